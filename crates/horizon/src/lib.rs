@@ -1,0 +1,1 @@
+//! Sector horizons (placeholder until the sweep lands).
