@@ -6,8 +6,10 @@
 
 pub mod delaunay;
 pub mod error;
+pub mod grid;
 pub mod mesh;
 
 pub use delaunay::{DedupePolicy, DelaunayReport, triangulate};
 pub use error::{Result, TinError};
+pub use grid::Grid;
 pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points, orient2d};
