@@ -51,15 +51,14 @@ pub fn triangulate(points: &[DVec3], policy: DedupePolicy) -> Result<(Tin, Delau
             keep.len()
         )));
     }
-    let spade_points: Vec<Point2<f64>> = keep
-        .iter()
-        .map(|&i| Point2::new(points[i].x, points[i].y))
-        .collect();
+    let spade_points: Vec<Point2<f64>> = keep.iter().map(|&i| Point2::new(points[i].x, points[i].y)).collect();
     let dt = DelaunayTriangulation::<Point2<f64>>::bulk_load_stable(spade_points).map_err(|e| {
         let index = keep
             .iter()
             .copied()
-            .find(|&i| spade::validate_coordinate(points[i].x).is_err() || spade::validate_coordinate(points[i].y).is_err())
+            .find(|&i| {
+                spade::validate_coordinate(points[i].x).is_err() || spade::validate_coordinate(points[i].y).is_err()
+            })
             .unwrap_or(0);
         TinError::Insertion {
             index,
@@ -117,7 +116,10 @@ fn dedupe(points: &[DVec3], policy: DedupePolicy) -> Result<(Vec<usize>, Delauna
                 if points[i].z == points[best].z {
                     report.merged_duplicates += 1;
                 } else if policy == DedupePolicy::Reject {
-                    let (first, second) = (group[0], *group.iter().find(|&&j| points[j].z != points[group[0]].z).unwrap_or(&i));
+                    let (first, second) = (
+                        group[0],
+                        *group.iter().find(|&&j| points[j].z != points[group[0]].z).unwrap_or(&i),
+                    );
                     return Err(TinError::DuplicateXy {
                         first,
                         second,
@@ -157,20 +159,31 @@ mod tests {
         let scale = tin.bbox().size().truncate().length().max(1.0);
         for (t, tri) in tin.triangles().iter().enumerate() {
             let [a, b, c] = tin.corners(t);
-            assert!(orient2d(a.truncate(), b.truncate(), c.truncate()) > 0.0, "triangle {t} not CCW");
+            assert!(
+                orient2d(a.truncate(), b.truncate(), c.truncate()) > 0.0,
+                "triangle {t} not CCW"
+            );
             for (v, &p) in tin.positions().iter().enumerate() {
                 if tri.contains(&(v as u32)) {
                     continue;
                 }
                 let s = in_circumcircle(a, b, c, p);
-                assert!(s <= 1e-9 * scale.powi(4), "vertex {v} inside circumcircle of triangle {t}: {s}");
+                assert!(
+                    s <= 1e-9 * scale.powi(4),
+                    "vertex {v} inside circumcircle of triangle {t}: {s}"
+                );
             }
         }
     }
 
     fn euler_ok(tin: &Tin) {
         // Planar triangulation of a point set: T = 2n - 2 - h, with h hull vertices.
-        let boundary_edges = tin.neighbours().iter().flatten().filter(|&&n| n == crate::NO_NEIGHBOUR).count();
+        let boundary_edges = tin
+            .neighbours()
+            .iter()
+            .flatten()
+            .filter(|&&n| n == crate::NO_NEIGHBOUR)
+            .count();
         assert_eq!(tin.num_triangles(), 2 * tin.num_vertices() - 2 - boundary_edges);
     }
 
@@ -210,7 +223,9 @@ mod tests {
     fn duplicates_with_different_height_are_named() {
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 0.0, 5.0)];
         match triangulate(&p, DedupePolicy::Reject) {
-            Err(TinError::DuplicateXy { first: 1, second: 3, .. }) => {}
+            Err(TinError::DuplicateXy {
+                first: 1, second: 3, ..
+            }) => {}
             other => panic!("expected DuplicateXy, got {other:?}"),
         }
         let (tin, report) = triangulate(&p, DedupePolicy::KeepHighest).expect("valid");
@@ -222,15 +237,27 @@ mod tests {
     #[test]
     fn collinear_and_tiny_inputs_are_errors() {
         let line: Vec<DVec3> = (0..10).map(|i| DVec3::new(i as f64, 2.0 * i as f64, 0.0)).collect();
-        assert!(matches!(triangulate(&line, DedupePolicy::Reject), Err(TinError::TooFewPoints(_))));
-        assert!(matches!(triangulate(&line[..2], DedupePolicy::Reject), Err(TinError::TooFewPoints(_))));
+        assert!(matches!(
+            triangulate(&line, DedupePolicy::Reject),
+            Err(TinError::TooFewPoints(_))
+        ));
+        assert!(matches!(
+            triangulate(&line[..2], DedupePolicy::Reject),
+            Err(TinError::TooFewPoints(_))
+        ));
         let nan = vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, f64::NAN, 0.0)];
-        assert!(matches!(triangulate(&nan, DedupePolicy::Reject), Err(TinError::NonFinite { index: 2, .. })));
+        assert!(matches!(
+            triangulate(&nan, DedupePolicy::Reject),
+            Err(TinError::NonFinite { index: 2, .. })
+        ));
     }
 
     #[test]
     fn huge_coordinates_are_rejected_not_panicking() {
         let p = vec![DVec3::ZERO, DVec3::new(1e300, 0.0, 0.0), DVec3::Y];
-        assert!(matches!(triangulate(&p, DedupePolicy::Reject), Err(TinError::Insertion { index: 1, .. })));
+        assert!(matches!(
+            triangulate(&p, DedupePolicy::Reject),
+            Err(TinError::Insertion { index: 1, .. })
+        ));
     }
 }

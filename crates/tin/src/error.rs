@@ -72,13 +72,17 @@ pub enum TinError {
         c: u32,
     },
     /// Triangles are not consistently oriented (some CCW, some CW in xy).
-    #[error("triangle {triangle} is oriented clockwise in x,y while triangle 0 is counter-clockwise: inconsistent orientation")]
+    #[error(
+        "triangle {triangle} is oriented clockwise in x,y while triangle 0 is counter-clockwise: inconsistent orientation"
+    )]
     InconsistentOrientation {
         /// Triangle index.
         triangle: usize,
     },
     /// An edge is shared by more than two triangles, or twice in the same direction.
-    #[error("edge ({a}, {b}) is not manifold: it is used by triangles {first} and {second} in the same direction or by more than two triangles")]
+    #[error(
+        "edge ({a}, {b}) is not manifold: it is used by triangles {first} and {second} in the same direction or by more than two triangles"
+    )]
     NonManifoldEdge {
         /// Edge start.
         a: u32,

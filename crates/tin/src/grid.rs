@@ -29,7 +29,9 @@ impl Grid {
     /// Infinite heights are rejected; NaN marks a void.
     pub fn new(rows: usize, cols: usize, dx: f64, dy: f64, origin: DVec2, z: Vec<f64>) -> Result<Grid> {
         if rows < 2 || cols < 2 {
-            return Err(TinError::InvalidParameter(format!("a grid needs at least 2 x 2 samples, got {rows} x {cols}")));
+            return Err(TinError::InvalidParameter(format!(
+                "a grid needs at least 2 x 2 samples, got {rows} x {cols}"
+            )));
         }
         if z.len() != rows * cols {
             return Err(TinError::InvalidParameter(format!(
@@ -39,10 +41,14 @@ impl Grid {
             )));
         }
         if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
-            return Err(TinError::InvalidParameter(format!("grid spacing must be positive and finite, got {dx}, {dy}")));
+            return Err(TinError::InvalidParameter(format!(
+                "grid spacing must be positive and finite, got {dx}, {dy}"
+            )));
         }
         if !origin.is_finite() {
-            return Err(TinError::InvalidParameter(format!("grid origin must be finite, got {origin}")));
+            return Err(TinError::InvalidParameter(format!(
+                "grid origin must be finite, got {origin}"
+            )));
         }
         if let Some(i) = z.iter().position(|h| h.is_infinite()) {
             return Err(TinError::InvalidParameter(format!(
@@ -51,13 +57,26 @@ impl Grid {
                 i % cols
             )));
         }
-        Ok(Grid { rows, cols, dx, dy, origin, z })
+        Ok(Grid {
+            rows,
+            cols,
+            dx,
+            dy,
+            origin,
+            z,
+        })
     }
 
     /// The world position of sample `(row, col)`, or `None` for a void.
     pub fn sample(&self, row: usize, col: usize) -> Option<DVec3> {
         let z = self.z[row * self.cols + col];
-        (!z.is_nan()).then(|| DVec3::new(self.origin.x + col as f64 * self.dx, self.origin.y - row as f64 * self.dy, z))
+        (!z.is_nan()).then(|| {
+            DVec3::new(
+                self.origin.x + col as f64 * self.dx,
+                self.origin.y - row as f64 * self.dy,
+                z,
+            )
+        })
     }
 
     /// Number of void samples.
@@ -80,8 +99,15 @@ mod tests {
 
     #[test]
     fn samples_and_voids() {
-        let g = Grid::new(2, 3, 10.0, 20.0, DVec2::new(100.0, 200.0), vec![1.0, 2.0, f64::NAN, 4.0, 5.0, 6.0])
-            .expect("valid grid");
+        let g = Grid::new(
+            2,
+            3,
+            10.0,
+            20.0,
+            DVec2::new(100.0, 200.0),
+            vec![1.0, 2.0, f64::NAN, 4.0, 5.0, 6.0],
+        )
+        .expect("valid grid");
         assert_eq!(g.sample(1, 2), Some(DVec3::new(120.0, 180.0, 6.0)));
         assert_eq!(g.sample(0, 2), None);
         assert_eq!(g.voids(), 1);

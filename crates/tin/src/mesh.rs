@@ -274,10 +274,7 @@ pub fn bounding_circle_of_points(points: &[DVec2]) -> Option<Circle> {
     }
     // Guard against rounding: every point must be inside.
     let exact = points.iter().map(|p| p.distance(centre)).fold(radius, f64::max);
-    Some(Circle {
-        centre,
-        radius: exact,
-    })
+    Some(Circle { centre, radius: exact })
 }
 
 /// A round local origin near the centre of the points' bounding box (a multiple of 1 km in x and y, 0 in z),
