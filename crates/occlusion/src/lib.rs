@@ -1,0 +1,10 @@
+//! Occlusion regions for tincull (thesis 4.6, design.md "Occlusion regions").
+//!
+//! A [`Region`] is the set of camera positions, in one sector's vertical plane, from which a vertex, a triangle or a
+//! group of triangles is hidden by the terrain. Regions of triangles and groups are intersections of their vertices'
+//! regions.
+#![warn(missing_docs)]
+
+pub mod region;
+
+pub use region::{Region, intersect_all};

@@ -1,0 +1,86 @@
+//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars, atomic file writes.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// How a command reports: human text, one JSON object on stdout, or nothing but errors.
+#[derive(Clone, Copy, Debug)]
+pub struct Output {
+    /// Print one JSON object on stdout instead of text.
+    pub json: bool,
+    /// No progress bars and no human text.
+    pub quiet: bool,
+}
+
+impl Output {
+    /// Prints a line of human-readable text (to stdout, or stderr when stdout carries JSON).
+    pub fn say(&self, text: impl AsRef<str>) {
+        if self.quiet {
+            return;
+        }
+        if self.json {
+            eprintln!("{}", text.as_ref());
+        } else {
+            println!("{}", text.as_ref());
+        }
+    }
+
+    /// Prints `value` as one JSON object on stdout when `--json` is set.
+    pub fn json(&self, value: &serde_json::Value) -> Result<()> {
+        if self.json {
+            let mut out = std::io::stdout().lock();
+            serde_json::to_writer(&mut out, value)?;
+            writeln!(out)?;
+        }
+        Ok(())
+    }
+
+    /// A progress bar on stderr for `len` steps (hidden with `--quiet` or when stderr is not a terminal).
+    pub fn progress(&self, len: u64, message: &str) -> ProgressBar {
+        if self.quiet {
+            return ProgressBar::hidden();
+        }
+        let bar = ProgressBar::new(len);
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} ({eta})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(message.to_string());
+        bar
+    }
+
+    /// A spinner on stderr for work of unknown length.
+    pub fn spinner(&self, message: &str) -> ProgressBar {
+        if self.quiet {
+            return ProgressBar::hidden();
+        }
+        let bar = ProgressBar::new_spinner();
+        bar.set_message(message.to_string());
+        bar.enable_steady_tick(Duration::from_millis(120));
+        bar
+    }
+}
+
+/// Writes a file atomically: the content goes to a temporary file in the same directory, which is renamed over
+/// `path` only when `write` succeeded, so a failure never leaves a half-written output.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create directory {}", dir.display()))?;
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)
+        .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    {
+        let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
+        write(&mut buf)?;
+        buf.flush().with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    tmp.persist(path).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}

@@ -1,0 +1,15 @@
+//! tincull: precomputed self-occlusion culling for irregular triangulated terrains.
+//!
+//! This crate is the command-line tool and a facade over the pipeline's crates, one per stage:
+//!
+//! | stage | crate |
+//! | --- | --- |
+//! | terrain: the [`tin::Tin`] mesh, Delaunay construction, OBJ and DEM import, simplification | [`tin`] |
+//! | per-vertex sector horizons (the covering-set sweep and its oracle) | [`horizon`] |
+//!
+//! The method follows P. M. Edmondson, *Hierarchical Occlusion Culling for Arbitrarily-Meshed Height Fields* (2004).
+
+pub use horizon;
+pub use tin;
+
+pub mod cli;
