@@ -2,9 +2,11 @@
 //!
 //! A [`Region`] is the set of camera positions, in one sector's vertical plane, from which a vertex, a triangle or a
 //! group of triangles is hidden by the terrain. Regions of triangles and groups are intersections of their vertices'
-//! regions.
+//! regions; a [`RegionTable`] holds them for many elements and all sectors.
 #![warn(missing_docs)]
 
 pub mod region;
+pub mod table;
 
 pub use region::{Region, intersect_all};
+pub use table::{RegionTable, SectorHorizon, plane_t};
