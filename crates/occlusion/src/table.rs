@@ -33,7 +33,7 @@ impl RegionTable {
     /// A table from row-major regions (`regions[element * sectors + sector]`).
     pub fn from_rows(sectors: u32, regions: Vec<Option<Region>>) -> RegionTable {
         assert!(
-            sectors > 0 && regions.len() % sectors as usize == 0,
+            sectors > 0 && regions.len().is_multiple_of(sectors as usize),
             "region table rows must be complete"
         );
         RegionTable { sectors, regions }
