@@ -1,8 +1,18 @@
-//! Run-time side of tincull: sector geometry, the exported hierarchy format and the culler.
+//! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the recursive
+//! culler.
 //!
-//! Light on dependencies so that a renderer can embed it.
+//! Light on dependencies (serde, postcard, crc32fast) so that a renderer can embed it: load a file with
+//! [`Hierarchy::load`], make a [`Culler`], and call [`Culler::cull_into`] once per frame.
 #![warn(missing_docs)]
 
+pub mod culler;
+pub mod error;
+pub mod file;
+pub mod hierarchy;
 pub mod sector;
 
+pub use culler::{Camera, CullStats, Culler, DrawList};
+pub use error::HierarchyError;
+pub use file::{FORMAT_VERSION, MAGIC, write_atomically};
+pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};
