@@ -1,5 +1,7 @@
 //! Command-line interface: argument definitions and dispatch. Each subcommand lives in its own module.
 
+mod cull_cmd;
+mod export_cmd;
 mod horizon_cmd;
 mod info;
 mod mesh_input;
@@ -10,18 +12,12 @@ mod tin_cmd;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
-pub use output::Output;
+pub use output::{Output, OutputArgs};
 
 /// tincull: precomputed terrain self-occlusion culling for irregular triangulated terrains (TINs).
 #[derive(Debug, Parser)]
 #[command(name = "tincull", version, about, long_about = None)]
 pub struct Cli {
-    /// Print one JSON object on stdout instead of text.
-    #[arg(long, global = true)]
-    pub json: bool,
-    /// No progress bars or human-readable text (errors are still printed).
-    #[arg(long, short, global = true)]
-    pub quiet: bool,
     /// The command to run.
     #[command(subcommand)]
     pub command: Command,
@@ -38,18 +34,20 @@ pub enum Command {
     Synth(synth::SynthArgs),
     /// Compute the horizon of every vertex in every subsector (the covering-set sweep).
     Horizon(horizon_cmd::HorizonArgs),
+    /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
+    Cull(cull_cmd::CullArgs),
+    /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
+    Export(export_cmd::ExportArgs),
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
-    let out = Output {
-        json: cli.json,
-        quiet: cli.quiet,
-    };
     match cli.command {
-        Command::Info(args) => info::run(&args, out),
-        Command::Tin(args) => tin_cmd::run(&args, out),
-        Command::Synth(args) => synth::run(&args, out),
-        Command::Horizon(args) => horizon_cmd::run(&args, out),
+        Command::Info(args) => info::run(&args, args.output.into()),
+        Command::Tin(args) => tin_cmd::run(&args, args.output.into()),
+        Command::Synth(args) => synth::run(&args, args.output.into()),
+        Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
+        Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
+        Command::Export(args) => export_cmd::run(&args, Output { json: false, quiet: args.quiet }),
     }
 }

@@ -7,6 +7,26 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
+/// The output flags most commands share.
+#[derive(Clone, Copy, Debug, Default, clap::Args)]
+pub struct OutputArgs {
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bars or human-readable text (errors and warnings are still printed).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+impl From<OutputArgs> for Output {
+    fn from(a: OutputArgs) -> Output {
+        Output {
+            json: a.json,
+            quiet: a.quiet,
+        }
+    }
+}
+
 /// How a command reports: human text, one JSON object on stdout, or nothing but errors.
 #[derive(Clone, Copy, Debug)]
 pub struct Output {

@@ -1,0 +1,41 @@
+//! `tincull export`: a `.tch` hierarchy as JSON or as a grouped OBJ.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use cull::Hierarchy;
+
+use super::Output;
+use crate::export::{write_grouped_obj, write_json};
+
+/// Arguments of `tincull export`.
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["json", "obj"])))]
+pub struct ExportArgs {
+    /// The hierarchy file written by `tincull build`.
+    pub hierarchy: PathBuf,
+    /// Write the hierarchy's JSON form here.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Write the mesh as OBJ with one group per leaf and the orphans (and a .mtl beside it).
+    #[arg(long, value_name = "FILE")]
+    pub obj: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `tincull export`.
+pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
+    let h = Hierarchy::load(&args.hierarchy).with_context(|| format!("cannot load {}", args.hierarchy.display()))?;
+    if let Some(path) = &args.json {
+        write_json(&h, path)?;
+        out.say(format!("wrote {}", path.display()));
+    }
+    if let Some(path) = &args.obj {
+        write_grouped_obj(&h, path)?;
+        out.say(format!("wrote {} and its .mtl", path.display()));
+    }
+    Ok(())
+}

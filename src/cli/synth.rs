@@ -1,0 +1,70 @@
+//! `tincull synth`: a seeded synthetic terrain written as OBJ.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use serde_json::json;
+use tin::SynthOptions;
+
+use super::{Output, OutputArgs};
+
+/// Arguments of `tincull synth`.
+#[derive(Debug, Args)]
+pub struct SynthArgs {
+    /// Output OBJ file.
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Number of vertices (exact).
+    #[arg(long, default_value_t = 10_000)]
+    pub vertices: usize,
+    /// Seed of the random generator: the same seed gives the same terrain.
+    #[arg(long, default_value_t = 1)]
+    pub rng_seed: u64,
+    /// Side of the square footprint in metres (default: 30 m per vertex spacing, 30·√vertices).
+    #[arg(long)]
+    pub extent: Option<f64>,
+    /// Relief in metres (default: a tenth of the extent).
+    #[arg(long)]
+    pub relief: Option<f64>,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Runs `tincull synth`.
+pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
+    let start = Instant::now();
+    let mut opts = SynthOptions::new(args.vertices, args.rng_seed);
+    if let Some(e) = args.extent {
+        opts.extent = e;
+        opts.relief = e / 10.0;
+    }
+    if let Some(r) = args.relief {
+        opts.relief = r;
+    }
+    let spinner = out.spinner("synthesising");
+    let tin = tin::synth_tin(&opts)?;
+    spinner.set_message("writing");
+    tin::write_obj(&tin, &args.out).with_context(|| format!("cannot write {}", args.out.display()))?;
+    spinner.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+    out.say(format!(
+        "wrote {}: {} vertices, {} triangles, {:.0} m square, {:.0} m relief ({seconds:.2} s)",
+        args.out.display(),
+        tin.num_vertices(),
+        tin.num_triangles(),
+        opts.extent,
+        opts.relief
+    ));
+    out.json(&json!({
+        "output": args.out,
+        "vertices": tin.num_vertices(),
+        "triangles": tin.num_triangles(),
+        "extent": opts.extent,
+        "relief": opts.relief,
+        "rng_seed": args.rng_seed,
+        "seconds": seconds,
+    }))
+}

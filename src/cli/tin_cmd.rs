@@ -1,0 +1,98 @@
+//! `tincull tin`: a DEM grid simplified into a TIN by greedy insertion, written as OBJ.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use serde_json::json;
+use tin::{DemOptions, SimplifyOptions};
+
+use super::{Output, OutputArgs};
+
+/// Arguments of `tincull tin`.
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("budget").required(true).multiple(true).args(["vertices", "max_error"])))]
+pub struct TinArgs {
+    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM) or 16-bit grayscale .png.
+    pub dem: PathBuf,
+    /// Output OBJ file.
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Stop at this many vertices.
+    #[arg(long)]
+    pub vertices: Option<usize>,
+    /// Stop when the largest vertical error is at most this (m).
+    #[arg(long)]
+    pub max_error: Option<f64>,
+    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar; required for .png).
+    #[arg(long, value_parser = parse_spacing)]
+    pub spacing: Option<(f64, f64)>,
+    /// Multiply heights by this (for .png: metres per grey level).
+    #[arg(long, default_value_t = 1.0)]
+    pub z_scale: f64,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s.split_once(',').ok_or_else(|| format!("expected dx,dy, got {s:?}"))?;
+    let parse = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
+    let (dx, dy) = (parse(a)?, parse(b)?);
+    if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
+        return Err(format!("spacing must be positive and finite, got {s:?}"));
+    }
+    Ok((dx, dy))
+}
+
+/// Runs `tincull tin`.
+pub fn run(args: &TinArgs, out: Output) -> Result<()> {
+    let start = Instant::now();
+    let dem_opts = DemOptions {
+        spacing: args.spacing,
+        z_scale: args.z_scale,
+    };
+    let spinner = out.spinner("reading DEM");
+    let grid = tin::read_dem(&args.dem, &dem_opts).with_context(|| format!("cannot read {}", args.dem.display()))?;
+    spinner.finish_and_clear();
+    let opts = SimplifyOptions {
+        max_vertices: args.vertices,
+        max_error: args.max_error,
+    };
+    let target = args.vertices.unwrap_or(grid.rows * grid.cols - grid.voids());
+    let bar = out.progress(target as u64, "simplifying");
+    let progress = |v: usize| bar.set_position(v as u64);
+    let (tin, report) = tin::simplify(&grid, &opts, Some(&progress))?;
+    bar.finish_and_clear();
+    tin::write_obj(&tin, &args.out).with_context(|| format!("cannot write {}", args.out.display()))?;
+    let seconds = start.elapsed().as_secs_f64();
+    out.say(format!(
+        "{} ({} x {} samples, {} voids) -> {}: {} vertices, {} triangles, max error {:.3} m, rms {:.3} m; \
+         simplification {:.2} s, total {seconds:.2} s",
+        args.dem.display(),
+        grid.rows,
+        grid.cols,
+        grid.voids(),
+        args.out.display(),
+        report.vertices,
+        report.triangles,
+        report.max_error,
+        report.rms_error,
+        report.seconds
+    ));
+    out.json(&json!({
+        "dem": args.dem,
+        "output": args.out,
+        "rows": grid.rows,
+        "cols": grid.cols,
+        "voids": grid.voids(),
+        "vertices": report.vertices,
+        "triangles": report.triangles,
+        "max_error": report.max_error,
+        "rms_error": report.rms_error,
+        "stopped_by": report.stopped_by,
+        "simplify_seconds": report.seconds,
+        "seconds": seconds,
+    }))
+}

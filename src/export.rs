@@ -1,0 +1,86 @@
+//! Writers for people and other tools: the grouped OBJ (one `g group_N` per leaf group, `g orphans`) with a `.mtl`
+//! of distinct colours, and the hierarchy's JSON form.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use cull::Hierarchy;
+
+use crate::cli::output::write_atomically;
+
+/// A distinct, reproducible colour for group `i` (golden-ratio hue steps, fixed saturation and value).
+pub fn group_colour(i: usize) -> [f64; 3] {
+    let h = (i as f64 * 0.618_033_988_749_895).fract() * 6.0;
+    let (s, v) = (0.65, 0.92);
+    let c = v * s;
+    let x = c * (1.0 - ((h % 2.0) - 1.0).abs());
+    let (r, g, b) = match h as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = v - c;
+    [r + m, g + m, b + m]
+}
+
+/// The colour of the always-visible (orphan) triangles: dark grey.
+pub const ORPHAN_COLOUR: [f64; 3] = [0.25, 0.25, 0.25];
+
+/// Writes the hierarchy's mesh as OBJ with one group per leaf (in triangle order) and the orphans last, plus a
+/// `.mtl` beside it with a colour per group. Positions are written exactly (shortest round-trip f64 text).
+pub fn write_grouped_obj(h: &Hierarchy, path: &Path) -> Result<()> {
+    let mtl_path = path.with_extension("mtl");
+    let mtl_name = mtl_path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .context("the OBJ path has no file name")?;
+    let mut leaves: Vec<[u32; 2]> = h.nodes.iter().filter(|n| n.children.is_empty()).map(|n| n.triangles).collect();
+    leaves.sort_unstable();
+    write_atomically(&mtl_path, |w| {
+        writeln!(w, "# tincull groups: one material per leaf group, grey for orphans")?;
+        for (i, _) in leaves.iter().enumerate() {
+            let [r, g, b] = group_colour(i);
+            writeln!(w, "newmtl group_{i}\nKd {r:.4} {g:.4} {b:.4}\n")?;
+        }
+        let [r, g, b] = ORPHAN_COLOUR;
+        writeln!(w, "newmtl orphans\nKd {r:.4} {g:.4} {b:.4}")?;
+        Ok(())
+    })?;
+    write_atomically(path, |w| {
+        writeln!(
+            w,
+            "# tincull hierarchy mesh: {} vertices, {} triangles, {} groups, {} orphans",
+            h.mesh.positions.len(),
+            h.mesh.triangles.len(),
+            leaves.len(),
+            h.always_visible[1] - h.always_visible[0]
+        )?;
+        writeln!(w, "mtllib {mtl_name}")?;
+        for p in &h.mesh.positions {
+            writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+        }
+        let faces = |w: &mut dyn Write, [s, e]: [u32; 2]| -> std::io::Result<()> {
+            for t in &h.mesh.triangles[s as usize..e as usize] {
+                writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+            }
+            Ok(())
+        };
+        for (i, &range) in leaves.iter().enumerate() {
+            writeln!(w, "g group_{i}\nusemtl group_{i}")?;
+            faces(w, range)?;
+        }
+        writeln!(w, "g orphans\nusemtl orphans")?;
+        faces(w, h.always_visible)?;
+        Ok(())
+    })
+}
+
+/// Writes the hierarchy's JSON form atomically.
+pub fn write_json(h: &Hierarchy, path: &Path) -> Result<()> {
+    let text = h.to_json()?;
+    write_atomically(path, |w| Ok(w.write_all(text.as_bytes())?))
+}
