@@ -5,16 +5,17 @@
 //! ch. 16): each octave contributes `(1 - |noise|)²`, weighted by the previous octave's signal, so ridges are sharp
 //! and valley floors smooth. The noise is 2-D gradient noise (Perlin's improved noise) over a permutation table
 //! shuffled by a seeded `ChaCha8Rng`. Octaves are rotated by the exact rotation `(0.6, 0.8)` and scaled by 2, so no
-//! grid direction dominates. A low-frequency gradient-noise swell modulates the ridges, and the result is raised to
-//! the power 1.5 to widen the valleys. Heights are then scaled to span exactly `[0, relief]` over the generated
+//! grid direction dominates; the input position is first displaced by a small gradient-noise domain warp (0.2 of the
+//! coarsest wavelength) so ridge lines meander instead of following the noise's circular arcs. A low-frequency
+//! gradient-noise swell modulates the ridges, and the result is raised to the power 1.5 to widen the valleys. Heights are then scaled to span exactly `[0, relief]` over the generated
 //! points.
 //!
 //! Choices:
 //! - Everything is computed with `+ - * /`, `floor` and `sqrt` only (all exactly rounded in IEEE 754), and random
 //!   numbers come from `ChaCha8Rng::seed_from_u64` through `next_u64` alone, so the output is bit-identical on every
 //!   platform.
-//! - The coarsest ridges have a wavelength of half the extent; octaves are added until the finest wavelength
-//!   reaches about four point spacings (at most 12 octaves).
+//! - The coarsest ridges have a wavelength of a third of the extent; octaves are halved in wavelength while the finest
+//!   stays at least six point spacings long (at most 12 octaves); each octave has 0.45 of the previous amplitude.
 //! - [`synth_tin`] places points on a jittered lattice: `round(√n)` rows with the `n` points spread over them as
 //!   evenly as possible, each point moved by up to ±35% of its spacing, except that points on the boundary stay on
 //!   the square's edges (so the footprint is exactly the square `[0, extent]²`). Points are therefore distinct and
@@ -153,10 +154,10 @@ pub fn synth_tin(opts: &SynthOptions) -> Result<Tin> {
 /// `round(√n)` in integers (exact for all `usize`).
 fn round_sqrt(n: usize) -> usize {
     let mut r = (n as f64).sqrt() as usize;
-    while r * r > n {
+    while r.checked_mul(r).is_none_or(|s| s > n) {
         r -= 1;
     }
-    while (r + 1) * (r + 1) <= n {
+    while (r + 1).checked_mul(r + 1).is_some_and(|s| s <= n) {
         r += 1;
     }
     // r = floor(√n); round up when n ≥ (r + ½)² = r² + r + ¼, i.e. n > r² + r.
@@ -194,6 +195,8 @@ struct Terrain {
     offsets: Vec<DVec2>,
     /// Offset of the low-frequency swell.
     swell_offset: DVec2,
+    /// Offsets of the two components of the domain warp.
+    warp_offsets: [DVec2; 2],
     /// 1 / (coarsest wavelength).
     frequency: f64,
 }
@@ -201,29 +204,37 @@ struct Terrain {
 impl Terrain {
     fn new(rng: &mut ChaCha8Rng, opts: &SynthOptions) -> Terrain {
         let noise = GradientNoise::new(rng);
-        let coarsest = opts.extent / 2.0;
+        let coarsest = opts.extent / 3.0;
         let spacing = opts.extent / (opts.vertices as f64).sqrt();
         let mut octaves = 1;
         let mut wavelength = coarsest;
-        while octaves < 12 && wavelength / 2.0 >= 4.0 * spacing {
+        while octaves < 12 && wavelength / 2.0 >= 6.0 * spacing {
             octaves += 1;
             wavelength /= 2.0;
         }
         let mut offset = || DVec2::new(unit(rng) * 256.0, unit(rng) * 256.0);
         let offsets = (0..octaves).map(|_| offset()).collect();
         let swell_offset = offset();
+        let warp_offsets = [offset(), offset()];
         Terrain {
             noise,
             offsets,
             swell_offset,
+            warp_offsets,
             frequency: 1.0 / coarsest,
         }
     }
 
-    /// Ridged multifractal (offset 1, gain 2, H = 1, lacunarity 2) times a swell, to the power 1.5.
+    /// Ridged multifractal (offset 1, gain 2, amplitude ratio 0.45, lacunarity 2) of the warped position, times a
+    /// swell, to the power 1.5.
     fn raw(&self, x: f64, y: f64) -> f64 {
         let p0 = DVec2::new(x, y) * self.frequency;
-        let mut p = p0;
+        // Domain warp: bends the ridge lines, which plain gradient noise draws as circular arcs.
+        let warp = DVec2::new(
+            self.noise.at(p0 + self.warp_offsets[0]),
+            self.noise.at(p0 + self.warp_offsets[1]),
+        );
+        let mut p = p0 + warp * 0.2;
         let mut sum = 0.0;
         let mut weight = 1.0;
         let mut amplitude = 1.0;
@@ -234,7 +245,7 @@ impl Terrain {
             signal *= weight;
             weight = (signal * 2.0).clamp(0.0, 1.0);
             sum += signal * amplitude;
-            amplitude *= 0.5;
+            amplitude *= 0.45;
             // Rotate by (0.6, 0.8) and double the frequency.
             p = DVec2::new(1.2 * p.x - 1.6 * p.y, 1.6 * p.x + 1.2 * p.y);
         }
@@ -271,15 +282,19 @@ impl GradientNoise {
         let perm = &self.perm;
         let a = perm[xi] as usize + yi;
         let b = perm[xi + 1] as usize + yi;
+        // Eight unit gradients at 22.5° + k·45°: none is parallel to an axis, so the noise never vanishes along a
+        // whole lattice edge (which the ridge function would turn into a straight crest).
+        const A: f64 = 0.923_879_532_511_286_7; // cos 22.5°
+        const B: f64 = 0.382_683_432_365_089_8; // sin 22.5°
         let g = |h: u8, x: f64, y: f64| match h & 7 {
-            0 => x + y,
-            1 => -x + y,
-            2 => x - y,
-            3 => -x - y,
-            4 => x,
-            5 => -x,
-            6 => y,
-            _ => -y,
+            0 => A * x + B * y,
+            1 => B * x + A * y,
+            2 => -B * x + A * y,
+            3 => -A * x + B * y,
+            4 => -A * x - B * y,
+            5 => -B * x - A * y,
+            6 => B * x - A * y,
+            _ => A * x - B * y,
         };
         let lerp = |t: f64, a: f64, b: f64| a + t * (b - a);
         lerp(
@@ -293,4 +308,165 @@ impl GradientNoise {
 /// Perlin's quintic fade `6t⁵ - 15t⁴ + 10t³`.
 fn fade(t: f64) -> f64 {
     t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn small(vertices: usize, rng_seed: u64) -> SynthOptions {
+        SynthOptions::new(vertices, rng_seed)
+    }
+
+    /// Checks the footprint, the height range and the vertex count.
+    fn check_tin(tin: &Tin, opts: &SynthOptions) {
+        assert_eq!(tin.num_vertices(), opts.vertices);
+        let b = tin.bbox();
+        assert_eq!(
+            (b.min.x, b.min.y, b.max.x, b.max.y),
+            (0.0, 0.0, opts.extent, opts.extent)
+        );
+        assert_eq!(b.min.z, 0.0);
+        assert_eq!(b.max.z, opts.relief);
+        assert!(tin.positions().iter().all(|p| p.is_finite()));
+        // A triangulation of n points with h on the hull has 2n - 2 - h triangles; here h >= 4.
+        assert!(tin.num_triangles() <= 2 * opts.vertices - 6);
+    }
+
+    #[test]
+    fn exact_vertex_counts() {
+        for n in [4, 5, 6, 7, 8, 9, 10, 11, 99, 1000, 1001, 4097] {
+            let opts = small(n, 7);
+            let tin = synth_tin(&opts).expect("synthetic TIN");
+            check_tin(&tin, &opts);
+        }
+    }
+
+    #[test]
+    fn same_seed_same_terrain_other_seed_other_terrain() {
+        let a = synth_tin(&small(2000, 11)).expect("tin");
+        let b = synth_tin(&small(2000, 11)).expect("tin");
+        let c = synth_tin(&small(2000, 12)).expect("tin");
+        assert_eq!(a, b);
+        assert_ne!(a.positions(), c.positions());
+        let ga = synth_grid(&small(2000, 11)).expect("grid");
+        assert_eq!(ga, synth_grid(&small(2000, 11)).expect("grid"));
+        assert_ne!(ga.z, synth_grid(&small(2000, 12)).expect("grid").z);
+    }
+
+    /// Pins the generator's output bit for bit: a change here means terrain changed for every user (or that a
+    /// platform computes differently, which the design forbids).
+    #[test]
+    fn output_is_pinned() {
+        let tin = synth_tin(&small(1000, 42)).expect("tin");
+        let fingerprint = tin.positions().iter().fold(0u64, |h, p| {
+            [p.x, p.y, p.z]
+                .iter()
+                .fold(h, |h, v| (h ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3))
+        });
+        assert_eq!(fingerprint, PINNED_FINGERPRINT, "fingerprint {fingerprint:#x}");
+    }
+    const PINNED_FINGERPRINT: u64 = 0x2a91_b51f_36d1_7cbd;
+
+    #[test]
+    fn grid_has_ridges_and_valleys() {
+        for seed in 0..5 {
+            let opts = small(10_000, seed);
+            let g = synth_grid(&opts).expect("grid");
+            assert_eq!((g.rows, g.cols), (100, 100));
+            assert_eq!(g.dx, opts.extent / 99.0);
+            assert!(g.z.iter().all(|&z| (0.0..=opts.relief).contains(&z)));
+            let (mut maxima, mut minima) = (0, 0);
+            for r in 1..g.rows - 1 {
+                for c in 1..g.cols - 1 {
+                    let z = g.z[r * g.cols + c];
+                    let around = (r - 1..=r + 1)
+                        .flat_map(|rr| (c - 1..=c + 1).map(move |cc| (rr, cc)))
+                        .filter(|&(rr, cc)| (rr, cc) != (r, c))
+                        .map(|(rr, cc)| g.z[rr * g.cols + cc]);
+                    let (lo, hi) =
+                        around.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), h| (lo.min(h), hi.max(h)));
+                    maxima += usize::from(z > hi);
+                    minima += usize::from(z < lo);
+                }
+            }
+            let mut sorted = g.z.clone();
+            sorted.sort_by(f64::total_cmp);
+            let median = sorted[sorted.len() / 2];
+            let low = g.z.iter().filter(|&&z| z < 0.25 * opts.relief).count() as f64 / g.z.len() as f64;
+            let high = g.z.iter().filter(|&&z| z > 0.75 * opts.relief).count() as f64 / g.z.len() as f64;
+            eprintln!("seed {seed}: {maxima} peaks, {minima} pits, median {median:.1}, low {low:.3}, high {high:.3}");
+            assert!(
+                maxima >= 20 && minima >= 20,
+                "seed {seed}: {maxima} peaks, {minima} pits"
+            );
+            // Broad valleys, narrow ridges: most of the area lies in the lower half of the relief.
+            assert!(median < 0.5 * opts.relief, "seed {seed}: median {median}");
+            assert!(low > 0.08 && high > 0.01, "seed {seed}: low {low}, high {high}");
+        }
+    }
+
+    #[test]
+    fn rejects_bad_options() {
+        let ok = small(100, 0);
+        let bad = [
+            SynthOptions { vertices: 3, ..ok },
+            SynthOptions { extent: 0.0, ..ok },
+            SynthOptions { extent: f64::NAN, ..ok },
+            SynthOptions { relief: -1.0, ..ok },
+            SynthOptions {
+                relief: f64::INFINITY,
+                ..ok
+            },
+        ];
+        for opts in bad {
+            assert!(
+                matches!(synth_tin(&opts), Err(TinError::InvalidParameter(_))),
+                "{opts:?}"
+            );
+            assert!(
+                matches!(synth_grid(&opts), Err(TinError::InvalidParameter(_))),
+                "{opts:?}"
+            );
+        }
+        let flat = synth_tin(&SynthOptions { relief: 0.0, ..ok }).expect("flat terrain");
+        assert!(flat.positions().iter().all(|p| p.z == 0.0));
+    }
+
+    #[test]
+    fn round_sqrt_matches_real_rounding() {
+        for n in 0..100_000usize {
+            assert_eq!(round_sqrt(n), (n as f64).sqrt().round() as usize, "n = {n}");
+        }
+        assert_eq!(round_sqrt(usize::MAX), 1 << 32);
+    }
+
+    /// Run with `cargo test -p tin --release -- --ignored`.
+    #[test]
+    #[ignore = "1M vertices: slow in debug builds"]
+    fn a_million_vertices() {
+        let opts = small(1_000_000, 5);
+        let tin = synth_tin(&opts).expect("tin");
+        check_tin(&tin, &opts);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(40))]
+
+        #[test]
+        fn any_count_extent_and_relief(
+            vertices in 4usize..3000,
+            seed in any::<u64>(),
+            extent in 1.0f64..1e6,
+            relief in 0.0f64..5000.0,
+        ) {
+            let opts = SynthOptions { vertices, rng_seed: seed, extent, relief };
+            let tin = synth_tin(&opts).expect("tin");
+            prop_assert_eq!(tin.num_vertices(), vertices);
+            let b = tin.bbox();
+            prop_assert_eq!((b.min.x, b.min.y, b.max.x, b.max.y), (0.0, 0.0, extent, extent));
+            prop_assert!(b.min.z >= 0.0 && b.max.z <= relief);
+        }
+    }
 }
