@@ -8,8 +8,12 @@ pub mod delaunay;
 pub mod error;
 pub mod grid;
 pub mod mesh;
+pub mod simplify;
+pub mod synth;
 
 pub use delaunay::{DedupePolicy, DelaunayReport, triangulate};
 pub use error::{Result, TinError};
 pub use grid::Grid;
 pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points, orient2d};
+pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify};
+pub use synth::{SynthOptions, synth_grid, synth_tin};
