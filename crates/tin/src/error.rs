@@ -121,6 +121,16 @@ pub enum TinError {
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// A line of an OBJ file is malformed, or the mesh it describes is not a height field there.
+    #[error("{path}:{line}: {kind}")]
+    ObjLine {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with that line.
+        kind: crate::obj::ObjLineError,
+    },
 }
 
 impl TinError {

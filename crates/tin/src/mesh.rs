@@ -279,7 +279,7 @@ pub fn bounding_circle_of_points(points: &[DVec2]) -> Option<Circle> {
 
 /// A round local origin near the centre of the points' bounding box (a multiple of 1 km in x and y, 0 in z),
 /// so that coordinates relative to it stay small and are reproducible.
-fn local_origin(positions: &[DVec3]) -> DVec3 {
+pub(crate) fn local_origin(positions: &[DVec3]) -> DVec3 {
     match Aabb::of_points(positions.iter().copied()) {
         Some(b) => {
             let c = (b.min + b.max) * 0.5;

@@ -1,0 +1,112 @@
+//! SRTM `.hgt` tiles.
+//!
+//! A tile is a square of big-endian i16 heights (metres), 1201 x 1201 samples for 3 arc-seconds (SRTM3) or
+//! 3601 x 3601 for 1 arc-second (SRTM1), row 0 north, column 0 west; neighbouring tiles share their edge rows and
+//! columns. -32768 marks a void. The file name gives the south-west corner: `N43W123.hgt` covers 43°N–44°N,
+//! 123°W–122°W. Any other file size is rejected.
+//!
+//! Metric frame (a local, tile-based choice, not a map projection):
+//! - 1° of latitude is 111,320 m ([`METRES_PER_DEGREE`]), so `dy = 111320 / (n − 1)` m.
+//! - 1° of longitude is `111,320 · cos(φc)` m with φc the latitude of the **tile centre** (south edge + 0.5°): the
+//!   east-west spacing is exact at mid-tile and off by at most about ±0.9% (at 45°) at the northern and southern
+//!   edges.
+//! - x is metres east of the tile's **west edge** (column 0 at x = 0); y is metres north of the equator,
+//!   `latitude · 111320` (the southern row at `south · 111320`). So y looks like a UTM northing (large coordinates,
+//!   as real data sets have) while adjacent tiles do not share an x frame.
+//!
+//! [`DemOptions::spacing`] overrides both spacings; the southern row stays at `south · 111320`.
+
+use std::path::Path;
+
+use glam::DVec2;
+
+use super::{DemOptions, finish, read_bytes};
+use crate::error::{Result, TinError};
+use crate::grid::Grid;
+
+/// Metres per degree of latitude (and of longitude at the equator).
+pub const METRES_PER_DEGREE: f64 = 111_320.0;
+/// The SRTM void value.
+pub const VOID: i16 = -32768;
+
+/// Position of a tile: its south-west corner in whole degrees (north and east positive).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileName {
+    /// Latitude of the southern edge.
+    pub lat: i32,
+    /// Longitude of the western edge.
+    pub lon: i32,
+}
+
+/// Parses a tile name such as `N43W123` (the first seven characters of the file name, any case).
+pub fn parse_tile_name(file_name: &str) -> Option<TileName> {
+    let s = file_name.as_bytes();
+    if s.len() < 7 || !s[..7].is_ascii() {
+        return None;
+    }
+    let digits = |b: &[u8]| -> Option<i32> {
+        b.iter()
+            .all(u8::is_ascii_digit)
+            .then(|| std::str::from_utf8(b).ok()?.parse().ok())?
+    };
+    let lat = digits(&s[1..3])?;
+    let lon = digits(&s[4..7])?;
+    let lat = match s[0].to_ascii_uppercase() {
+        b'N' => lat,
+        b'S' => -lat,
+        _ => return None,
+    };
+    let lon = match s[3].to_ascii_uppercase() {
+        b'E' => lon,
+        b'W' => -lon,
+        _ => return None,
+    };
+    ((-90..90).contains(&lat) && (-180..180).contains(&lon)).then_some(TileName { lat, lon })
+}
+
+/// Reads an SRTM tile (see the module documentation).
+pub fn read_hgt(path: &Path, opts: &DemOptions) -> Result<Grid> {
+    opts.check()?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tile = parse_tile_name(&name).ok_or_else(|| {
+        TinError::format(
+            path,
+            format!("cannot tell the tile's position from the name {name:?}: expected e.g. N43W123.hgt"),
+        )
+    })?;
+    let bytes = read_bytes(path)?;
+    parse_hgt(&bytes, tile, path, opts)
+}
+
+/// Parses the bytes of a tile at `tile`; `path` names it in errors.
+pub fn parse_hgt(bytes: &[u8], tile: TileName, path: &Path, opts: &DemOptions) -> Result<Grid> {
+    let n = match bytes.len() {
+        2_884_802 => 1201,
+        25_934_402 => 3601,
+        len => {
+            return Err(TinError::format(
+                path,
+                format!(
+                    "{len} bytes is not an SRTM tile: expected 2884802 (1201 x 1201, 3 arc-seconds) or 25934402 \
+                     (3601 x 3601, 1 arc-second)"
+                ),
+            ));
+        }
+    };
+    let z: Vec<f64> = bytes
+        .chunks_exact(2)
+        .map(|b| match i16::from_be_bytes([b[0], b[1]]) {
+            VOID => f64::NAN,
+            h => f64::from(h),
+        })
+        .collect();
+    let dy = METRES_PER_DEGREE / (n as f64 - 1.0);
+    let centre_lat = (f64::from(tile.lat) + 0.5).to_radians();
+    let spacing = opts.spacing.unwrap_or((dy * centre_lat.cos(), dy));
+    let south = f64::from(tile.lat) * METRES_PER_DEGREE;
+    let origin = DVec2::new(0.0, south + (n as f64 - 1.0) * spacing.1);
+    finish(path, n, n, spacing, origin, z, opts)
+}

@@ -1,0 +1,421 @@
+//! NumPy `.npy` arrays (format versions 1, 2 and 3) with a JSON sidecar.
+//!
+//! The header is parsed here (it is a small Python dict literal: `descr`, `fortran_order`, `shape`). Supported
+//! element types: signed and unsigned 8/16/32/64-bit integers and 32/64-bit floats, either byte order. Both C order
+//! and Fortran order are read (NumPy semantics: element `(r, c)` of a Fortran-ordered array is stored at
+//! `c * rows + r`). The array must be 2-D; row 0 is the northern edge.
+//!
+//! Sidecar: `NAME.json` next to `NAME.npy`, as written for the project's data sets:
+//! `spacing_x_m`, `spacing_y_m` (metres), optional `nodata` (null or a number: samples equal to it become voids),
+//! optional `rows`/`cols` (checked against the array), optional `easting_min` and `northing_max` (or `northing_min`)
+//! giving the world position of the western column and northern (southern) row of sample centres. Other keys are
+//! ignored. [`DemOptions::spacing`] wins over the sidecar's spacing; with neither, reading fails. Without an
+//! easting/northing, the south-west sample is put at (0, 0).
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec2;
+
+use super::{DemOptions, finish, read_bytes};
+use crate::error::{Result, TinError};
+use crate::grid::Grid;
+
+/// A 2-D array read from a `.npy` file, converted to f64 in row-major (C) order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NpyArray {
+    /// Number of rows (first dimension).
+    pub rows: usize,
+    /// Number of columns (second dimension).
+    pub cols: usize,
+    /// The `descr` of the file, e.g. `<i2`.
+    pub descr: String,
+    /// Values, row-major.
+    pub values: Vec<f64>,
+}
+
+/// What the JSON sidecar says.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sidecar {
+    /// `spacing_x_m`, `spacing_y_m`.
+    pub spacing: Option<(f64, f64)>,
+    /// `nodata`.
+    pub nodata: Option<f64>,
+    /// `rows`.
+    pub rows: Option<usize>,
+    /// `cols`.
+    pub cols: Option<usize>,
+    /// `easting_min`.
+    pub easting_min: Option<f64>,
+    /// `northing_max`.
+    pub northing_max: Option<f64>,
+    /// `northing_min`.
+    pub northing_min: Option<f64>,
+}
+
+/// Reads a `.npy` DEM and its sidecar (see the module documentation).
+pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
+    opts.check()?;
+    let bytes = read_bytes(path)?;
+    let array = parse_npy(&bytes, path)?;
+    let sidecar_path = sidecar_path(path);
+    let sidecar = if sidecar_path.exists() {
+        Some(read_sidecar(&sidecar_path)?)
+    } else {
+        None
+    };
+    let side = sidecar.clone().unwrap_or_default();
+    if let Some(r) = side.rows
+        && r != array.rows
+    {
+        return Err(TinError::format(
+            &sidecar_path,
+            format!("rows = {r}, but the array has {} rows", array.rows),
+        ));
+    }
+    if let Some(c) = side.cols
+        && c != array.cols
+    {
+        return Err(TinError::format(
+            &sidecar_path,
+            format!("cols = {c}, but the array has {} columns", array.cols),
+        ));
+    }
+    let spacing = opts.spacing.or(side.spacing).ok_or_else(|| {
+        TinError::format(
+            path,
+            if sidecar.is_some() {
+                format!(
+                    "no grid spacing: the sidecar {} has no spacing_x_m/spacing_y_m and none was given",
+                    sidecar_path.display()
+                )
+            } else {
+                format!(
+                    "no grid spacing: give one, or put a JSON sidecar {} with spacing_x_m and spacing_y_m next to it",
+                    sidecar_path.display()
+                )
+            },
+        )
+    })?;
+    let north = side
+        .northing_max
+        .or_else(|| side.northing_min.map(|s| s + (array.rows as f64 - 1.0) * spacing.1));
+    let origin = match (side.easting_min, north) {
+        (Some(e), Some(n)) => DVec2::new(e, n),
+        _ => DVec2::new(0.0, (array.rows as f64 - 1.0) * spacing.1),
+    };
+    let mut z = array.values;
+    if let Some(nodata) = side.nodata {
+        for h in &mut z {
+            if *h == nodata {
+                *h = f64::NAN;
+            }
+        }
+    }
+    finish(path, array.rows, array.cols, spacing, origin, z, opts)
+}
+
+/// Reads a sidecar (see the module documentation).
+pub fn read_sidecar(path: &Path) -> Result<Sidecar> {
+    let bytes = read_bytes(path)?;
+    let value: serde_json::Value =
+        serde_json::from_slice(&bytes).map_err(|e| TinError::format(path, format!("not valid JSON: {e}")))?;
+    let obj = value
+        .as_object()
+        .ok_or_else(|| TinError::format(path, "expected a JSON object"))?;
+    let number = |key: &str| -> Result<Option<f64>> {
+        match obj.get(key) {
+            None | Some(serde_json::Value::Null) => Ok(None),
+            Some(v) => v
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .map(Some)
+                .ok_or_else(|| TinError::format(path, format!("{key} must be a number, found {v}"))),
+        }
+    };
+    let count = |key: &str| -> Result<Option<usize>> {
+        match obj.get(key) {
+            None | Some(serde_json::Value::Null) => Ok(None),
+            Some(v) => v
+                .as_u64()
+                .map(|x| Some(x as usize))
+                .ok_or_else(|| TinError::format(path, format!("{key} must be a non-negative integer, found {v}"))),
+        }
+    };
+    let spacing = match (number("spacing_x_m")?, number("spacing_y_m")?) {
+        (Some(dx), Some(dy)) if dx > 0.0 && dy > 0.0 => Some((dx, dy)),
+        (None, None) => None,
+        (dx, dy) => {
+            return Err(TinError::format(
+                path,
+                format!("spacing_x_m and spacing_y_m must both be positive numbers, found {dx:?} and {dy:?}"),
+            ));
+        }
+    };
+    Ok(Sidecar {
+        spacing,
+        nodata: number("nodata")?,
+        rows: count("rows")?,
+        cols: count("cols")?,
+        easting_min: number("easting_min")?,
+        northing_max: number("northing_max")?,
+        northing_min: number("northing_min")?,
+    })
+}
+
+/// Element type of an array.
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Int,
+    Uint,
+    Float,
+}
+
+/// Parses the bytes of a `.npy` file holding a 2-D numeric array; `path` names it in errors.
+pub fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyArray> {
+    let err = |m: String| TinError::format(path, m);
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err(err("not a NumPy .npy file (bad magic bytes)".into()));
+    }
+    let (major, minor) = (bytes[6], bytes[7]);
+    let (header_len, start) = match major {
+        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+        2 | 3 => {
+            if bytes.len() < 12 {
+                return Err(err("truncated .npy header".into()));
+            }
+            (
+                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+                12,
+            )
+        }
+        _ => return Err(err(format!("unsupported .npy format version {major}.{minor}"))),
+    };
+    let data_start = start + header_len;
+    if bytes.len() < data_start {
+        return Err(err(format!(
+            "truncated .npy header: {header_len} header bytes announced, {} present",
+            bytes.len() - start
+        )));
+    }
+    let header =
+        std::str::from_utf8(&bytes[start..data_start]).map_err(|_| err("the .npy header is not text".into()))?;
+    let dict = parse_header(header).map_err(|m| err(format!("bad .npy header {:?}: {m}", header.trim())))?;
+    let descr = dict.descr.ok_or_else(|| err("the .npy header has no 'descr'".into()))?;
+    let fortran = dict
+        .fortran_order
+        .ok_or_else(|| err("the .npy header has no 'fortran_order'".into()))?;
+    let shape = dict.shape.ok_or_else(|| err("the .npy header has no 'shape'".into()))?;
+    let [rows, cols] = shape[..] else {
+        return Err(err(format!(
+            "expected a 2-D array (rows, cols), the shape is {shape:?}"
+        )));
+    };
+    let (little, kind, size) = parse_descr(&descr).ok_or_else(|| {
+        err(format!(
+            "unsupported element type {descr:?}: expected integers (i1..i8, u1..u8) or floats (f4, f8)"
+        ))
+    })?;
+    let expected = rows
+        .checked_mul(cols)
+        .and_then(|n| n.checked_mul(size))
+        .ok_or_else(|| err(format!("array of {rows} x {cols} is too large")))?;
+    let data = &bytes[data_start..];
+    if data.len() < expected {
+        return Err(err(format!(
+            "truncated: {} data bytes, expected {expected} ({rows} x {cols} x {size} bytes)",
+            data.len()
+        )));
+    }
+    if data.len() > expected {
+        return Err(err(format!(
+            "{} bytes of unexpected data after the {rows} x {cols} array",
+            data.len() - expected
+        )));
+    }
+    let element = |k: usize| -> f64 {
+        let b = &data[k * size..(k + 1) * size];
+        let mut buf = [0u8; 8];
+        buf[..size].copy_from_slice(b);
+        if !little {
+            buf[..size].reverse();
+        }
+        // buf now holds the value in little-endian order, zero-padded.
+        match (kind, size) {
+            (Kind::Float, 4) => f64::from(f32::from_le_bytes([buf[0], buf[1], buf[2], buf[3]])),
+            (Kind::Float, _) => f64::from_le_bytes(buf),
+            (Kind::Uint, _) => u64::from_le_bytes(buf) as f64,
+            (Kind::Int, _) => {
+                // Sign-extend from `size` bytes.
+                let shift = 64 - 8 * size as u32;
+                ((u64::from_le_bytes(buf) << shift) as i64 >> shift) as f64
+            }
+        }
+    };
+    let values = if fortran {
+        let mut v = vec![0.0; rows * cols];
+        for c in 0..cols {
+            for r in 0..rows {
+                v[r * cols + c] = element(c * rows + r);
+            }
+        }
+        v
+    } else {
+        (0..rows * cols).map(element).collect()
+    };
+    Ok(NpyArray {
+        rows,
+        cols,
+        descr,
+        values,
+    })
+}
+
+/// Byte order (true = little), kind and size of a `descr` such as `<i2`.
+fn parse_descr(descr: &str) -> Option<(bool, Kind, usize)> {
+    let mut chars = descr.chars();
+    let order = chars.next()?;
+    let kind = match chars.next()? {
+        'i' => Kind::Int,
+        'u' => Kind::Uint,
+        'f' => Kind::Float,
+        _ => return None,
+    };
+    let size: usize = chars.as_str().parse().ok()?;
+    let valid = match kind {
+        Kind::Float => size == 4 || size == 8,
+        _ => matches!(size, 1 | 2 | 4 | 8),
+    };
+    let little = match order {
+        '<' => true,
+        '>' => false,
+        '|' if size == 1 => true,
+        '=' => cfg!(target_endian = "little"),
+        _ => return None,
+    };
+    valid.then_some((little, kind, size))
+}
+
+#[derive(Debug, Default)]
+struct Header {
+    descr: Option<String>,
+    fortran_order: Option<bool>,
+    shape: Option<Vec<usize>>,
+}
+
+/// Parses the header dict, e.g. `{'descr': '<i2', 'fortran_order': False, 'shape': (344, 403), }`.
+fn parse_header(text: &str) -> std::result::Result<Header, String> {
+    let mut p = Lexer {
+        s: text.as_bytes(),
+        i: 0,
+    };
+    let mut h = Header::default();
+    p.expect(b'{')?;
+    loop {
+        p.skip_ws();
+        if p.eat(b'}') {
+            break;
+        }
+        let key = p.string()?;
+        p.expect(b':')?;
+        p.skip_ws();
+        match key.as_str() {
+            "descr" => h.descr = Some(p.string()?),
+            "fortran_order" => h.fortran_order = Some(p.boolean()?),
+            "shape" => h.shape = Some(p.tuple()?),
+            other => return Err(format!("unexpected key {other:?}")),
+        }
+        p.skip_ws();
+        if !p.eat(b',') {
+            p.expect(b'}')?;
+            break;
+        }
+    }
+    Ok(h)
+}
+
+struct Lexer<'a> {
+    s: &'a [u8],
+    i: usize,
+}
+
+impl Lexer<'_> {
+    fn skip_ws(&mut self) {
+        while self.i < self.s.len() && self.s[self.i].is_ascii_whitespace() {
+            self.i += 1;
+        }
+    }
+
+    fn eat(&mut self, c: u8) -> bool {
+        self.skip_ws();
+        if self.s.get(self.i) == Some(&c) {
+            self.i += 1;
+            true
+        } else {
+            false
+        }
+    }
+
+    fn expect(&mut self, c: u8) -> std::result::Result<(), String> {
+        if self.eat(c) {
+            Ok(())
+        } else {
+            Err(format!("expected '{}' at byte {}", c as char, self.i))
+        }
+    }
+
+    fn string(&mut self) -> std::result::Result<String, String> {
+        self.skip_ws();
+        let quote = match self.s.get(self.i) {
+            Some(&q @ (b'\'' | b'"')) => q,
+            _ => return Err(format!("expected a string at byte {}", self.i)),
+        };
+        let start = self.i + 1;
+        let len = self.s[start..]
+            .iter()
+            .position(|&b| b == quote)
+            .ok_or_else(|| "unterminated string".to_string())?;
+        self.i = start + len + 1;
+        Ok(String::from_utf8_lossy(&self.s[start..start + len]).into_owned())
+    }
+
+    fn boolean(&mut self) -> std::result::Result<bool, String> {
+        self.skip_ws();
+        for (word, value) in [("True", true), ("False", false)] {
+            if self.s[self.i..].starts_with(word.as_bytes()) {
+                self.i += word.len();
+                return Ok(value);
+            }
+        }
+        Err(format!("expected True or False at byte {}", self.i))
+    }
+
+    fn tuple(&mut self) -> std::result::Result<Vec<usize>, String> {
+        self.expect(b'(')?;
+        let mut v = Vec::new();
+        loop {
+            self.skip_ws();
+            if self.eat(b')') {
+                return Ok(v);
+            }
+            let start = self.i;
+            while self.i < self.s.len() && self.s[self.i].is_ascii_digit() {
+                self.i += 1;
+            }
+            let digits = std::str::from_utf8(&self.s[start..self.i]).unwrap_or("");
+            v.push(
+                digits
+                    .parse()
+                    .map_err(|_| format!("expected a dimension at byte {start}"))?,
+            );
+            if !self.eat(b',') {
+                self.expect(b')')?;
+                return Ok(v);
+            }
+        }
+    }
+}
+
+/// The path of the sidecar of a `.npy` file.
+pub fn sidecar_path(npy: &Path) -> PathBuf {
+    npy.with_extension("json")
+}

@@ -1,0 +1,66 @@
+//! Grayscale PNG height maps.
+//!
+//! 16-bit grayscale (the usual height-map format) or 8-bit grayscale; height = stored value · `z_scale`. A PNG has
+//! no georeference, so [`DemOptions::spacing`] is required, and the south-west sample is put at (0, 0). Every value
+//! is a height (PNG has no nodata convention). Row 0 (the top of the image) is north. Other colour types and bit
+//! depths are rejected.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use glam::DVec2;
+
+use super::{DemOptions, finish, read_bytes};
+use crate::error::{Result, TinError};
+use crate::grid::Grid;
+
+/// Reads a PNG height map (see the module documentation).
+pub fn read_png(path: &Path, opts: &DemOptions) -> Result<Grid> {
+    opts.check()?;
+    let bytes = read_bytes(path)?;
+    parse_png(&bytes, path, opts)
+}
+
+/// Parses a PNG height map held in memory; `path` names it in errors.
+pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
+    let spacing = opts.spacing.ok_or_else(|| {
+        TinError::InvalidParameter(format!(
+            "{}: a PNG height map has no georeference: the sample spacing must be given",
+            path.display()
+        ))
+    })?;
+    let err = |m: String| TinError::format(path, m);
+    let mut decoder = png::Decoder::new_with_limits(Cursor::new(bytes), png::Limits { bytes: 1 << 31 });
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    let (color, depth) = (info.color_type, info.bit_depth);
+    if color != png::ColorType::Grayscale || !matches!(depth, png::BitDepth::Eight | png::BitDepth::Sixteen) {
+        return Err(err(format!(
+            "colour type {color:?} with {} bits per sample: only 8- or 16-bit grayscale height maps are supported",
+            depth as u8
+        )));
+    }
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| err("image too large".into()))?;
+    let mut buf = vec![0u8; size];
+    let frame = reader
+        .next_frame(&mut buf)
+        .map_err(|e| err(format!("truncated or corrupt PNG: {e}")))?;
+    let (cols, rows) = (frame.width as usize, frame.height as usize);
+    let mut z = Vec::with_capacity(rows * cols);
+    for r in 0..rows {
+        let line = &buf[r * frame.line_size..];
+        for c in 0..cols {
+            z.push(match depth {
+                png::BitDepth::Sixteen => f64::from(u16::from_be_bytes([line[2 * c], line[2 * c + 1]])),
+                _ => f64::from(line[c]),
+            });
+        }
+    }
+    let origin = DVec2::new(0.0, (rows as f64 - 1.0) * spacing.1);
+    finish(path, rows, cols, spacing, origin, z, opts)
+}

@@ -1,0 +1,588 @@
+//! Checks and statistics of a TIN: is it a height field, how good are its triangles, and is it safe to convert to
+//! f32 for rendering.
+//!
+//! The thesis (Edmondson 2004, section 4.1) assumes a TIN that is a height field: unique x,y per vertex, triangles
+//! that do not overlap in x,y. [`Tin::from_parts`] checks indices, degeneracy, orientation and manifold edges; this
+//! module adds what it cannot check cheaply at construction, and reports everything at once instead of failing on
+//! the first problem.
+//!
+//! Choices where nothing else fixes them:
+//! - All triangle quality figures are in the x,y projection (the triangulation lives there; 3-D quality of a height
+//!   field mostly reflects the slope).
+//! - *Aspect ratio* is `longest edge² / (2 · area)`, i.e. the longest edge over the altitude onto it (2/√3 ≈ 1.155
+//!   for an equilateral triangle). A *sliver* has its smallest angle below [`SLIVER_MIN_ANGLE_DEG`] or its aspect
+//!   ratio above [`SLIVER_MAX_ASPECT`]. A triangle is *near-degenerate* when its aspect ratio exceeds
+//!   [`NEAR_DEGENERATE_ASPECT`] (altitude below a millionth of the longest edge) and *degenerate* when its x,y area is
+//!   exactly zero under an exact orientation predicate or it repeats a vertex.
+//! - Overlap is interior overlap: triangles that only share an edge, a vertex or touch along a boundary do not
+//!   overlap. The test is exact (Shewchuk's adaptive predicates through the `robust` crate): two convex polygons have
+//!   disjoint interiors exactly when one of their edge lines weakly separates them. Candidate pairs come from a
+//!   uniform grid over the triangles' bounding boxes, with cells about the size of an average triangle, so a
+//!   well-shaped mesh of n triangles is checked in O(n) after bucketing; a few huge triangles (for example over a
+//!   flat lake) cost time proportional to the cells they cover.
+//! - f32 precision: converting a coordinate of magnitude m to f32 rounds it to a multiple of the f32 spacing
+//!   2^(⌊log2 m⌋ − 23). Absolute coordinates of 1e5 m or more get a warning (f32 spacing ≥ 2^-7 m ≈ 8 mm there, and
+//!   0.5 m at UTM northings); coordinates relative to [`Tin::origin`] are flagged when their f32 spacing exceeds 1% of
+//!   the shortest x,y edge.
+
+use std::collections::HashMap;
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::mesh::{Aabb, NO_NEIGHBOUR, Tin, local_origin};
+
+/// A triangle whose smallest x,y angle is below this (degrees) is a sliver.
+pub const SLIVER_MIN_ANGLE_DEG: f64 = 5.0;
+/// A triangle whose aspect ratio (longest edge² / (2 · area), in x,y) is above this is a sliver.
+pub const SLIVER_MAX_ASPECT: f64 = 20.0;
+/// A triangle whose aspect ratio is above this is near-degenerate.
+pub const NEAR_DEGENERATE_ASPECT: f64 = 1e6;
+/// Absolute coordinates at or above this magnitude (m) get an f32 precision warning.
+pub const F32_ABSOLUTE_WARNING: f64 = 1e5;
+/// How many example elements a report lists for each kind of problem.
+pub const MAX_EXAMPLES: usize = 20;
+
+/// Everything [`validate`] found wrong or risky in a mesh. Counts are complete; example lists hold at most
+/// [`MAX_EXAMPLES`] entries, smallest indices first.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ValidationReport {
+    /// Number of vertices.
+    pub vertices: usize,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Vertices with a NaN or infinite coordinate.
+    pub non_finite_vertices: usize,
+    /// Some of them.
+    pub non_finite_examples: Vec<u32>,
+    /// Triangles that refer to a vertex that does not exist (never for a [`Tin`]).
+    pub bad_index_triangles: usize,
+    /// Vertices that share x,y with an earlier vertex (equal or different z).
+    pub duplicate_xy_vertices: usize,
+    /// Vertices no triangle uses.
+    pub unreferenced_vertices: usize,
+    /// Triangles with zero x,y area or a repeated vertex.
+    pub degenerate_triangles: usize,
+    /// Some of them.
+    pub degenerate_examples: Vec<u32>,
+    /// Triangles that are clockwise in x,y (a [`Tin`] has none).
+    pub clockwise_triangles: usize,
+    /// Undirected edges used by more than two triangles or twice in the same direction.
+    pub non_manifold_edges: usize,
+    /// Pairs of triangles whose interiors overlap in x,y.
+    pub overlapping_pairs: usize,
+    /// Some of them, as `[smaller, larger]` triangle indices.
+    pub overlap_examples: Vec<[u32; 2]>,
+    /// Non-degenerate triangles with aspect ratio above [`NEAR_DEGENERATE_ASPECT`].
+    pub near_degenerate_triangles: usize,
+    /// Triangles with smallest angle below [`SLIVER_MIN_ANGLE_DEG`] or aspect ratio above [`SLIVER_MAX_ASPECT`]
+    /// (degenerate triangles included).
+    pub slivers: usize,
+    /// Some of them.
+    pub sliver_examples: Vec<u32>,
+    /// How well the coordinates survive conversion to f32.
+    pub precision: PrecisionReport,
+    /// Human-readable summary of every problem and risk above, one line each.
+    pub warnings: Vec<String>,
+}
+
+impl ValidationReport {
+    /// True when the mesh is a valid height field: finite, unique x,y, valid indices, no degenerate, clockwise or
+    /// overlapping triangles, manifold edges. Slivers, unreferenced vertices and precision risks do not count.
+    pub fn is_height_field(&self) -> bool {
+        self.non_finite_vertices == 0
+            && self.bad_index_triangles == 0
+            && self.duplicate_xy_vertices == 0
+            && self.degenerate_triangles == 0
+            && self.clockwise_triangles == 0
+            && self.non_manifold_edges == 0
+            && self.overlapping_pairs == 0
+    }
+}
+
+/// How coordinates fare when converted to f32 (see the module documentation).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PrecisionReport {
+    /// The local origin ([`Tin::origin`]) that renderers subtract.
+    pub origin: DVec3,
+    /// Largest absolute value of any coordinate (m).
+    pub max_abs_coordinate: f64,
+    /// f32 spacing at that magnitude (m).
+    pub f32_step_absolute: f64,
+    /// Largest absolute value of any coordinate relative to the origin (m).
+    pub max_local_coordinate: f64,
+    /// f32 spacing at that magnitude (m).
+    pub f32_step_local: f64,
+    /// Shortest triangle edge in x,y (m); infinite without triangles.
+    pub min_edge_xy: f64,
+    /// `max_abs_coordinate` ≥ [`F32_ABSOLUTE_WARNING`]: absolute coordinates must not go to f32.
+    pub absolute_f32_unsafe: bool,
+    /// `f32_step_local` > 1% of `min_edge_xy`: even origin-relative f32 coordinates distort the smallest triangles.
+    pub local_f32_unsafe: bool,
+}
+
+/// Summary figures of a mesh, for `tincull info` and reports.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MeshStats {
+    /// Number of vertices.
+    pub vertices: usize,
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Triangle edges without a neighbour.
+    pub boundary_edges: usize,
+    /// Bounding box of the vertices.
+    pub bbox: Aabb,
+    /// Highest minus lowest vertex (m).
+    pub relief: f64,
+    /// The local origin for f32 conversion.
+    pub origin: DVec3,
+    /// Total x,y area of the triangles (m²).
+    pub area_xy_total: f64,
+    /// Smallest triangle x,y area (m²).
+    pub area_xy_min: f64,
+    /// Largest triangle x,y area (m²).
+    pub area_xy_max: f64,
+    /// Mean triangle x,y area (m²).
+    pub area_xy_mean: f64,
+    /// Shortest edge in x,y (m).
+    pub edge_xy_min: f64,
+    /// Longest edge in x,y (m).
+    pub edge_xy_max: f64,
+    /// Smallest interior angle of any triangle in x,y (degrees).
+    pub min_angle_deg: f64,
+    /// Largest aspect ratio (longest edge² / (2 · area)) of any triangle.
+    pub max_aspect: f64,
+    /// Number of slivers (see [`is_sliver`]).
+    pub slivers: usize,
+}
+
+/// Shape of one triangle in x,y.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct TriangleQuality {
+    /// Smallest interior angle (degrees); 0 for a degenerate triangle.
+    pub min_angle_deg: f64,
+    /// Longest edge² / (2 · area); infinite for a degenerate triangle.
+    pub aspect: f64,
+}
+
+/// Shape of triangle `abc` in x,y (orientation does not matter).
+pub fn triangle_quality(a: DVec2, b: DVec2, c: DVec2) -> TriangleQuality {
+    let angle = |p: DVec2, q: DVec2, r: DVec2| {
+        let (u, v) = (q - p, r - p);
+        u.perp_dot(v).abs().atan2(u.dot(v))
+    };
+    let twice_area = (b - a).perp_dot(c - a).abs();
+    let longest = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    if twice_area == 0.0 || !twice_area.is_finite() {
+        return TriangleQuality {
+            min_angle_deg: 0.0,
+            aspect: f64::INFINITY,
+        };
+    }
+    let min_angle = angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b));
+    TriangleQuality {
+        min_angle_deg: min_angle.to_degrees(),
+        aspect: longest / twice_area,
+    }
+}
+
+/// Whether a triangle of this shape is a sliver (see the module documentation).
+pub fn is_sliver(q: TriangleQuality) -> bool {
+    q.min_angle_deg < SLIVER_MIN_ANGLE_DEG || q.aspect > SLIVER_MAX_ASPECT
+}
+
+/// The spacing of f32 values near magnitude `m` (the gap between `m` rounded to f32 and the next f32).
+pub fn f32_step(m: f64) -> f64 {
+    let m = m.abs();
+    if !m.is_finite() {
+        return f64::INFINITY;
+    }
+    if m < f64::from(f32::MIN_POSITIVE) {
+        return 2f64.powi(-149);
+    }
+    let exponent = ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    2f64.powi(exponent - 23)
+}
+
+/// Exact orientation of `abc` in x,y: positive when counter-clockwise, zero when collinear.
+pub(crate) fn orient_exact(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    let p = |v: DVec2| robust::Coord { x: v.x, y: v.y };
+    robust::orient2d(p(a), p(b), p(c))
+}
+
+/// Whether two counter-clockwise triangles have overlapping interiors (exact).
+pub(crate) fn interiors_overlap(a: &[DVec2; 3], b: &[DVec2; 3]) -> bool {
+    let separates = |s: &[DVec2; 3], t: &[DVec2; 3]| {
+        (0..3).any(|i| {
+            let (p, q) = (s[i], s[(i + 1) % 3]);
+            t.iter().all(|&v| orient_exact(p, q, v) <= 0.0)
+        })
+    };
+    !(separates(a, b) || separates(b, a))
+}
+
+/// Pairs of triangles whose interiors overlap in x,y.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Overlaps {
+    /// How many pairs overlap.
+    pub count: usize,
+    /// The smallest pairs (by first, then second index), `[smaller, larger]`, at most the requested limit.
+    pub first: Vec<[u32; 2]>,
+}
+
+/// Finds every pair of triangles whose interiors overlap in x,y, exactly. Triangles with an invalid index, a
+/// non-finite corner or zero area are skipped (they are reported elsewhere). The result does not depend on the
+/// number of threads.
+pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) -> Overlaps {
+    // Counter-clockwise corners and x,y box of each usable triangle.
+    let mut tris: Vec<(u32, [DVec2; 3], DVec2, DVec2)> = Vec::with_capacity(triangles.len());
+    for (t, tri) in triangles.iter().enumerate() {
+        if tri.iter().any(|&v| v as usize >= positions.len()) {
+            continue;
+        }
+        let mut c = tri.map(|v| positions[v as usize].truncate());
+        if !c.iter().all(|p| p.is_finite()) {
+            continue;
+        }
+        let o = orient_exact(c[0], c[1], c[2]);
+        if o == 0.0 {
+            continue;
+        }
+        if o < 0.0 {
+            c.swap(1, 2);
+        }
+        let lo = c[0].min(c[1]).min(c[2]);
+        let hi = c[0].max(c[1]).max(c[2]);
+        tris.push((t as u32, c, lo, hi));
+    }
+    if tris.len() < 2 {
+        return Overlaps::default();
+    }
+    let (mut lo, mut hi) = (tris[0].2, tris[0].3);
+    let mut mean_extent = 0.0;
+    for (_, _, l, h) in &tris {
+        lo = lo.min(*l);
+        hi = hi.max(*h);
+        mean_extent += (*h - *l).max_element();
+    }
+    mean_extent /= tris.len() as f64;
+    let size = hi - lo;
+    // Cells about one average triangle across, but no more than ~4 per triangle.
+    let max_cells = 4.0 * tris.len() as f64 + 16.0;
+    let mut cell = mean_extent.max(f64::MIN_POSITIVE);
+    let cells_for = |cell: f64| ((size.x / cell).floor() + 1.0) * ((size.y / cell).floor() + 1.0);
+    while cells_for(cell) > max_cells {
+        cell *= 1.5;
+    }
+    let nx = (size.x / cell).floor() as usize + 1;
+    let ny = (size.y / cell).floor() as usize + 1;
+    let cell_of = |p: DVec2| -> (usize, usize) {
+        let cx = (((p.x - lo.x) / cell).floor().max(0.0) as usize).min(nx - 1);
+        let cy = (((p.y - lo.y) / cell).floor().max(0.0) as usize).min(ny - 1);
+        (cx, cy)
+    };
+    // Bucket triangles into every cell their box touches (compressed rows).
+    let mut offsets = vec![0usize; nx * ny + 1];
+    let ranges: Vec<((usize, usize), (usize, usize))> = tris.iter().map(|t| (cell_of(t.2), cell_of(t.3))).collect();
+    for &((x0, y0), (x1, y1)) in &ranges {
+        for cy in y0..=y1 {
+            for cx in x0..=x1 {
+                offsets[cy * nx + cx + 1] += 1;
+            }
+        }
+    }
+    for i in 0..nx * ny {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut fill = offsets.clone();
+    let mut members = vec![0u32; offsets[nx * ny]];
+    for (k, &((x0, y0), (x1, y1))) in ranges.iter().enumerate() {
+        for cy in y0..=y1 {
+            for cx in x0..=x1 {
+                members[fill[cy * nx + cx]] = k as u32;
+                fill[cy * nx + cx] += 1;
+            }
+        }
+    }
+    let keep_smallest = |mut v: Vec<[u32; 2]>| {
+        if v.len() > limit {
+            v.sort_unstable();
+            v.truncate(limit);
+        }
+        v
+    };
+    let (count, mut first) = (0..nx * ny)
+        .into_par_iter()
+        .fold(
+            || (0usize, Vec::new()),
+            |(mut count, mut found), c| {
+                let here = &members[offsets[c]..offsets[c + 1]];
+                for (i, &ka) in here.iter().enumerate() {
+                    let a = &tris[ka as usize];
+                    for &kb in &here[i + 1..] {
+                        let b = &tris[kb as usize];
+                        // Boxes must overlap with positive area, and each pair is tested only in the cell holding
+                        // the lower-left corner of the boxes' intersection.
+                        if a.2.x >= b.3.x || b.2.x >= a.3.x || a.2.y >= b.3.y || b.2.y >= a.3.y {
+                            continue;
+                        }
+                        let (cx, cy) = cell_of(a.2.max(b.2));
+                        if cy * nx + cx != c || !interiors_overlap(&a.1, &b.1) {
+                            continue;
+                        }
+                        count += 1;
+                        if limit > 0 {
+                            found.push([a.0.min(b.0), a.0.max(b.0)]);
+                            if found.len() >= 2 * limit {
+                                found = keep_smallest(found);
+                            }
+                        }
+                    }
+                }
+                (count, found)
+            },
+        )
+        .reduce(
+            || (0, Vec::new()),
+            |(ca, mut fa), (cb, fb)| {
+                fa.extend(fb);
+                (ca + cb, keep_smallest(fa))
+            },
+        );
+    first.sort_unstable();
+    first.truncate(limit);
+    Overlaps { count, first }
+}
+
+/// Checks a mesh given as raw parts, which may break any rule (see [`ValidationReport`]). Never panics.
+pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> ValidationReport {
+    let n = positions.len();
+    let non_finite: Vec<u32> = (0..n as u32).filter(|&v| !positions[v as usize].is_finite()).collect();
+    let mut referenced = vec![false; n];
+    let mut bad_index_triangles = 0;
+    let mut degenerate = Vec::new();
+    let mut clockwise_triangles = 0;
+    let mut near_degenerate_triangles = 0;
+    let mut slivers = Vec::new();
+    let mut min_edge_xy = f64::INFINITY;
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(triangles.len() * 2);
+    for (t, tri) in triangles.iter().enumerate() {
+        if tri.iter().any(|&v| v as usize >= n) {
+            bad_index_triangles += 1;
+            continue;
+        }
+        for &v in tri {
+            referenced[v as usize] = true;
+        }
+        for i in 0..3 {
+            let (a, b) = (tri[i], tri[(i + 1) % 3]);
+            // Per undirected edge: uses in direction min->max and max->min.
+            let e = edges.entry((a.min(b), a.max(b))).or_default();
+            if a < b {
+                e.0 += 1;
+            } else {
+                e.1 += 1;
+            }
+        }
+        let c = tri.map(|v| positions[v as usize].truncate());
+        if !c.iter().all(|p| p.is_finite()) {
+            continue;
+        }
+        for i in 0..3 {
+            let len = c[i].distance(c[(i + 1) % 3]);
+            if len > 0.0 {
+                min_edge_xy = min_edge_xy.min(len);
+            }
+        }
+        let o = orient_exact(c[0], c[1], c[2]);
+        if o == 0.0 || tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+            degenerate.push(t as u32);
+            slivers.push(t as u32);
+            continue;
+        }
+        if o < 0.0 {
+            clockwise_triangles += 1;
+        }
+        let q = triangle_quality(c[0], c[1], c[2]);
+        if q.aspect > NEAR_DEGENERATE_ASPECT {
+            near_degenerate_triangles += 1;
+        }
+        if is_sliver(q) {
+            slivers.push(t as u32);
+        }
+    }
+    let non_manifold_edges = edges.values().filter(|&&(f, b)| f > 1 || b > 1).count();
+    let unreferenced_vertices = referenced.iter().filter(|&&r| !r).count();
+    let duplicate_xy_vertices = {
+        let mut keys: Vec<(u64, u64)> = positions
+            .iter()
+            .filter(|p| p.is_finite())
+            .map(|p| ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()))
+            .collect();
+        keys.sort_unstable();
+        keys.windows(2).filter(|w| w[0] == w[1]).count()
+    };
+    let overlaps = find_overlaps(positions, triangles, MAX_EXAMPLES);
+    let precision = precision_report(positions, min_edge_xy);
+
+    let mut warnings = Vec::new();
+    let mut warn = |count: usize, what: &str| {
+        if count > 0 {
+            warnings.push(format!("{count} {what}"));
+        }
+    };
+    warn(non_finite.len(), "vertices with a NaN or infinite coordinate");
+    warn(bad_index_triangles, "triangles referring to missing vertices");
+    warn(
+        duplicate_xy_vertices,
+        "vertices sharing x,y with another vertex: not a height field",
+    );
+    warn(degenerate.len(), "degenerate triangles (zero area in x,y)");
+    warn(clockwise_triangles, "clockwise triangles");
+    warn(non_manifold_edges, "non-manifold edges");
+    warn(
+        overlaps.count,
+        "pairs of triangles overlapping in x,y: not a height field",
+    );
+    warn(
+        near_degenerate_triangles,
+        "near-degenerate triangles (altitude below 1e-6 of the longest edge)",
+    );
+    warn(
+        slivers.len(),
+        "sliver triangles (smallest angle below 5 degrees or aspect ratio above 20)",
+    );
+    warn(unreferenced_vertices, "vertices used by no triangle");
+    if precision.absolute_f32_unsafe {
+        warnings.push(format!(
+            "absolute coordinates reach {} m, where f32 values are {} m apart: subtract the local origin {} before \
+             converting to f32",
+            precision.max_abs_coordinate, precision.f32_step_absolute, precision.origin
+        ));
+    }
+    if precision.local_f32_unsafe {
+        warnings.push(format!(
+            "even relative to the local origin, f32 values are {} m apart at {} m, more than 1% of the shortest \
+             edge ({} m)",
+            precision.f32_step_local, precision.max_local_coordinate, precision.min_edge_xy
+        ));
+    }
+
+    let examples = |v: &[u32]| v.iter().copied().take(MAX_EXAMPLES).collect::<Vec<u32>>();
+    ValidationReport {
+        vertices: n,
+        triangles: triangles.len(),
+        non_finite_vertices: non_finite.len(),
+        non_finite_examples: examples(&non_finite),
+        bad_index_triangles,
+        duplicate_xy_vertices,
+        unreferenced_vertices,
+        degenerate_triangles: degenerate.len(),
+        degenerate_examples: examples(&degenerate),
+        clockwise_triangles,
+        non_manifold_edges,
+        overlapping_pairs: overlaps.count,
+        overlap_examples: overlaps.first,
+        near_degenerate_triangles,
+        slivers: slivers.len(),
+        sliver_examples: examples(&slivers),
+        precision,
+        warnings,
+    }
+}
+
+fn precision_report(positions: &[DVec3], min_edge_xy: f64) -> PrecisionReport {
+    let finite: Vec<DVec3> = positions.iter().copied().filter(|p| p.is_finite()).collect();
+    let origin = local_origin(&finite);
+    let max_abs_coordinate = finite.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+    let max_local_coordinate = finite
+        .iter()
+        .map(|p| (*p - origin).abs().max_element())
+        .fold(0.0, f64::max);
+    let f32_step_absolute = f32_step(max_abs_coordinate);
+    let f32_step_local = f32_step(max_local_coordinate);
+    PrecisionReport {
+        origin,
+        max_abs_coordinate,
+        f32_step_absolute,
+        max_local_coordinate,
+        f32_step_local,
+        min_edge_xy,
+        absolute_f32_unsafe: max_abs_coordinate >= F32_ABSOLUTE_WARNING,
+        local_f32_unsafe: f32_step_local > 0.01 * min_edge_xy,
+    }
+}
+
+/// Checks a [`Tin`] (see [`ValidationReport`]). A TIN built by [`Tin::from_parts`] can still overlap itself in x,y,
+/// have duplicate x,y positions among vertices no triangle uses, slivers, or coordinates too large for f32.
+pub fn validate(tin: &Tin) -> ValidationReport {
+    validate_parts(tin.positions(), tin.triangles())
+}
+
+/// Summary figures of a TIN.
+pub fn mesh_stats(tin: &Tin) -> MeshStats {
+    let bbox = tin.bbox();
+    let mut area_min = f64::INFINITY;
+    let mut area_max: f64 = 0.0;
+    let mut area_total = 0.0;
+    let mut edge_min = f64::INFINITY;
+    let mut edge_max: f64 = 0.0;
+    let mut min_angle = f64::INFINITY;
+    let mut max_aspect: f64 = 0.0;
+    let mut slivers = 0;
+    for t in 0..tin.num_triangles() {
+        let [a, b, c] = tin.corners(t).map(|p| p.truncate());
+        let area = tin.triangle_area_xy(t);
+        area_min = area_min.min(area);
+        area_max = area_max.max(area);
+        area_total += area;
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            let len = p.distance(q);
+            edge_min = edge_min.min(len);
+            edge_max = edge_max.max(len);
+        }
+        let q = triangle_quality(a, b, c);
+        min_angle = min_angle.min(q.min_angle_deg);
+        max_aspect = max_aspect.max(q.aspect);
+        slivers += usize::from(is_sliver(q));
+    }
+    let boundary_edges = tin
+        .neighbours()
+        .iter()
+        .flatten()
+        .filter(|&&n| n == NO_NEIGHBOUR)
+        .count();
+    MeshStats {
+        vertices: tin.num_vertices(),
+        triangles: tin.num_triangles(),
+        boundary_edges,
+        bbox,
+        relief: bbox.max.z - bbox.min.z,
+        origin: tin.origin(),
+        area_xy_total: area_total,
+        area_xy_min: area_min,
+        area_xy_max: area_max,
+        area_xy_mean: area_total / tin.num_triangles() as f64,
+        edge_xy_min: edge_min,
+        edge_xy_max: edge_max,
+        min_angle_deg: min_angle,
+        max_aspect,
+        slivers,
+    }
+}
+
+impl Tin {
+    /// Checks this TIN; see [`validate`].
+    pub fn validate(&self) -> ValidationReport {
+        validate(self)
+    }
+
+    /// Summary figures; see [`mesh_stats`].
+    pub fn stats(&self) -> MeshStats {
+        mesh_stats(self)
+    }
+}
