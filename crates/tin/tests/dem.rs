@@ -324,6 +324,11 @@ fn asc_malformed_files() {
         ("hello world\n".to_string(), "line 1: unknown header key \"hello\""),
         ("ncols\n".to_string(), "line 1: header key \"ncols\" has no value"),
         ("".to_string(), "no ncols"),
+        // A header that promises two billion values but holds none.
+        (
+            "ncols 46340\nnrows 46340\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n".to_string(),
+            "truncated: 2 values",
+        ),
     ];
     for (text, expected) in cases {
         std::fs::write(&path, &text).expect("write");
@@ -445,6 +450,19 @@ fn png_height_maps() {
     std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
     let m = format_message(read_dem(&path, &with_spacing(1.0, 1.0)));
     assert!(m.contains("truncated or corrupt PNG"), "{m}");
+    // A header announcing 65535 x 65535 samples is refused before anything is allocated.
+    let mut huge = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut huge, 65535, 65535);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        let mut w = enc.write_header().expect("header");
+        w.write_chunk(png::chunk::IDAT, &[0x78, 0x9c]).expect("chunk");
+        drop(w);
+    }
+    std::fs::write(&path, &huge).expect("write");
+    let m = format_message(read_dem(&path, &with_spacing(1.0, 1.0)));
+    assert!(m.contains("65535 x 65535 samples is more than"), "{m}");
     // Foreign.
     std::fs::write(&path, b"ncols 3\n").expect("write");
     assert!(format_message(read_dem(&path, &with_spacing(1.0, 1.0))).contains("not a readable PNG"));
