@@ -68,7 +68,7 @@ impl Tin {
     /// manifold edges, and computing adjacency.
     ///
     /// Triangles must all be counter-clockwise in x,y, or all clockwise (then every triangle is flipped).
-    /// Overlap in x,y is not checked here; see [`crate::validate`].
+    /// Overlap in x,y is not checked here; see [`crate::validate()`].
     pub fn from_parts(positions: Vec<DVec3>, mut triangles: Vec<[u32; 3]>) -> Result<Tin> {
         for (index, p) in positions.iter().enumerate() {
             if !p.is_finite() {

@@ -5,7 +5,8 @@
 //! `f`/`fo` faces with `v`, `v/vt`, `v//vn` or `v/vt/vn` references (positive or negative, i.e. relative, indices).
 //! Every other standard OBJ statement (`vt`, `vn`, `l`, `p`, `o`, `g`, `s`, `usemtl`, `mtllib`, free-form geometry,
 //! …) is counted and ignored; an unknown statement is an error, which is how foreign files are caught. `#` starts
-//! a comment anywhere on a line. Line continuation with a trailing `\` is not supported.
+//! a comment anywhere on a line; a UTF-8 byte-order mark is skipped. Line continuation with a trailing `\` is not
+//! supported.
 //!
 //! The reader is a small line parser of its own rather than `tobj`: `tobj` reports errors without line numbers,
 //! reindexes vertices per object (dropping unreferenced ones, so a vertex-only point cloud yields nothing) and
@@ -289,6 +290,11 @@ fn parse_lines(text: &[u8], path: &Path) -> Result<Parsed> {
     for (i, raw) in text.split(|&b| b == b'\n').enumerate() {
         let line = i + 1;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        let raw = if i == 0 {
+            raw.strip_prefix("\u{feff}".as_bytes()).unwrap_or(raw)
+        } else {
+            raw
+        };
         let s = std::str::from_utf8(raw).map_err(|_| line_err(line, ObjLineError::NotUtf8))?;
         let s = s.find('#').map_or(s, |c| &s[..c]);
         let mut words = s.split_whitespace();

@@ -337,7 +337,7 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
                         count += 1;
                         if limit > 0 {
                             found.push([a.0.min(b.0), a.0.max(b.0)]);
-                            if found.len() >= 2 * limit {
+                            if found.len() >= limit.saturating_mul(2) {
                                 found = keep_smallest(found);
                             }
                         }
@@ -584,5 +584,167 @@ impl Tin {
     /// Summary figures; see [`mesh_stats`].
     pub fn stats(&self) -> MeshStats {
         mesh_stats(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn tri(p: [(f64, f64); 3]) -> [DVec2; 3] {
+        let mut t = p.map(|(x, y)| DVec2::new(x, y));
+        if orient_exact(t[0], t[1], t[2]) < 0.0 {
+            t.swap(1, 2);
+        }
+        t
+    }
+
+    /// Area of the intersection of two counter-clockwise triangles (Sutherland-Hodgman clipping): an independent
+    /// oracle for [`interiors_overlap`].
+    fn intersection_area(a: &[DVec2; 3], b: &[DVec2; 3]) -> f64 {
+        let mut poly: Vec<DVec2> = a.to_vec();
+        for i in 0..3 {
+            let (p, q) = (b[i], b[(i + 1) % 3]);
+            let side = |v: DVec2| (q - p).perp_dot(v - p);
+            let mut out = Vec::new();
+            for k in 0..poly.len() {
+                let (s, e) = (poly[k], poly[(k + 1) % poly.len()]);
+                let (ds, de) = (side(s), side(e));
+                if ds >= 0.0 {
+                    out.push(s);
+                }
+                if (ds >= 0.0) != (de >= 0.0) {
+                    out.push(s + (e - s) * (ds / (ds - de)));
+                }
+            }
+            poly = out;
+            if poly.is_empty() {
+                return 0.0;
+            }
+        }
+        0.5 * (0..poly.len())
+            .map(|k| poly[k].perp_dot(poly[(k + 1) % poly.len()]))
+            .sum::<f64>()
+    }
+
+    #[test]
+    fn overlap_cases() {
+        let a = tri([(0.0, 0.0), (4.0, 0.0), (0.0, 4.0)]);
+        // Shared edge, other side.
+        assert!(!interiors_overlap(&a, &tri([(4.0, 0.0), (0.0, 4.0), (4.0, 4.0)])));
+        // Shared vertex only.
+        assert!(!interiors_overlap(&a, &tri([(4.0, 0.0), (6.0, 0.0), (5.0, 1.0)])));
+        // Touching along part of an edge (T-junction).
+        assert!(!interiors_overlap(&a, &tri([(1.0, 0.0), (3.0, 0.0), (2.0, -1.0)])));
+        // Identical.
+        assert!(interiors_overlap(&a, &a));
+        // One inside the other.
+        assert!(interiors_overlap(&a, &tri([(1.0, 1.0), (2.0, 1.0), (1.0, 2.0)])));
+        // Star of David: no vertex inside the other, edges cross.
+        let up = tri([(0.0, 0.0), (6.0, 0.0), (3.0, 5.0)]);
+        let down = tri([(0.0, 3.0), (6.0, 3.0), (3.0, -2.0)]);
+        assert!(interiors_overlap(&up, &down));
+        // Same edge, same side.
+        assert!(interiors_overlap(&a, &tri([(0.0, 0.0), (4.0, 0.0), (1.0, 1.0)])));
+        // Disjoint.
+        assert!(!interiors_overlap(&a, &tri([(5.0, 5.0), (6.0, 5.0), (5.0, 6.0)])));
+    }
+
+    #[test]
+    fn f32_step_matches_f32() {
+        for v in [
+            1.0f32,
+            1.5,
+            100_000.0,
+            4_194_304.0,
+            5_000_000.0,
+            0.001,
+            3.0e38,
+            f32::MIN_POSITIVE,
+        ] {
+            assert_eq!(f32_step(f64::from(v)), f64::from(v.next_up() - v), "{v}");
+        }
+        assert_eq!(f32_step(5e6), 0.5);
+        assert_eq!(f32_step(1e5), 2f64.powi(-7));
+    }
+
+    fn small_point() -> impl Strategy<Value = (f64, f64)> {
+        (0i32..7, 0i32..7).prop_map(|(x, y)| (f64::from(x), f64::from(y)))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// The exact separating-edge test agrees with the area of the clipped intersection.
+        #[test]
+        fn overlap_test_matches_clipping(p in prop::array::uniform3(small_point()), q in prop::array::uniform3(small_point())) {
+            let (a, b) = (tri(p), tri(q));
+            prop_assume!(orient_exact(a[0], a[1], a[2]) != 0.0 && orient_exact(b[0], b[1], b[2]) != 0.0);
+            let area = intersection_area(&a, &b);
+            // Intersection areas of triangles on a 7 x 7 integer grid are rationals far above 1e-6 when positive.
+            prop_assert_eq!(interiors_overlap(&a, &b), area > 1e-6, "area {}", area);
+            prop_assert_eq!(interiors_overlap(&a, &b), interiors_overlap(&b, &a));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+        /// The bucketed search finds exactly the pairs that the all-pairs search finds.
+        #[test]
+        fn grid_search_matches_all_pairs(
+            pts in prop::collection::vec((0.0f64..100.0, 0.0f64..100.0), 3..40),
+            tris in prop::collection::vec((0usize..40, 0usize..40, 0usize..40), 1..60),
+            limit in 0usize..10,
+        ) {
+            let positions: Vec<DVec3> = pts.iter().map(|&(x, y)| DVec3::new(x, y, 0.0)).collect();
+            let n = positions.len();
+            let triangles: Vec<[u32; 3]> = tris.iter().map(|&(a, b, c)| [(a % n) as u32, (b % n) as u32, (c % n) as u32]).collect();
+            check_against_all_pairs(&positions, &triangles, limit)?;
+        }
+
+        /// Same, with many small triangles scattered over a large area (many grid cells, few overlaps).
+        #[test]
+        fn grid_search_matches_all_pairs_small_triangles(
+            tris in prop::collection::vec(((0.0f64..200.0, 0.0f64..200.0), prop::array::uniform3((-4.0f64..4.0, -4.0f64..4.0))), 1..150),
+            limit in 0usize..10,
+        ) {
+            let mut positions = Vec::new();
+            let mut triangles = Vec::new();
+            for ((x, y), corners) in &tris {
+                let base = positions.len() as u32;
+                positions.extend(corners.iter().map(|(dx, dy)| DVec3::new(x + dx, y + dy, 0.0)));
+                triangles.push([base, base + 1, base + 2]);
+            }
+            check_against_all_pairs(&positions, &triangles, limit)?;
+        }
+    }
+
+    fn check_against_all_pairs(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) -> Result<(), TestCaseError> {
+        {
+            let mut expected = Vec::new();
+            let ccw = |t: &[u32; 3]| {
+                let c = t.map(|v| positions[v as usize].truncate());
+                let o = orient_exact(c[0], c[1], c[2]);
+                (o != 0.0).then(|| if o < 0.0 { [c[0], c[2], c[1]] } else { c })
+            };
+            for i in 0..triangles.len() {
+                for j in i + 1..triangles.len() {
+                    if let (Some(a), Some(b)) = (ccw(&triangles[i]), ccw(&triangles[j]))
+                        && interiors_overlap(&a, &b)
+                    {
+                        expected.push([i as u32, j as u32]);
+                    }
+                }
+            }
+            let found = find_overlaps(positions, triangles, usize::MAX);
+            prop_assert_eq!(found.count, expected.len());
+            prop_assert_eq!(&found.first, &expected);
+            let limited = find_overlaps(positions, triangles, limit);
+            prop_assert_eq!(limited.count, expected.len());
+            prop_assert_eq!(&limited.first[..], &expected[..limit.min(expected.len())]);
+        }
+        Ok(())
     }
 }

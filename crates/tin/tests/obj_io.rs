@@ -451,6 +451,23 @@ fn garbage_is_reported() {
 }
 
 #[test]
+fn byte_order_mark_and_crlf_are_accepted() {
+    let text = "\u{feff}v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n";
+    let (tin, report) = keep(text).expect("valid");
+    assert_eq!((report.vertices_read, tin.num_triangles()), (3, 1));
+    // A mark anywhere else is garbage.
+    assert_eq!(
+        line_error(keep("v 0 0 0\n\u{feff}v 1 0 0\n")),
+        (
+            2,
+            K::UnknownStatement {
+                keyword: "\u{feff}v".into()
+            }
+        )
+    );
+}
+
+#[test]
 fn keep_faces_needs_faces() {
     match keep("v 0 0 0\nv 1 0 0\nv 0 1 0\n") {
         Err(TinError::Format { message, .. }) => assert!(message.contains("no faces"), "{message}"),

@@ -146,7 +146,9 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
         .checked_mul(cols)
         .filter(|&n| n <= (1 << 31))
         .ok_or_else(|| err(format!("{rows} x {cols} samples is too many")))?;
-    let mut z = Vec::with_capacity(expected);
+    // Every value takes at least two bytes: never reserve more than the file can hold (a lying header must not
+    // allocate gigabytes).
+    let mut z = Vec::with_capacity(expected.min(bytes.len() / 2 + 1));
     for (i, line) in lines {
         for word in line.split_whitespace() {
             if z.len() == expected {

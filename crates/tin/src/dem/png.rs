@@ -14,6 +14,9 @@ use super::{DemOptions, finish, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
+/// Largest image (in samples) read: 16384 x 16384.
+pub const MAX_SAMPLES: u64 = 1 << 28;
+
 /// Reads a PNG height map (see the module documentation).
 pub fn read_png(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check()?;
@@ -37,6 +40,12 @@ pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
     let info = reader.info();
     let (color, depth) = (info.color_type, info.bit_depth);
+    if u64::from(info.width) * u64::from(info.height) > MAX_SAMPLES {
+        return Err(err(format!(
+            "{} x {} samples is more than the {MAX_SAMPLES} supported",
+            info.width, info.height
+        )));
+    }
     if color != png::ColorType::Grayscale || !matches!(depth, png::BitDepth::Eight | png::BitDepth::Sixteen) {
         return Err(err(format!(
             "colour type {color:?} with {} bits per sample: only 8- or 16-bit grayscale height maps are supported",

@@ -1,0 +1,568 @@
+//! DEM readers: small fixtures written by the tests, malformed files, and the real data sets when present.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec2;
+use tin::dem::hgt::{METRES_PER_DEGREE, TileName, parse_tile_name};
+use tin::{DemOptions, Grid, TinError, read_dem};
+
+fn opts() -> DemOptions {
+    DemOptions::default()
+}
+
+fn with_spacing(dx: f64, dy: f64) -> DemOptions {
+    DemOptions {
+        spacing: Some((dx, dy)),
+        z_scale: 1.0,
+    }
+}
+
+fn format_message(r: tin::Result<Grid>) -> String {
+    match r {
+        Err(TinError::Format { message, .. }) => message,
+        Err(e) => panic!("expected a format error, got {e}"),
+        Ok(g) => panic!("expected a format error, got a {} x {} grid", g.rows, g.cols),
+    }
+}
+
+/// Bit-exact comparison that treats NaN (void) as equal to NaN.
+fn same_heights(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()))
+}
+
+// ---------------------------------------------------------------- npy
+
+/// Writes a `.npy` file with the given header fields and raw data.
+fn write_npy(path: &Path, version: u8, descr: &str, fortran: bool, shape: &str, data: &[u8]) {
+    let dict = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    let prefix = if version == 1 { 10 } else { 12 };
+    let mut header = dict.into_bytes();
+    while (prefix + header.len() + 1) % 64 != 0 {
+        header.push(b' ');
+    }
+    header.push(b'\n');
+    let mut bytes = b"\x93NUMPY".to_vec();
+    bytes.push(version);
+    bytes.push(0);
+    if version == 1 {
+        bytes.extend((header.len() as u16).to_le_bytes());
+    } else {
+        bytes.extend((header.len() as u32).to_le_bytes());
+    }
+    bytes.extend(header);
+    bytes.extend(data);
+    std::fs::write(path, bytes).expect("write npy");
+}
+
+const VALUES: [f64; 6] = [1.0, -2.0, 3.5, 400.0, -32768.0, 6.25];
+
+#[test]
+fn npy_element_types_and_byte_orders() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let exact = VALUES.to_vec();
+    let truncated: Vec<f64> = VALUES.iter().map(|v| v.trunc()).collect();
+    let cases: Vec<(&str, Vec<u8>, &Vec<f64>)> = vec![
+        ("<f8", VALUES.iter().flat_map(|v| v.to_le_bytes()).collect(), &exact),
+        (">f8", VALUES.iter().flat_map(|v| v.to_be_bytes()).collect(), &exact),
+        (
+            "<f4",
+            VALUES.iter().flat_map(|&v| (v as f32).to_le_bytes()).collect(),
+            &exact,
+        ),
+        (
+            ">f4",
+            VALUES.iter().flat_map(|&v| (v as f32).to_be_bytes()).collect(),
+            &exact,
+        ),
+        (
+            "<i4",
+            VALUES.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect(),
+            &truncated,
+        ),
+        (
+            ">i8",
+            VALUES.iter().flat_map(|&v| (v as i64).to_be_bytes()).collect(),
+            &truncated,
+        ),
+    ];
+    for (version, (descr, data, expected)) in [1u8, 2, 3].into_iter().cycle().zip(cases) {
+        let path = dir.path().join(format!("a{}.npy", descr.replace(['<', '>'], "_")));
+        write_npy(&path, version, descr, false, "(2, 3)", &data);
+        let g = read_dem(&path, &with_spacing(10.0, 20.0)).expect(descr);
+        assert_eq!((g.rows, g.cols, g.dx, g.dy), (2, 3, 10.0, 20.0), "{descr}");
+        assert_eq!(&g.z, expected, "{descr}");
+        // No georeference: the south-west sample is at (0, 0).
+        assert_eq!(g.origin, DVec2::new(0.0, 20.0), "{descr}");
+        assert_eq!(g.sample(1, 0).map(|p| p.truncate()), Some(DVec2::ZERO));
+    }
+    // Unsigned bytes and 16-bit words.
+    let path = dir.path().join("u.npy");
+    write_npy(&path, 1, "|u1", false, "(2, 2)", &[0, 1, 128, 255]);
+    assert_eq!(
+        read_dem(&path, &with_spacing(1.0, 1.0)).expect("u1").z,
+        vec![0.0, 1.0, 128.0, 255.0]
+    );
+    write_npy(&path, 1, ">u2", false, "(2, 2)", &[0, 1, 255, 255, 128, 0, 0, 0]);
+    assert_eq!(
+        read_dem(&path, &with_spacing(1.0, 1.0)).expect("u2").z,
+        vec![1.0, 65535.0, 32768.0, 0.0]
+    );
+    // i2 both ways, with extreme values.
+    let ints: [i16; 4] = [-32768, -1, 0, 32767];
+    for (descr, data) in [
+        ("<i2", ints.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()),
+        (">i2", ints.iter().flat_map(|v| v.to_be_bytes()).collect()),
+    ] {
+        let path = dir.path().join("ints.npy");
+        write_npy(&path, 1, descr, false, "(2, 2)", &data);
+        let g = read_dem(&path, &with_spacing(1.0, 1.0)).expect(descr);
+        assert_eq!(g.z, vec![-32768.0, -1.0, 0.0, 32767.0], "{descr}");
+    }
+}
+
+#[test]
+fn npy_fortran_order_is_transposed_storage() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("f.npy");
+    // The 2 x 3 array [[1, 2, 3], [4, 5, 6]] in column-major order.
+    let stored = [1i16, 4, 2, 5, 3, 6];
+    write_npy(
+        &path,
+        1,
+        "<i2",
+        true,
+        "(2, 3)",
+        &stored.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>(),
+    );
+    let g = read_dem(&path, &with_spacing(1.0, 1.0)).expect("reads");
+    assert_eq!(g.z, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+}
+
+#[test]
+fn npy_sidecar_gives_spacing_nodata_and_origin() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("dem.npy");
+    let data: Vec<u8> = VALUES.iter().flat_map(|&v| (v as i16).to_le_bytes()).collect();
+    write_npy(&path, 1, "<i2", false, "(2, 3)", &data);
+    // No sidecar, no spacing: a clear error.
+    let m = format_message(read_dem(&path, &opts()));
+    assert!(m.contains("no grid spacing") && m.contains("dem.json"), "{m}");
+    std::fs::write(
+        dir.path().join("dem.json"),
+        r#"{"rows": 2, "cols": 3, "spacing_x_m": 30.5, "spacing_y_m": 40.25, "nodata": -32768,
+            "easting_min": 1000.0, "northing_max": 5000.0, "units": "metres"}"#,
+    )
+    .expect("sidecar");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!((g.dx, g.dy), (30.5, 40.25));
+    assert_eq!(g.origin, DVec2::new(1000.0, 5000.0));
+    assert_eq!(g.voids(), 1);
+    assert!(g.z[4].is_nan(), "nodata is a void, never a height");
+    // The caller's spacing wins, and z_scale scales heights (not voids).
+    let g = read_dem(
+        &path,
+        &DemOptions {
+            spacing: Some((1.0, 2.0)),
+            z_scale: 0.5,
+        },
+    )
+    .expect("reads");
+    assert_eq!((g.dx, g.dy), (1.0, 2.0));
+    assert_eq!(g.z[1], -1.0);
+    assert!(g.z[4].is_nan());
+    // A sidecar that disagrees with the array.
+    std::fs::write(
+        dir.path().join("dem.json"),
+        r#"{"rows": 3, "spacing_x_m": 1, "spacing_y_m": 1}"#,
+    )
+    .expect("sidecar");
+    let m = format_message(read_dem(&path, &opts()));
+    assert!(m.contains("rows = 3"), "{m}");
+    // Northing given as the southern row.
+    std::fs::write(
+        dir.path().join("dem.json"),
+        r#"{"spacing_x_m": 1, "spacing_y_m": 2, "easting_min": 10, "northing_min": 100, "nodata": null}"#,
+    )
+    .expect("sidecar");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!(g.origin, DVec2::new(10.0, 102.0));
+    assert_eq!(g.voids(), 0);
+    // A broken sidecar.
+    std::fs::write(dir.path().join("dem.json"), "{ not json").expect("sidecar");
+    let m = format_message(read_dem(&path, &opts()));
+    assert!(m.contains("not valid JSON"), "{m}");
+}
+
+#[test]
+fn npy_malformed_files() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("bad.npy");
+    let s = with_spacing(1.0, 1.0);
+    let data: Vec<u8> = (0..6i16).flat_map(|v| v.to_le_bytes()).collect();
+    // Truncated data.
+    write_npy(&path, 1, "<i2", false, "(2, 3)", &data[..11]);
+    let m = format_message(read_dem(&path, &s));
+    assert!(
+        m.contains("truncated") && m.contains("11 data bytes, expected 12"),
+        "{m}"
+    );
+    // Trailing data.
+    write_npy(&path, 1, "<i2", false, "(2, 3)", &[data.as_slice(), &[0, 0]].concat());
+    assert!(format_message(read_dem(&path, &s)).contains("2 bytes of unexpected data"));
+    // Not 2-D.
+    write_npy(&path, 1, "<i2", false, "(6,)", &data);
+    assert!(format_message(read_dem(&path, &s)).contains("expected a 2-D array"));
+    // Unsupported type.
+    write_npy(&path, 1, "<c16", false, "(2, 3)", &data);
+    assert!(format_message(read_dem(&path, &s)).contains("unsupported element type"));
+    // Foreign file.
+    std::fs::write(&path, b"\x89PNG\r\n\x1a\n0000000000000").expect("write");
+    assert!(format_message(read_dem(&path, &s)).contains("bad magic"));
+    // Truncated header.
+    std::fs::write(&path, b"\x93NUMPY\x01\x00\x76\x00{'descr'").expect("write");
+    assert!(format_message(read_dem(&path, &s)).contains("truncated .npy header"));
+    // Garbled header.
+    write_npy(&path, 1, "<i2", false, "(2, three)", &data);
+    assert!(format_message(read_dem(&path, &s)).contains("bad .npy header"));
+    // Too small for a grid.
+    write_npy(&path, 1, "<i2", false, "(1, 6)", &data);
+    assert!(format_message(read_dem(&path, &s)).contains("at least 2 x 2"));
+    // Infinite heights.
+    let inf: Vec<u8> = [0.0, 1.0, f64::INFINITY, 2.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    write_npy(&path, 1, "<f8", false, "(2, 2)", &inf);
+    assert!(format_message(read_dem(&path, &s)).contains("(row 1, col 0) is infinite"));
+    // Missing file.
+    assert!(matches!(
+        read_dem(&dir.path().join("none.npy"), &s),
+        Err(TinError::Io { .. })
+    ));
+}
+
+#[test]
+fn npy_nan_is_void() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("nan.npy");
+    let data: Vec<u8> = [0.0f32, f32::NAN, 2.0, 3.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    write_npy(&path, 1, "<f4", false, "(2, 2)", &data);
+    let g = read_dem(&path, &with_spacing(1.0, 1.0)).expect("reads");
+    assert_eq!(g.voids(), 1);
+    assert_eq!(g.points().len(), 3);
+}
+
+// ---------------------------------------------------------------- asc
+
+#[test]
+fn asc_corner_and_centre_conventions() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("g.asc");
+    let body = "1 2 3\n4 -9999 6\n";
+    std::fs::write(
+        &path,
+        format!("ncols 3\nnrows 2\nxllcorner 100\nyllcorner 200\ncellsize 10\nNODATA_value -9999\n{body}"),
+    )
+    .expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!((g.rows, g.cols, g.dx, g.dy), (2, 3, 10.0, 10.0));
+    // Lower-left cell corner (100, 200): its centre is (105, 205); the north-west centre is one row up.
+    assert_eq!(g.origin, DVec2::new(105.0, 215.0));
+    assert_eq!(g.voids(), 1);
+    assert_eq!(g.z[0..3], [1.0, 2.0, 3.0]);
+    std::fs::write(
+        &path,
+        format!("NCOLS 3\nNROWS 2\nXLLCENTER 100\nYLLCENTER 200\nDX 10\nDY 20\n{body}"),
+    )
+    .expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!((g.dx, g.dy), (10.0, 20.0));
+    assert_eq!(g.origin, DVec2::new(100.0, 220.0));
+    assert_eq!(g.voids(), 0, "without NODATA_value, -9999 is a height");
+    assert_eq!(g.sample(1, 0).map(|p| p.truncate()), Some(DVec2::new(100.0, 200.0)));
+}
+
+#[test]
+fn asc_malformed_files() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("bad.asc");
+    let header = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n";
+    let cases = [
+        (format!("{header}1 2 3\n4 5"), "truncated: 5 values"),
+        (format!("{header}1 2 3\n4 5 6 7\n"), "line 7: more than the 6 values"),
+        (
+            format!("{header}1 2 3\n4 x 6\n"),
+            "line 7: \"x\" is not a number (row 1, column 1)",
+        ),
+        (format!("{header}1 2 3\n4 5 6."), ""), // "6." is a number: complete
+        (
+            "ncols 3\nnrows 2\nxllcorner 0\ncellsize 1\n1 2 3 4 5 6\n".to_string(),
+            "no yllcorner or yllcenter",
+        ),
+        (
+            "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\n1 2 3 4 5 6\n".to_string(),
+            "no cellsize",
+        ),
+        (
+            "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\ndx 2\n1 2 3 4 5 6\n".to_string(),
+            "either cellsize",
+        ),
+        (
+            "ncols three\n".to_string(),
+            "line 1: ncols = \"three\" is not a positive integer",
+        ),
+        ("ncols 3\nncols 3\n".to_string(), "line 2: ncols given twice"),
+        ("hello world\n".to_string(), "line 1: unknown header key \"hello\""),
+        ("ncols\n".to_string(), "line 1: header key \"ncols\" has no value"),
+        ("".to_string(), "no ncols"),
+        // A header that promises two billion values but holds none.
+        (
+            "ncols 46340\nnrows 46340\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n".to_string(),
+            "truncated: 2 values",
+        ),
+    ];
+    for (text, expected) in cases {
+        std::fs::write(&path, &text).expect("write");
+        let r = read_dem(&path, &opts());
+        if expected.is_empty() {
+            assert!(r.is_ok(), "{text:?}: {r:?}");
+        } else {
+            let m = format_message(r);
+            assert!(m.contains(expected), "{text:?}: {m}");
+        }
+    }
+    std::fs::write(&path, b"ncols 3\n\xff\xfe\x00binary").expect("write");
+    assert!(format_message(read_dem(&path, &opts())).contains("line 2: not text"));
+}
+
+// ---------------------------------------------------------------- hgt
+
+fn hgt_bytes(n: usize, f: impl Fn(usize, usize) -> i16) -> Vec<u8> {
+    (0..n * n).flat_map(|i| f(i / n, i % n).to_be_bytes()).collect()
+}
+
+#[test]
+fn hgt_tiles() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("S12E034.hgt");
+    let bytes = hgt_bytes(1201, |r, c| {
+        if (r, c) == (7, 9) {
+            -32768
+        } else {
+            (r as i16) - (c as i16)
+        }
+    });
+    std::fs::write(&path, &bytes).expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!((g.rows, g.cols), (1201, 1201));
+    assert_eq!(g.voids(), 1);
+    assert!(g.z[7 * 1201 + 9].is_nan());
+    assert_eq!(g.z[3 * 1201 + 1], 2.0);
+    assert_eq!(g.z[1200], -1200.0);
+    let dy = METRES_PER_DEGREE / 1200.0;
+    assert_eq!(g.dy, dy);
+    assert_eq!(g.dx, dy * (-11.5f64).to_radians().cos());
+    // West edge at x = 0; the southern row at latitude -12.
+    assert_eq!(g.origin.x, 0.0);
+    let south = g.sample(1200, 0).expect("not void").y;
+    assert!((south - (-12.0 * METRES_PER_DEGREE)).abs() < 1e-6, "{south}");
+    assert!((g.origin.y - (-11.0 * METRES_PER_DEGREE)).abs() < 1e-6);
+    // Wrong sizes and names.
+    let short = dir.path().join("N00E000.hgt");
+    std::fs::write(&short, &bytes[..bytes.len() - 1]).expect("write");
+    assert!(format_message(read_dem(&short, &opts())).contains("2884801 bytes is not an SRTM tile"));
+    let nameless = dir.path().join("tile.hgt");
+    std::fs::write(&nameless, &bytes).expect("write");
+    assert!(format_message(read_dem(&nameless, &opts())).contains("cannot tell the tile's position"));
+    assert_eq!(parse_tile_name("n43w123.hgt"), Some(TileName { lat: 43, lon: -123 }));
+    assert_eq!(
+        parse_tile_name("N50E008.SRTMGL1.hgt"),
+        Some(TileName { lat: 50, lon: 8 })
+    );
+    assert_eq!(parse_tile_name("N95E008.hgt"), None);
+    assert_eq!(parse_tile_name("N43X123.hgt"), None);
+    assert_eq!(parse_tile_name("N4"), None);
+}
+
+// ---------------------------------------------------------------- png
+
+fn write_png(path: &Path, w: u32, h: u32, color: png::ColorType, depth: png::BitDepth, data: &[u8]) {
+    let file = std::fs::File::create(path).expect("create");
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    enc.set_color(color);
+    enc.set_depth(depth);
+    let mut writer = enc.write_header().expect("header");
+    writer.write_image_data(data).expect("data");
+}
+
+#[test]
+fn png_height_maps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("h.png");
+    let values: [u16; 6] = [0, 1, 65535, 300, 40000, 7];
+    let data: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
+    write_png(&path, 3, 2, png::ColorType::Grayscale, png::BitDepth::Sixteen, &data);
+    let o = DemOptions {
+        spacing: Some((2.0, 3.0)),
+        z_scale: 0.1,
+    };
+    let g = read_dem(&path, &o).expect("reads");
+    assert_eq!((g.rows, g.cols, g.dx, g.dy), (2, 3, 2.0, 3.0));
+    let expected: Vec<f64> = values.iter().map(|&v| f64::from(v) * 0.1).collect();
+    assert!(same_heights(&g.z, &expected), "{:?}", g.z);
+    assert_eq!(g.origin, DVec2::new(0.0, 3.0));
+    // Spacing is required.
+    assert!(matches!(read_dem(&path, &opts()), Err(TinError::InvalidParameter(m)) if m.contains("spacing")));
+    // 8-bit gray.
+    write_png(
+        &path,
+        2,
+        2,
+        png::ColorType::Grayscale,
+        png::BitDepth::Eight,
+        &[0, 10, 200, 255],
+    );
+    let g = read_dem(&path, &with_spacing(1.0, 1.0)).expect("reads");
+    assert_eq!(g.z, vec![0.0, 10.0, 200.0, 255.0]);
+    // Colour is rejected.
+    write_png(&path, 2, 2, png::ColorType::Rgb, png::BitDepth::Eight, &[0; 12]);
+    let m = format_message(read_dem(&path, &with_spacing(1.0, 1.0)));
+    assert!(m.contains("Rgb") && m.contains("grayscale"), "{m}");
+    // Truncated.
+    write_png(
+        &path,
+        64,
+        64,
+        png::ColorType::Grayscale,
+        png::BitDepth::Sixteen,
+        &[7; 64 * 64 * 2],
+    );
+    let bytes = std::fs::read(&path).expect("read");
+    std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
+    let m = format_message(read_dem(&path, &with_spacing(1.0, 1.0)));
+    assert!(m.contains("truncated or corrupt PNG"), "{m}");
+    // A header announcing 65535 x 65535 samples is refused before anything is allocated.
+    let mut huge = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut huge, 65535, 65535);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        let mut w = enc.write_header().expect("header");
+        w.write_chunk(png::chunk::IDAT, &[0x78, 0x9c]).expect("chunk");
+        drop(w);
+    }
+    std::fs::write(&path, &huge).expect("write");
+    let m = format_message(read_dem(&path, &with_spacing(1.0, 1.0)));
+    assert!(m.contains("65535 x 65535 samples is more than"), "{m}");
+    // Foreign.
+    std::fs::write(&path, b"ncols 3\n").expect("write");
+    assert!(format_message(read_dem(&path, &with_spacing(1.0, 1.0))).contains("not a readable PNG"));
+}
+
+#[test]
+fn dispatch_and_options() {
+    let m = format_message(read_dem(Path::new("terrain.tif"), &opts()));
+    assert!(m.contains("unsupported DEM extension \"tif\""), "{m}");
+    for bad in [
+        DemOptions {
+            spacing: None,
+            z_scale: 0.0,
+        },
+        DemOptions {
+            spacing: Some((0.0, 1.0)),
+            z_scale: 1.0,
+        },
+        DemOptions {
+            spacing: Some((1.0, f64::NAN)),
+            z_scale: 1.0,
+        },
+    ] {
+        assert!(matches!(
+            read_dem(Path::new("x.asc"), &bad),
+            Err(TinError::InvalidParameter(_))
+        ));
+    }
+}
+
+// ---------------------------------------------------------------- real data
+
+fn shared_dem() -> Option<PathBuf> {
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/dem"));
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!("{} not found: skipping the real-data checks", dir.display());
+        None
+    }
+}
+
+fn range(g: &Grid) -> (f64, f64) {
+    g.z.iter()
+        .filter(|z| !z.is_nan())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &z| {
+            (lo.min(z), hi.max(z))
+        })
+}
+
+#[test]
+fn real_jacksboro_npy_and_asc_agree() {
+    let Some(dir) = shared_dem() else { return };
+    let npy = read_dem(&dir.join("jacksboro_fault.npy"), &opts()).expect("npy");
+    assert_eq!((npy.rows, npy.cols), (344, 403));
+    assert_eq!((npy.dx, npy.dy), (74.485, 92.767));
+    assert_eq!(npy.voids(), 0);
+    assert_eq!(range(&npy), (236.0, 1076.0));
+    assert_eq!(npy.origin, DVec2::new(0.0, 343.0 * 92.767));
+    let asc = read_dem(&dir.join("jacksboro_fault.asc"), &opts()).expect("asc");
+    assert_eq!((asc.rows, asc.cols, asc.dx, asc.dy), (344, 403, 74.485, 92.767));
+    assert!(same_heights(&npy.z, &asc.z));
+    // The ASCII grid's lower-left cell corner is (0, 0), half a cell from its sample.
+    assert_eq!(asc.origin, DVec2::new(74.485 / 2.0, 92.767 / 2.0 + 343.0 * 92.767));
+}
+
+#[test]
+fn real_crater_lake() {
+    let Some(dir) = shared_dem() else { return };
+    let g = read_dem(&dir.join("crater_lake.npy"), &opts()).expect("npy");
+    assert_eq!((g.rows, g.cols), (513, 513));
+    assert_eq!((g.dx, g.dy), (20.182, 27.305));
+    assert_eq!(range(&g), (1524.0, 2478.0));
+    assert_eq!(g.voids(), 0);
+    assert_eq!(g.origin, DVec2::new(561_133.125, 4_760_971.5));
+    // The file is Fortran-ordered. Read the right way round, the lake (flat at 1883 m) touches the eastern edge
+    // and the summit of Wizard Island (2111 m, the highest point the lake surrounds) lies in its west part; the
+    // transposed reading would put the lake on the southern edge.
+    assert_eq!(g.z[251 * 513 + 427], 2111.0);
+    assert_eq!(g.z[250 * 513 + 512], 1883.0);
+    assert_ne!(g.z[512 * 513 + 250], 1883.0);
+}
+
+#[test]
+fn real_srtm_tiles() {
+    let Some(dir) = shared_dem() else { return };
+    let g = read_dem(&dir.join("N43W123.hgt"), &opts()).expect("hgt");
+    assert_eq!((g.rows, g.cols), (1201, 1201));
+    assert_eq!(g.voids(), 0);
+    assert_eq!(range(&g), (143.0, 2731.0));
+    // 3 arc-seconds: 92.77 m north-south; east-west at the tile centre (43.5 N).
+    assert!((g.dy - 92.7667).abs() < 1e-3, "{}", g.dy);
+    assert!((g.dx - 67.291).abs() < 0.001, "{}", g.dx);
+    assert!((g.origin.y - 44.0 * METRES_PER_DEGREE).abs() < 1e-6);
+
+    let g = read_dem(&dir.join("N50E008.hgt"), &opts()).expect("hgt");
+    assert_eq!((g.rows, g.cols), (1201, 1201));
+    assert_eq!(g.voids(), 50);
+    assert_eq!(range(&g), (62.0, 885.0));
+    assert!((g.dx - 59.007).abs() < 0.001, "{}", g.dx);
+    // Voids never become vertices.
+    assert_eq!(g.points().len(), 1201 * 1201 - 50);
+}

@@ -1,0 +1,204 @@
+//! Validation reports and mesh statistics on constructed meshes with known answers.
+
+use glam::DVec3;
+use tin::{DedupePolicy, Tin, triangulate, validate, validate_parts};
+
+fn grid(w: usize, h: usize, spacing: f64, offset: DVec3) -> Tin {
+    let points: Vec<DVec3> = (0..w * h)
+        .map(|i| {
+            offset
+                + DVec3::new(
+                    (i % w) as f64 * spacing,
+                    (i / w) as f64 * spacing,
+                    ((i * 31) % 17) as f64,
+                )
+        })
+        .collect();
+    triangulate(&points, DedupePolicy::Reject).expect("grid").0
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * b.abs().max(1.0)
+}
+
+#[test]
+fn delaunay_grid_is_clean() {
+    let tin = grid(20, 10, 5.0, DVec3::ZERO);
+    let r = tin.validate();
+    assert!(r.is_height_field(), "{:?}", r.warnings);
+    assert_eq!(r.overlapping_pairs, 0);
+    assert_eq!(r.slivers, 0);
+    assert_eq!(
+        r.degenerate_triangles + r.near_degenerate_triangles + r.unreferenced_vertices,
+        0
+    );
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    let s = tin.stats();
+    assert_eq!(s.vertices, 200);
+    assert_eq!(s.triangles, 2 * 19 * 9);
+    assert_eq!(s.boundary_edges, 2 * (19 + 9));
+    assert_eq!(s.area_xy_total, 95.0 * 45.0);
+    assert_eq!(s.area_xy_min, 12.5);
+    assert_eq!(s.area_xy_max, 12.5);
+    assert_eq!(s.relief, 16.0);
+    assert!(close(s.min_angle_deg, 45.0, 1e-12), "{}", s.min_angle_deg);
+    assert!(close(s.max_aspect, 50.0 / 25.0, 1e-12), "{}", s.max_aspect);
+    assert_eq!(s.edge_xy_min, 5.0);
+    assert!(close(s.edge_xy_max, 50f64.sqrt(), 1e-12));
+    // Both serialise.
+    let json = serde_json::to_string(&(r, s)).expect("serialises");
+    assert!(json.contains("\"overlapping_pairs\":0"));
+}
+
+#[test]
+fn slivers_by_angle_and_by_aspect() {
+    // 0: a flat sliver (angles 1.15°, 1.15°, 177.7°); 1: a needle (apex 4°, aspect 14.3, a sliver by angle only);
+    // 2: a cap with base angles 5.5° (aspect 20.8, a sliver by aspect only); 3: equilateral.
+    let t55 = 5.5f64.to_radians().tan();
+    let t2 = 2f64.to_radians().tan();
+    let positions = vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(100.0, 0.0, 0.0),
+        DVec3::new(50.0, 1.0, 0.0),
+        DVec3::new(200.0, 0.0, 0.0),
+        DVec3::new(300.0, -100.0 * t2, 0.0),
+        DVec3::new(300.0, 100.0 * t2, 0.0),
+        DVec3::new(400.0, 0.0, 0.0),
+        DVec3::new(402.0, 0.0, 0.0),
+        DVec3::new(401.0, t55, 0.0),
+        DVec3::new(500.0, 0.0, 0.0),
+        DVec3::new(502.0, 0.0, 0.0),
+        DVec3::new(501.0, 3f64.sqrt(), 0.0),
+    ];
+    let tin = Tin::from_parts(positions, vec![[0, 1, 2], [3, 4, 5], [6, 7, 8], [9, 10, 11]]).expect("valid");
+    let r = validate(&tin);
+    assert_eq!(r.slivers, 3);
+    assert_eq!(r.sliver_examples, vec![0, 1, 2]);
+    assert_eq!(r.near_degenerate_triangles, 0);
+    assert!(r.is_height_field());
+    assert!(r.warnings.iter().any(|w| w.contains("3 sliver")), "{:?}", r.warnings);
+    let s = tin.stats();
+    assert_eq!(s.slivers, 3);
+    assert!(
+        close(s.min_angle_deg, (1.0f64 / 50.0).atan().to_degrees(), 1e-9),
+        "{}",
+        s.min_angle_deg
+    );
+    assert!(close(s.max_aspect, 100.0 * 100.0 / 100.0, 1e-9), "{}", s.max_aspect);
+    let q = |t: usize| {
+        let [a, b, c] = tin.corners(t).map(|p| p.truncate());
+        tin::validate::triangle_quality(a, b, c)
+    };
+    assert!(close(q(1).min_angle_deg, 4.0, 1e-9) && q(1).aspect < 20.0, "{:?}", q(1));
+    assert!(close(q(2).min_angle_deg, 5.5, 1e-9) && q(2).aspect > 20.0, "{:?}", q(2));
+    assert!(close(q(3).min_angle_deg, 60.0, 1e-9) && close(q(3).aspect, 2.0 / 3f64.sqrt(), 1e-9));
+    // A near-degenerate one: altitude 1e-7 of the base.
+    let flat = Tin::from_parts(
+        vec![DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.5, 1e-7, 0.0)],
+        vec![[0, 1, 2]],
+    )
+    .expect("valid");
+    assert_eq!(flat.validate().near_degenerate_triangles, 1);
+}
+
+#[test]
+fn huge_offsets_are_an_f32_risk() {
+    // UTM-like coordinates with 1 m cells: absolute f32 loses half a metre, local coordinates are fine.
+    let tin = grid(10, 10, 1.0, DVec3::new(500_000.0, 5_000_000.0, 100.0));
+    let r = tin.validate();
+    assert!(r.is_height_field());
+    let p = &r.precision;
+    assert_eq!(p.origin, DVec3::new(500_000.0, 5_000_000.0, 0.0));
+    assert_eq!(p.max_abs_coordinate, 5_000_009.0);
+    assert_eq!(p.f32_step_absolute, 0.5);
+    assert!(p.absolute_f32_unsafe);
+    assert!(!p.local_f32_unsafe);
+    assert_eq!(p.min_edge_xy, 1.0);
+    // Local coordinates reach the heights (up to 116 m) and 9 m in x,y.
+    assert_eq!(p.max_local_coordinate, 116.0);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("absolute coordinates")),
+        "{:?}",
+        r.warnings
+    );
+    // A TIN spanning 20,000 km with a 1 mm triangle: even local f32 coordinates are too coarse.
+    let tiny = Tin::from_parts(
+        vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2e7, 0.0, 0.0),
+            DVec3::new(0.0, 2e7, 0.0),
+            DVec3::new(5e6, 5e6, 0.0),
+            DVec3::new(5e6 + 0.001, 5e6, 0.0),
+            DVec3::new(5e6, 5e6 + 0.001, 0.0),
+        ],
+        vec![[0, 1, 2], [3, 4, 5]],
+    )
+    .expect("valid parts");
+    let r = tiny.validate();
+    assert!(r.precision.local_f32_unsafe);
+    assert!(close(r.precision.min_edge_xy, 0.001, 1e-6));
+    // The 1 mm triangle lies inside the big one.
+    assert_eq!(r.overlapping_pairs, 1);
+    assert_eq!(r.overlap_examples, vec![[0, 1]]);
+    // Small coordinates raise nothing.
+    let small = grid(5, 5, 1.0, DVec3::ZERO).validate();
+    assert!(!small.precision.absolute_f32_unsafe && !small.precision.local_f32_unsafe);
+}
+
+#[test]
+fn overlapping_triangles_are_found() {
+    // Tin::from_parts does not check overlap: build a fold where a third triangle covers part of the first.
+    let positions = vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(4.0, 0.0, 0.0),
+        DVec3::new(0.0, 4.0, 0.0),
+        DVec3::new(4.0, 4.0, 0.0),
+        DVec3::new(1.0, 1.0, 5.0),
+        DVec3::new(3.0, 1.0, 5.0),
+    ];
+    let tin = Tin::from_parts(positions, vec![[0, 1, 2], [1, 3, 2], [4, 5, 2]]).expect("manifold and CCW");
+    let r = tin.validate();
+    assert!(!r.is_height_field());
+    assert_eq!(r.overlapping_pairs, 1);
+    assert_eq!(r.overlap_examples, vec![[0, 2]]);
+    assert!(r.warnings.iter().any(|w| w.contains("overlapping")), "{:?}", r.warnings);
+}
+
+#[test]
+fn raw_parts_report_every_problem() {
+    let positions = vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::new(f64::NAN, 0.0, 0.0),
+        DVec3::new(1.0, 1.0, 3.0), // same x,y as 3
+        DVec3::new(7.0, 7.0, 0.0), // unreferenced
+        DVec3::new(2.0, 0.0, 0.0),
+    ];
+    let triangles = vec![
+        [0, 1, 2],  // fine
+        [1, 3, 2],  // fine
+        [0, 2, 1],  // clockwise, overlaps 0, reuses edges 0-2 / 2-1 / 1-0 in directions already used
+        [0, 1, 7],  // degenerate (collinear)
+        [0, 1, 99], // bad index
+        [4, 1, 2],  // non-finite corner
+        [3, 5, 1],  // degenerate (3 and 5 share x,y)
+    ];
+    let r = validate_parts(&positions, &triangles);
+    assert_eq!(r.non_finite_vertices, 1);
+    assert_eq!(r.non_finite_examples, vec![4]);
+    assert_eq!(r.bad_index_triangles, 1);
+    assert_eq!(r.duplicate_xy_vertices, 1);
+    assert_eq!(r.unreferenced_vertices, 1);
+    assert_eq!(r.degenerate_triangles, 2);
+    assert_eq!(r.degenerate_examples, vec![3, 6]);
+    assert_eq!(r.clockwise_triangles, 1);
+    assert_eq!(r.overlapping_pairs, 1);
+    assert_eq!(r.overlap_examples, vec![[0, 2]]);
+    // 0->1 (triangles 0 and 3), 1->2 (0 and 5), 1->3 (1 and 6) are each used twice in one direction; 0-2 is used
+    // once each way, which is fine.
+    assert_eq!(r.non_manifold_edges, 3);
+    assert!(!r.is_height_field());
+    assert!(r.warnings.len() >= 8, "{:?}", r.warnings);
+}
