@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use cull::Hierarchy;
 
-use crate::cli::output::write_atomically;
+use tin::write_atomic;
 
 /// A distinct, reproducible colour for group `i` (golden-ratio hue steps, fixed saturation and value).
 pub fn group_colour(i: usize) -> [f64; 3] {
@@ -38,9 +38,14 @@ pub fn write_grouped_obj(h: &Hierarchy, path: &Path) -> Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .context("the OBJ path has no file name")?;
-    let mut leaves: Vec<[u32; 2]> = h.nodes.iter().filter(|n| n.children.is_empty()).map(|n| n.triangles).collect();
+    let mut leaves: Vec<[u32; 2]> = h
+        .nodes
+        .iter()
+        .filter(|n| n.children.is_empty())
+        .map(|n| n.triangles)
+        .collect();
     leaves.sort_unstable();
-    write_atomically(&mtl_path, |w| {
+    write_atomic(&mtl_path, |w| {
         writeln!(w, "# tincull groups: one material per leaf group, grey for orphans")?;
         for (i, _) in leaves.iter().enumerate() {
             let [r, g, b] = group_colour(i);
@@ -50,7 +55,7 @@ pub fn write_grouped_obj(h: &Hierarchy, path: &Path) -> Result<()> {
         writeln!(w, "newmtl orphans\nKd {r:.4} {g:.4} {b:.4}")?;
         Ok(())
     })?;
-    write_atomically(path, |w| {
+    Ok(write_atomic(path, |w| {
         writeln!(
             w,
             "# tincull hierarchy mesh: {} vertices, {} triangles, {} groups, {} orphans",
@@ -76,11 +81,11 @@ pub fn write_grouped_obj(h: &Hierarchy, path: &Path) -> Result<()> {
         writeln!(w, "g orphans\nusemtl orphans")?;
         faces(w, h.always_visible)?;
         Ok(())
-    })
+    })?)
 }
 
 /// Writes the hierarchy's JSON form atomically.
 pub fn write_json(h: &Hierarchy, path: &Path) -> Result<()> {
     let text = h.to_json()?;
-    write_atomically(path, |w| Ok(w.write_all(text.as_bytes())?))
+    Ok(write_atomic(path, |w| w.write_all(text.as_bytes()))?)
 }

@@ -9,7 +9,10 @@
 //!
 //! The method follows P. M. Edmondson, *Hierarchical Occlusion Culling for Arbitrarily-Meshed Height Fields* (2004).
 
+pub use cull;
 pub use horizon;
+pub use occlusion;
 pub use tin;
 
 pub mod cli;
+pub mod export;

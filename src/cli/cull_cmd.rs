@@ -40,7 +40,7 @@ pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
     }
     let mut p = [0.0; 3];
     for (v, text) in p.iter_mut().zip(&parts) {
-        *v = text.parse().map_err(|_| format!("{text:?} is not a number"))?;
+        *v = text.parse::<f64>().map_err(|_| format!("{text:?} is not a number"))?;
         if !v.is_finite() {
             return Err(format!("{text:?} is not finite"));
         }
@@ -86,7 +86,11 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         let camera = Camera {
             position: eye,
             yaw: args.yaw.to_radians(),
-            hfov: if args.fov >= 360.0 { std::f64::consts::TAU } else { args.fov.to_radians() },
+            hfov: if args.fov >= 360.0 {
+                std::f64::consts::TAU
+            } else {
+                args.fov.to_radians()
+            },
         };
         let ns = timed_cull(&culler, &camera, &mut list);
         let s = list.stats;

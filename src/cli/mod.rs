@@ -2,7 +2,7 @@
 
 mod cull_cmd;
 mod export_cmd;
-mod horizon_cmd;
+
 mod info;
 mod mesh_input;
 pub mod output;
@@ -32,8 +32,6 @@ pub enum Command {
     Tin(tin_cmd::TinArgs),
     /// Write a seeded synthetic terrain (ridged fractal with valleys) as OBJ.
     Synth(synth::SynthArgs),
-    /// Compute the horizon of every vertex in every subsector (the covering-set sweep).
-    Horizon(horizon_cmd::HorizonArgs),
     /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
     Cull(cull_cmd::CullArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
@@ -46,8 +44,14 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(args) => info::run(&args, args.output.into()),
         Command::Tin(args) => tin_cmd::run(&args, args.output.into()),
         Command::Synth(args) => synth::run(&args, args.output.into()),
-        Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
+
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
-        Command::Export(args) => export_cmd::run(&args, Output { json: false, quiet: args.quiet }),
+        Command::Export(args) => export_cmd::run(
+            &args,
+            Output {
+                json: false,
+                quiet: args.quiet,
+            },
+        ),
     }
 }

@@ -1,10 +1,9 @@
 //! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars, atomic file writes.
 
 use std::io::Write;
-use std::path::Path;
 use std::time::Duration;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// The output flags most commands share.
@@ -84,23 +83,4 @@ impl Output {
         bar.enable_steady_tick(Duration::from_millis(120));
         bar
     }
-}
-
-/// Writes a file atomically: the content goes to a temporary file in the same directory, which is renamed over
-/// `path` only when `write` succeeded, so a failure never leaves a half-written output.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create directory {}", dir.display()))?;
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)
-        .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
-    {
-        let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
-        write(&mut buf)?;
-        buf.flush().with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    tmp.persist(path).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
 }

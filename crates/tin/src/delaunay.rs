@@ -51,30 +51,32 @@ pub fn triangulate(points: &[DVec3], policy: DedupePolicy) -> Result<(Tin, Delau
             keep.len()
         )));
     }
-    let spade_points: Vec<Point2<f64>> = keep.iter().map(|&i| Point2::new(points[i].x, points[i].y)).collect();
-    let dt = DelaunayTriangulation::<Point2<f64>>::bulk_load_stable(spade_points).map_err(|e| {
-        let index = keep
-            .iter()
-            .copied()
-            .find(|&i| {
-                spade::validate_coordinate(points[i].x).is_err() || spade::validate_coordinate(points[i].y).is_err()
-            })
-            .unwrap_or(0);
-        TinError::Insertion {
-            index,
+    // Insert in Morton (Z-curve) order of the points' positions: spatially coherent, so each point location starts
+    // near the previous one, and deterministic. (spade's bulk loader re-inserts skipped points from a HashSet whose
+    // order changes from process to process, which can change the triangulation of cocircular points.)
+    let order = morton_order(points, &keep);
+    let mut dt = DelaunayTriangulation::<Point2<f64>>::with_capacity(keep.len(), keep.len() * 3, keep.len() * 2);
+    // `vertex_of_slot[k]` is the position in `keep` of the k-th vertex spade created.
+    let mut vertex_of_slot = Vec::with_capacity(keep.len());
+    for &k in &order {
+        let p = points[keep[k]];
+        let handle = dt.insert(Point2::new(p.x, p.y)).map_err(|e| TinError::Insertion {
+            index: keep[k],
             reason: e.to_string(),
+        })?;
+        if handle.index() != vertex_of_slot.len() {
+            // Exact duplicates were removed above, so this only happens if spade considers two distinct points equal.
+            return Err(TinError::TooFewPoints(format!(
+                "the triangulator merged input points {} and {}, which differ only below its precision",
+                keep[vertex_of_slot[handle.index()] as usize],
+                keep[k]
+            )));
         }
-    })?;
-    if dt.num_vertices() != keep.len() {
-        // Exact duplicates were removed above, so this only happens if spade considers two distinct f64 points equal.
-        return Err(TinError::TooFewPoints(format!(
-            "the triangulator merged {} points that differ only below its precision",
-            keep.len() - dt.num_vertices()
-        )));
+        vertex_of_slot.push(k as u32);
     }
     let triangles: Vec<[u32; 3]> = dt
         .inner_faces()
-        .map(|f| f.vertices().map(|v| v.fix().index() as u32))
+        .map(|f| f.vertices().map(|v| vertex_of_slot[v.fix().index()]))
         .collect();
     if triangles.is_empty() {
         return Err(TinError::TooFewPoints("all points are collinear".into()));
@@ -88,6 +90,31 @@ pub fn triangulate(points: &[DVec3], policy: DedupePolicy) -> Result<(Tin, Delau
             ..report
         },
     ))
+}
+
+/// Positions in `keep` sorted along a Morton curve over the points' bounding box (ties by position in `keep`).
+fn morton_order(points: &[DVec3], keep: &[usize]) -> Vec<usize> {
+    let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    for &i in keep {
+        lo = lo.min(points[i].truncate());
+        hi = hi.max(points[i].truncate());
+    }
+    let scale = (hi - lo).max(glam::DVec2::splat(f64::MIN_POSITIVE));
+    let spread = |v: u32| {
+        let mut x = u64::from(v);
+        x = (x | (x << 16)) & 0x0000_ffff_0000_ffff;
+        x = (x | (x << 8)) & 0x00ff_00ff_00ff_00ff;
+        x = (x | (x << 4)) & 0x0f0f_0f0f_0f0f_0f0f;
+        x = (x | (x << 2)) & 0x3333_3333_3333_3333;
+        (x | (x << 1)) & 0x5555_5555_5555_5555
+    };
+    let key = |i: usize| {
+        let q = (points[i].truncate() - lo) / scale * f64::from(u32::MAX);
+        spread(q.x as u32) | (spread(q.y as u32) << 1)
+    };
+    let mut order: Vec<usize> = (0..keep.len()).collect();
+    order.sort_by_cached_key(|&k| (key(keep[k]), k));
+    order
 }
 
 /// Returns the input indices to keep, in input order, and the counts of what was dropped.

@@ -1,7 +1,5 @@
 //! The [`Tin`] type: an f64 height-field triangle mesh with edge adjacency.
 
-use std::collections::HashMap;
-
 use glam::{DVec2, DVec3};
 
 use crate::error::{Result, TinError};
@@ -289,31 +287,31 @@ pub(crate) fn local_origin(positions: &[DVec3]) -> DVec3 {
     }
 }
 
-/// Computes per-edge neighbours, failing on non-manifold edges.
+/// Computes per-edge neighbours, failing on non-manifold edges: the directed edges are sorted once, then each edge
+/// finds its twin `(b, a)` by binary search.
 fn compute_neighbours(triangles: &[[u32; 3]]) -> Result<Vec<[u32; 3]>> {
-    let mut neighbours = vec![[NO_NEIGHBOUR; 3]; triangles.len()];
-    // Directed edge (a, b) -> (triangle, corner).
-    let mut edges: HashMap<(u32, u32), (u32, u8)> = HashMap::with_capacity(triangles.len() * 3);
+    let key = |a: u32, b: u32| (u64::from(a) << 32) | u64::from(b);
+    // (directed edge key, triangle * 3 + corner)
+    let mut edges: Vec<(u64, u32)> = Vec::with_capacity(triangles.len() * 3);
     for (t, tri) in triangles.iter().enumerate() {
         for i in 0..3 {
-            let (a, b) = (tri[i], tri[(i + 1) % 3]);
-            if let Some(&(other, _)) = edges.get(&(a, b)) {
-                return Err(TinError::NonManifoldEdge {
-                    a,
-                    b,
-                    first: other as usize,
-                    second: t,
-                });
-            }
-            edges.insert((a, b), (t as u32, i as u8));
+            edges.push((key(tri[i], tri[(i + 1) % 3]), (t * 3 + i) as u32));
         }
     }
-    for (t, tri) in triangles.iter().enumerate() {
-        for i in 0..3 {
-            let (a, b) = (tri[i], tri[(i + 1) % 3]);
-            if let Some(&(other, _)) = edges.get(&(b, a)) {
-                neighbours[t][i] = other;
-            }
+    edges.sort_unstable();
+    if let Some(w) = edges.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(TinError::NonManifoldEdge {
+            a: (w[0].0 >> 32) as u32,
+            b: w[0].0 as u32,
+            first: (w[0].1 / 3) as usize,
+            second: (w[1].1 / 3) as usize,
+        });
+    }
+    let mut neighbours = vec![[NO_NEIGHBOUR; 3]; triangles.len()];
+    for &(k, slot) in &edges {
+        let twin = key(k as u32, (k >> 32) as u32);
+        if let Ok(j) = edges.binary_search_by_key(&twin, |e| e.0) {
+            neighbours[slot as usize / 3][slot as usize % 3] = edges[j].1 / 3;
         }
     }
     Ok(neighbours)

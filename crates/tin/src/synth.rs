@@ -442,9 +442,7 @@ mod tests {
         assert_eq!(round_sqrt(usize::MAX), 1 << 32);
     }
 
-    /// Run with `cargo test -p tin --release -- --ignored`.
     #[test]
-    #[ignore = "1M vertices: slow in debug builds"]
     fn a_million_vertices() {
         let opts = small(1_000_000, 5);
         let tin = synth_tin(&opts).expect("tin");
