@@ -60,7 +60,7 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
         }
     ));
     for w in &check.warnings {
-        out.say(format!("  warning: {w}"));
+        out.warn(w);
     }
     out.json(&json!({
         "mesh": args.mesh.mesh,

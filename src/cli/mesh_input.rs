@@ -59,14 +59,14 @@ impl MeshArgs {
             tin::read_obj(&self.mesh, &opts).with_context(|| format!("cannot import {}", self.mesh.display()))?;
         spinner.finish_and_clear();
         if report.merged_duplicates > 0 {
-            out.say(format!(
-                "warning: merged {} duplicate vertices (same x, y and z)",
+            out.warn(format!(
+                "merged {} duplicate vertices (same x, y and z)",
                 report.merged_duplicates
             ));
         }
         if report.dropped_lower > 0 {
-            out.say(format!(
-                "warning: dropped {} lower vertices sharing x,y with a higher one (--dedupe keep-highest)",
+            out.warn(format!(
+                "dropped {} lower vertices sharing x,y with a higher one (--dedupe keep-highest)",
                 report.dropped_lower
             ));
         }

@@ -36,15 +36,17 @@ pub struct Output {
 }
 
 impl Output {
-    /// Prints a line of human-readable text (to stdout, or stderr when stdout carries JSON).
+    /// Prints a line of human-readable text on stdout (not with `--json` or `--quiet`).
     pub fn say(&self, text: impl AsRef<str>) {
-        if self.quiet {
-            return;
-        }
-        if self.json {
-            eprintln!("{}", text.as_ref());
-        } else {
+        if !self.quiet && !self.json {
             println!("{}", text.as_ref());
+        }
+    }
+
+    /// Prints a warning on stderr (not with `--quiet`).
+    pub fn warn(&self, text: impl AsRef<str>) {
+        if !self.quiet {
+            eprintln!("warning: {}", text.as_ref());
         }
     }
 
