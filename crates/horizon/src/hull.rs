@@ -7,14 +7,18 @@
 //! below the hull are dropped), except that of several points with identical `(t, z)` it keeps the smallest vertex
 //! index — the one the tie-break would choose.
 //!
-//! Points arrive in any `t` order. Each hull is a treap keyed by `t` (distinct within a hull) with its vertices also
-//! threaded as a doubly linked list, all in one arena per sweep:
-//! - insertion: locate neighbours (O(log h)), drop the point if on or below the hull, else link it in and pop the
-//!   neighbours that stopped being strictly convex (amortised O(log h) each, every point is removed at most once);
-//! - tangent query from an apex left of all points: the slope from the apex increases along the hull while the
-//!   apex is strictly above the line of the current edge, then never again (the edges' lines, evaluated at
-//!   `t_p < t_min`, increase along an upper hull), so a descent of the treap finds the first vertex whose outgoing
-//!   edge does not increase the slope: the leftmost tangent vertex, in O(log h).
+//! Points arrive in any `t` order. Two representations, behind one handle ([`HullRef`] in a [`HullSet`]):
+//! - *small* hulls (the common case on terrain: a few vertices) are sorted arrays in power-of-two chunks of a
+//!   shared pool: binary search, then a short `copy_within`; one or two cache lines per operation;
+//! - a hull that grows beyond a limit (e.g. on a dome, where every point is a hull vertex) becomes a treap keyed
+//!   by `t` with its vertices threaded as a doubly linked list ([`HullArena`]), so every operation stays
+//!   O(log h): insertion locates the neighbours, drops the point if on or below the hull, else links it in and
+//!   pops the neighbours that stopped being strictly convex (amortised, every point is removed at most once).
+//!
+//! Tangent query from an apex left of all points: the slope from the apex increases along the hull while the apex
+//! is strictly above the line of the current edge, then never again (the edges' lines, evaluated at
+//! `t_p < t_min`, increase along an upper hull), so a binary search (array) or a descent (treap) finds the first
+//! vertex whose outgoing edge does not increase the slope: the leftmost tangent vertex, in O(log h).
 //!
 //! All turns are decided by the exact [`crate::predicates::orient2d`].
 
@@ -226,18 +230,7 @@ impl HullArena {
             prev = n;
             n = self.nodes[n as usize].next;
         }
-        for w in list.windows(2) {
-            if w[0].0 >= w[1].0 {
-                return Err(format!("t not strictly increasing: {} then {}", w[0].0, w[1].0));
-            }
-        }
-        for w in list.windows(3) {
-            let [a, b, c] = [w[0], w[1], w[2]].map(|(t, z, _)| DVec2::new(t, z));
-            if orient2d(a, b, c) != Ordering::Less {
-                return Err(format!("vertex {b} is not strictly convex"));
-            }
-        }
-        Ok(())
+        check_chain(&list)
     }
 
     fn collect_inorder(&self, n: u32, out: &mut Vec<u32>) -> Result<(), String> {
@@ -391,6 +384,269 @@ impl HullArena {
     }
 }
 
+/// A projected point in a small hull.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pt {
+    t: f64,
+    z: f64,
+    index: u32,
+}
+
+impl Pt {
+    #[inline]
+    fn point(&self) -> DVec2 {
+        DVec2::new(self.t, self.z)
+    }
+}
+
+/// Handle of one upper hull in a [`HullSet`]: empty, a small sorted array, or a treap.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HullRef {
+    /// Start of the chunk in the pool (small), or index of the treap (big).
+    start: u32,
+    /// Number of vertices of a small hull.
+    len: u16,
+    /// Chunk capacity is `1 << class`.
+    class: u8,
+    big: bool,
+}
+
+impl HullRef {
+    /// The empty hull.
+    pub const EMPTY: HullRef = HullRef {
+        start: 0,
+        len: 0,
+        class: 0,
+        big: false,
+    };
+
+    /// Whether the hull holds no point.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        !self.big && self.len == 0
+    }
+}
+
+/// Storage for the covering sets of one sweep: small hulls as sorted arrays, big ones as treaps.
+#[derive(Clone, Debug)]
+pub struct HullSet {
+    small_limit: usize,
+    pool: Vec<Pt>,
+    free: Vec<Vec<u32>>,
+    trees: Vec<Hull>,
+    arena: HullArena,
+}
+
+impl Default for HullSet {
+    fn default() -> Self {
+        HullSet::new(HullSet::DEFAULT_SMALL_LIMIT, 0)
+    }
+}
+
+impl HullSet {
+    /// Default number of vertices beyond which a hull becomes a treap.
+    pub const DEFAULT_SMALL_LIMIT: usize = 32;
+
+    /// An empty set whose hulls turn into treaps beyond `small_limit` vertices (clamped to 1..=1024), with room
+    /// for `capacity` small-hull vertices.
+    pub fn new(small_limit: usize, capacity: usize) -> HullSet {
+        let small_limit = small_limit.clamp(1, 1024);
+        let classes = small_limit.next_power_of_two().trailing_zeros() as usize + 1;
+        HullSet {
+            small_limit,
+            pool: Vec::with_capacity(capacity),
+            free: vec![Vec::new(); classes],
+            trees: Vec::new(),
+            arena: HullArena::default(),
+        }
+    }
+
+    /// The smallest `t` of all points ever inserted into `hull` (its leftmost vertex), or `None` when empty.
+    #[inline]
+    pub fn min_t(&self, hull: &HullRef) -> Option<f64> {
+        if hull.big {
+            self.arena.min_t(&self.trees[hull.start as usize])
+        } else {
+            (hull.len > 0).then(|| self.pool[hull.start as usize].t)
+        }
+    }
+
+    /// Whether `hull` is stored as a treap.
+    pub fn is_big(&self, hull: &HullRef) -> bool {
+        hull.big
+    }
+
+    /// The hull's vertices from left to right as `(t, z, index)`.
+    pub fn vertices(&self, hull: &HullRef) -> Vec<(f64, f64, u32)> {
+        if hull.big {
+            self.arena.vertices(&self.trees[hull.start as usize])
+        } else {
+            self.small(hull).iter().map(|p| (p.t, p.z, p.index)).collect()
+        }
+    }
+
+    #[inline]
+    fn small(&self, hull: &HullRef) -> &[Pt] {
+        &self.pool[hull.start as usize..hull.start as usize + hull.len as usize]
+    }
+
+    /// The leftmost steepest hull vertex seen from `apex`, which must lie strictly left of every point of the hull.
+    #[inline]
+    pub(crate) fn tangent(&self, hull: &HullRef, apex: DVec2) -> Option<Candidate> {
+        if hull.big {
+            return self.arena.tangent(&self.trees[hull.start as usize], apex);
+        }
+        let pts = self.small(hull);
+        if pts.is_empty() {
+            return None;
+        }
+        // First i whose outgoing edge does not increase the slope (the predicate is true on a prefix).
+        let (mut lo, mut hi) = (0, pts.len() - 1);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if orient2d(apex, pts[mid].point(), pts[mid + 1].point()) == Ordering::Greater {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        let p = pts[lo];
+        Some(Candidate::vertex(p.t, p.z, p.index))
+    }
+
+    /// Inserts the projected point `(t, z)` of vertex `index` into `hull`.
+    pub fn insert(&mut self, hull: &mut HullRef, t: f64, z: f64, index: u32) {
+        if hull.big {
+            self.arena.insert(&mut self.trees[hull.start as usize], t, z, index);
+            return;
+        }
+        let new = Pt { t, z, index };
+        if hull.len == 0 {
+            let start = self.alloc(0);
+            self.pool[start as usize] = new;
+            *hull = HullRef {
+                start,
+                len: 1,
+                class: 0,
+                big: false,
+            };
+            return;
+        }
+        let q = new.point();
+        let start = hull.start as usize;
+        let len = hull.len as usize;
+        let pts = &mut self.pool[start..start + len];
+        let pos = pts.partition_point(|p| p.t <= t);
+        let (mut keep_left, mut resume_right) = (pos, pos);
+        if pos > 0 && pts[pos - 1].t == t {
+            let pred = &mut pts[pos - 1];
+            match pred.z.total_cmp(&z) {
+                Ordering::Greater => return,
+                Ordering::Equal => {
+                    pred.index = pred.index.min(index);
+                    return;
+                }
+                // Directly above a hull vertex: replaces it.
+                Ordering::Less => keep_left = pos - 1,
+            }
+        } else if pos > 0 && pos < len && orient2d(pts[pos - 1].point(), pts[pos].point(), q) != Ordering::Greater {
+            // On or below the segment between its neighbours.
+            return;
+        }
+        while keep_left >= 2 && orient2d(pts[keep_left - 2].point(), pts[keep_left - 1].point(), q) != Ordering::Less {
+            keep_left -= 1;
+        }
+        while resume_right + 1 < len
+            && orient2d(q, pts[resume_right].point(), pts[resume_right + 1].point()) != Ordering::Less
+        {
+            resume_right += 1;
+        }
+        let new_len = keep_left + 1 + (len - resume_right);
+        if new_len > self.small_limit {
+            self.make_big(hull, new);
+        } else if new_len > 1 << hull.class {
+            let class = hull.class + 1;
+            let to = self.alloc(class) as usize;
+            self.pool.copy_within(start..start + keep_left, to);
+            self.pool[to + keep_left] = new;
+            self.pool
+                .copy_within(start + resume_right..start + len, to + keep_left + 1);
+            self.free[hull.class as usize].push(hull.start);
+            *hull = HullRef {
+                start: to as u32,
+                len: new_len as u16,
+                class,
+                big: false,
+            };
+        } else {
+            self.pool
+                .copy_within(start + resume_right..start + len, start + keep_left + 1);
+            self.pool[start + keep_left] = new;
+            hull.len = new_len as u16;
+        }
+    }
+
+    /// Moves a small hull into a treap and inserts `new`.
+    fn make_big(&mut self, hull: &mut HullRef, new: Pt) {
+        let mut tree = Hull::EMPTY;
+        let (start, len) = (hull.start as usize, hull.len as usize);
+        for i in start..start + len {
+            let p = self.pool[i];
+            self.arena.insert(&mut tree, p.t, p.z, p.index);
+        }
+        self.arena.insert(&mut tree, new.t, new.z, new.index);
+        self.free[hull.class as usize].push(hull.start);
+        self.trees.push(tree);
+        *hull = HullRef {
+            start: (self.trees.len() - 1) as u32,
+            len: 0,
+            class: 0,
+            big: true,
+        };
+    }
+
+    fn alloc(&mut self, class: u8) -> u32 {
+        if let Some(start) = self.free[class as usize].pop() {
+            return start;
+        }
+        let start = self.pool.len() as u32;
+        self.pool.resize(self.pool.len() + (1 << class), Pt::default());
+        start
+    }
+
+    /// Checks every invariant of `hull`: a strictly increasing, strictly convex upper chain (and, for a treap,
+    /// the treap's own invariants). Returns a description of the first violation.
+    pub fn check_invariants(&self, hull: &HullRef) -> Result<(), String> {
+        if hull.big {
+            return self.arena.check_invariants(&self.trees[hull.start as usize]);
+        }
+        if hull.len as usize > 1 << hull.class || hull.len as usize > self.small_limit {
+            return Err(format!(
+                "small hull of {} vertices in a chunk of {}",
+                hull.len,
+                1 << hull.class
+            ));
+        }
+        check_chain(&self.vertices(hull))
+    }
+}
+
+/// A strictly increasing, strictly convex upper chain.
+fn check_chain(list: &[(f64, f64, u32)]) -> Result<(), String> {
+    for w in list.windows(2) {
+        if w[0].0 >= w[1].0 {
+            return Err(format!("t not strictly increasing: {} then {}", w[0].0, w[1].0));
+        }
+    }
+    for w in list.windows(3) {
+        let [a, b, c] = [w[0], w[1], w[2]].map(|(t, z, _)| DVec2::new(t, z));
+        if orient2d(a, b, c) != Ordering::Less {
+            return Err(format!("vertex {b} is not strictly convex"));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -454,6 +710,23 @@ mod tests {
         }
 
         #[test]
+        fn hull_set_matches_brute_force(points in small_points(), limit in 1usize..8, apex_z in -20i32..20) {
+            // Low limits force the conversion from arrays to treaps in the middle of the sequence.
+            let mut set = HullSet::new(limit, 0);
+            let mut hulls = [HullRef::EMPTY; 2];
+            for (k, &(t, z, i)) in points.iter().enumerate() {
+                let h = k % 2;
+                set.insert(&mut hulls[h], t, z, i);
+                set.check_invariants(&hulls[h]).map_err(TestCaseError::fail)?;
+                let mine: Vec<_> = points[..=k].iter().enumerate().filter(|(j, _)| j % 2 == h).map(|(_, &p)| p).collect();
+                prop_assert_eq!(set.vertices(&hulls[h]), upper_hull(&mine));
+                let apex = DVec2::new(-0.5, apex_z as f64 / 3.0);
+                prop_assert_eq!(set.tangent(&hulls[h], apex), steepest(&mine, apex));
+                prop_assert_eq!(set.min_t(&hulls[h]), mine.iter().map(|p| p.0).reduce(f64::min));
+            }
+        }
+
+        #[test]
         fn many_hulls_share_an_arena(points in prop::collection::vec((0.0f64..100.0, 0.0f64..10.0), 1..200)) {
             let mut arena = HullArena::default();
             let mut hulls = [Hull::EMPTY; 3];
@@ -470,6 +743,25 @@ mod tests {
             }
             prop_assert_eq!(arena.live(), live);
         }
+    }
+
+    #[test]
+    fn a_dome_becomes_a_treap() {
+        // Points on a concave parabola: every point is a hull vertex.
+        let mut set = HullSet::default();
+        let mut hull = HullRef::EMPTY;
+        for i in 0..200u32 {
+            let t = ((i * 37) % 200) as f64;
+            set.insert(&mut hull, t, -(t - 100.0) * (t - 100.0), i);
+        }
+        assert!(set.is_big(&hull));
+        set.check_invariants(&hull).expect("valid");
+        assert_eq!(set.vertices(&hull).len(), 200);
+        let c = set.tangent(&hull, DVec2::new(-10.0, 0.0)).expect("non-empty");
+        assert_eq!(
+            c,
+            steepest(&set.vertices(&hull), DVec2::new(-10.0, 0.0)).expect("non-empty")
+        );
     }
 
     #[test]

@@ -193,6 +193,18 @@ impl LineKey {
         self.value
     }
 
+    /// A gap between approximate values beyond which two keys are certainly ordered like their approximations,
+    /// for keys whose magnitudes are at most `max_magnitude` (see [`LineKey::magnitude`]).
+    pub fn certain_gap(max_magnitude: f64) -> f64 {
+        2.0 * KEY_ERR_BOUND * max_magnitude
+    }
+
+    /// The magnitude `|e.x·x.y| + |e.y·x.x|` that bounds the rounding error of the value.
+    #[inline]
+    pub fn magnitude(&self) -> f64 {
+        self.magnitude
+    }
+
     /// Compares the exact values `cross(e, q)` (self, the key of `q`) and `cross(e, p)` (other, the key of `p`):
     /// `Greater` when `q` lies strictly left of the line through `p` with direction `e`.
     #[inline]

@@ -29,11 +29,13 @@
 //! Cost per subsector: two O(n log n) sorts, then for each vertex O(log n) nodes with an O(log h) tangent query
 //! or amortised O(log h) insertion each: O(n log² n) time; at most O(n log n) hull vertices alive.
 
+use std::cmp::Ordering;
+
 use glam::{DVec2, DVec3};
 
 use crate::NO_HORIZON;
 use crate::candidate::{Candidate, CandidateId, keep_best};
-use crate::hull::{Hull, HullArena};
+use crate::hull::{HullRef, HullSet};
 use crate::oracle::best_in_wedge;
 use crate::predicates::LineKey;
 use crate::sector::Wedge;
@@ -51,18 +53,27 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
     let kb: Vec<LineKey> = positions.iter().map(|p| LineKey::new(wedge.b, p.truncate())).collect();
     let t: Vec<f64> = positions.iter().map(|p| wedge.project(origin, p.truncate())).collect();
     let cmp_b = |x: u32, y: u32| kb[x as usize].cmp_exact(&kb[y as usize], wedge.b, xy(x), xy(y));
+    let gap = |keys: &[LineKey]| LineKey::certain_gap(keys.iter().map(LineKey::magnitude).fold(0.0, f64::max));
 
     // Visiting order: A descending, then B ascending, then index.
-    let mut order_a: Vec<u32> = (0..n as u32).collect();
-    order_a.sort_unstable_by(|&x, &y| {
-        ka[y as usize]
-            .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
-            .then_with(|| cmp_b(x, y))
-            .then(x.cmp(&y))
-    });
+    let order_a = sort_exact(
+        n,
+        |v| -ka[v as usize].value(),
+        gap(&ka),
+        |x, y| {
+            ka[y as usize]
+                .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
+                .then_with(|| cmp_b(x, y))
+                .then(x.cmp(&y))
+        },
+    );
     // Leaves: B ascending, then index; hi = last leaf of each group of equal B.
-    let mut order_b: Vec<u32> = (0..n as u32).collect();
-    order_b.sort_unstable_by(|&x, &y| cmp_b(x, y).then(x.cmp(&y)));
+    let order_b = sort_exact(
+        n,
+        |v| kb[v as usize].value(),
+        gap(&kb),
+        |x, y| cmp_b(x, y).then(x.cmp(&y)),
+    );
     let mut leaf_of = vec![0u32; n];
     for (pos, &v) in order_b.iter().enumerate() {
         leaf_of[v as usize] = pos as u32;
@@ -78,15 +89,48 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
     }
     drop(order_b);
 
+    // Everything the main loop reads, laid out in visiting order.
     let leaves = n.next_power_of_two();
-    let mut hulls = vec![Hull::EMPTY; 2 * leaves];
-    let mut arena = HullArena::with_capacity(2 * n);
-    for &p in &order_a {
-        let pu = p as usize;
-        let apex = DVec2::new(t[pu], positions[pu].z);
+    struct Visit {
+        t: f64,
+        z: f64,
+        vertex: u32,
+        leaf: u32,
+        query_leaf: u32,
+    }
+    let visits: Vec<Visit> = order_a
+        .iter()
+        .map(|&v| {
+            let leaf = leaf_of[v as usize];
+            Visit {
+                t: t[v as usize],
+                z: positions[v as usize].z,
+                vertex: v,
+                leaf: (leaves + leaf as usize) as u32,
+                query_leaf: (leaves + hi[leaf as usize] as usize) as u32,
+            }
+        })
+        .collect();
+    drop((order_a, leaf_of, hi));
+
+    let mut hulls = vec![HullRef::EMPTY; 2 * leaves];
+    // Vertices not yet visited whose query path contains each node: a hull that no later vertex will query
+    // needs no insertions.
+    let mut pending = vec![0u32; 2 * leaves];
+    for visit in &visits {
+        let mut node = visit.query_leaf as usize;
+        while node >= 1 {
+            pending[node] += 1;
+            node >>= 1;
+        }
+    }
+    let mut arena = HullSet::new(HullSet::DEFAULT_SMALL_LIMIT, 4 * n);
+    for visit in &visits {
+        let p = visit.vertex;
+        let apex = DVec2::new(visit.t, visit.z);
         let mut best: Option<Candidate> = None;
         let mut degenerate = false;
-        let mut node = leaves + hi[leaf_of[pu] as usize] as usize;
+        let mut node = visit.query_leaf as usize;
         loop {
             let hull = &hulls[node];
             if let Some(min_t) = arena.min_t(hull) {
@@ -106,7 +150,7 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
         if degenerate {
             best = best_in_wedge(positions, wedge, p, &ka, &kb, &t);
         }
-        out[pu] = match best {
+        out[p as usize] = match best {
             Some(Candidate {
                 id: CandidateId::Vertex(q),
                 ..
@@ -115,16 +159,41 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
         };
 
         // Insert p into its own leaf and into the right siblings of the left children on its path, skipping
-        // siblings whose subtree holds no vertex.
-        let mut node = leaves + leaf_of[pu] as usize;
-        arena.insert(&mut hulls[node], apex.x, apex.y, p);
-        let mut level = 0;
+        // nodes whose subtree holds no vertex still to be visited.
+        let mut x = visit.query_leaf as usize;
+        while x >= 1 {
+            pending[x] -= 1;
+            x >>= 1;
+        }
+        let mut node = visit.leaf as usize;
+        if pending[node] > 0 {
+            arena.insert(&mut hulls[node], apex.x, apex.y, p);
+        }
         while node > 1 {
-            if node & 1 == 0 && ((node + 1) << level) - leaves < n {
+            if node & 1 == 0 && pending[node + 1] > 0 {
                 arena.insert(&mut hulls[node + 1], apex.x, apex.y, p);
             }
             node >>= 1;
-            level += 1;
         }
     }
+}
+
+/// The vertices `0..n` sorted by `exact`, a total order that agrees with the approximate keys `approx` whenever
+/// they differ by more than `gap`: sort by the approximations, then re-sort each run of approximations closer
+/// than `gap` with the exact comparison.
+fn sort_exact(n: usize, approx: impl Fn(u32) -> f64, gap: f64, exact: impl Fn(u32, u32) -> Ordering) -> Vec<u32> {
+    let mut keyed: Vec<(f64, u32)> = (0..n as u32).map(|v| (approx(v), v)).collect();
+    keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut start = 0;
+    while start < n {
+        let mut end = start + 1;
+        while end < n && keyed[end].0 - keyed[end - 1].0 <= gap {
+            end += 1;
+        }
+        if end - start > 1 {
+            keyed[start..end].sort_unstable_by(|a, b| exact(a.1, b.1));
+        }
+        start = end;
+    }
+    keyed.into_iter().map(|(_, v)| v).collect()
 }

@@ -43,11 +43,23 @@ fn bowl_and_dome_rings() {
         }
         // Sector summaries: slope 0.2; farthest distance along the sector centre is 20·cos of the smallest angle
         // between the sector centre and a subsector centre (0 for odd k, half a subsector for even k).
-        let min_offset = if k % 2 == 1 { 0.0 } else { std::f64::consts::PI / g.total() as f64 };
+        let min_offset = if k % 2 == 1 {
+            0.0
+        } else {
+            std::f64::consts::PI / g.total() as f64
+        };
         for i in 0..s {
             let sum = field.sector_summary(0, i).expect("every subsector has a horizon");
-            assert!((sum.slope - 0.2).abs() < 1e-12, "{s}x{k} sector {i}: slope {}", sum.slope);
-            assert!((sum.distance - 20.0 * min_offset.cos()).abs() < 1e-9, "{s}x{k}: distance {}", sum.distance);
+            assert!(
+                (sum.slope - 0.2).abs() < 1e-12,
+                "{s}x{k} sector {i}: slope {}",
+                sum.slope
+            );
+            assert!(
+                (sum.distance - 20.0 * min_offset.cos()).abs() < 1e-9,
+                "{s}x{k}: distance {}",
+                sum.distance
+            );
             let dome_sum = dome_field.sector_summary(0, i).expect("horizons everywhere");
             assert!((dome_sum.slope + 0.1).abs() < 1e-12);
         }
@@ -77,8 +89,9 @@ fn straight_ridge_has_the_flank_slope() {
         let pos = tin.positions();
         let mut near_checked = 0;
         for (p, &pp) in pos.iter().enumerate() {
-            let members: Vec<usize> =
-                (0..pos.len()).filter(|&q| q != p && w.contains(pp.truncate(), pos[q].truncate())).collect();
+            let members: Vec<usize> = (0..pos.len())
+                .filter(|&q| q != p && w.contains(pp.truncate(), pos[q].truncate()))
+                .collect();
             let h = field.horizon(p as u32, j as u32);
             assert_eq!(h.is_some(), !members.is_empty());
             let Some(h) = h else { continue };
@@ -164,7 +177,11 @@ fn spike_on_a_flat_grid() {
                 } else {
                     nearest_member(&g, &tin, p, j, false)
                 };
-                assert_eq!(field.horizon(p as u32, j as u32), expect, "{s}x{k} vertex {p} subsector {j}");
+                assert_eq!(
+                    field.horizon(p as u32, j as u32),
+                    expect,
+                    "{s}x{k} vertex {p} subsector {j}"
+                );
             }
         }
     }

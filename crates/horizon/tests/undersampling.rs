@@ -48,7 +48,11 @@ fn edge_points_appear_on_sparse_terrain_and_only_raise_slopes() {
             let opts = with_radius(extent / 10.0);
             let fixed = compute(&tin, &cfg, &opts).expect("valid");
             let plain = compute(&tin, &cfg, &HorizonOptions::default()).expect("valid");
-            assert_same(&fixed, &brute_force(&tin, &cfg, &opts).expect("valid"), &format!("{kind:?} {s}x{k}"));
+            assert_same(
+                &fixed,
+                &brute_force(&tin, &cfg, &opts).expect("valid"),
+                &format!("{kind:?} {s}x{k}"),
+            );
             total += fixed.edge_horizon_count();
             let o = tin.origin().truncate();
             for v in 0..tin.num_vertices() as u32 {
@@ -81,7 +85,10 @@ fn tiny_radius_changes_nothing() {
     let cfg = config(8, 8);
     let fixed = compute(&tin, &cfg, &with_radius(1e-3)).expect("valid");
     assert_eq!(fixed.edge_horizon_count(), 0);
-    assert_eq!(fixed.mismatches(&compute(&tin, &cfg, &HorizonOptions::default()).expect("valid")), 0);
+    assert_eq!(
+        fixed.mismatches(&compute(&tin, &cfg, &HorizonOptions::default()).expect("valid")),
+        0
+    );
 }
 
 /// A high edge from (10, −30) to (10, 30) in front of vertex 0 at the origin spans the subsectors around east;
@@ -89,20 +96,27 @@ fn tiny_radius_changes_nothing() {
 #[test]
 fn a_spanning_edge_becomes_the_horizon() {
     let pts = [
-        DVec3::new(0.0, 0.0, 0.0),    // 0: p
+        DVec3::new(0.0, 0.0, 0.0),     // 0: p
         DVec3::new(10.0, -30.0, 50.0), // 1: u
         DVec3::new(10.0, 30.0, 50.0),  // 2: w
         DVec3::new(-10.0, 0.0, 0.0),   // 3
         DVec3::new(200.0, 0.0, 0.0),   // 4: far and low, due east
     ];
     let (tin, _) = triangulate(&pts, DedupePolicy::Reject).expect("triangulates");
-    let has_edge = tin.triangles().iter().any(|t| t.contains(&1) && t.contains(&2) && t.contains(&0));
+    let has_edge = tin
+        .triangles()
+        .iter()
+        .any(|t| t.contains(&1) && t.contains(&2) && t.contains(&0));
     assert!(has_edge, "the test needs the edge 1-2 next to vertex 0");
     let cfg = config(16, 1);
     let g = SectorGeometry::new(&cfg);
     let fixed = compute(&tin, &cfg, &with_radius(35.0)).expect("valid");
     let plain = compute(&tin, &cfg, &HorizonOptions::default()).expect("valid");
-    assert_same(&fixed, &brute_force(&tin, &cfg, &with_radius(35.0)).expect("valid"), "spanning edge");
+    assert_same(
+        &fixed,
+        &brute_force(&tin, &cfg, &with_radius(35.0)).expect("valid"),
+        "spanning edge",
+    );
     // Subsectors 0 and 15 contain vertex 4 (due east, on their shared boundary); 3 and 12 contain 2 and 1.
     assert_eq!(plain.horizon(0, 0), Some(4));
     assert_eq!(plain.horizon(0, 15), Some(4));
@@ -115,7 +129,10 @@ fn a_spanning_edge_becomes_the_horizon() {
             Some(HorizonPoint::Edge(e)) => {
                 assert_eq!(e.edge, [1, 2]);
                 let expect = r * (10.0 / r.x);
-                assert!((e.point.truncate() - expect).length() < 1e-9, "subsector {j}: {e:?} expected {expect}");
+                assert!(
+                    (e.point.truncate() - expect).length() < 1e-9,
+                    "subsector {j}: {e:?} expected {expect}"
+                );
                 assert!((e.point.z - 50.0).abs() < 1e-9);
             }
             other => panic!("subsector {j}: expected an edge point, got {other:?}"),
