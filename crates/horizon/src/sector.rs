@@ -109,6 +109,19 @@ pub fn unit_direction(num: u64, den: u64) -> DVec2 {
     DVec2::new(c, s)
 }
 
+/// A monotone stand-in for the azimuth of `d` (the "diamond angle"): 0 at +x, increasing counter-clockwise to 4.
+/// Its derivative with respect to the angle lies in [1/2, 1].
+fn pseudo_angle(d: DVec2) -> f64 {
+    let (x, y) = (d.x, d.y);
+    if y >= 0.0 {
+        if x >= 0.0 { y / (x + y) } else { 1.0 - x / (y - x) }
+    } else if x < 0.0 {
+        2.0 - y / (-x - y)
+    } else {
+        3.0 + x / (x - y)
+    }
+}
+
 /// The wedge of one subsector: boundary directions `a` (start) and `b` (end, counter-clockwise from `a`) and the
 /// centre direction `r` onto which points are projected.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -156,7 +169,9 @@ impl Wedge {
 pub struct SectorGeometry {
     config: SectorConfig,
     edges: Vec<DVec2>,
-    centres: Vec<DVec2>,
+    /// Pseudo-angles of the edges (increasing, the first 0).
+    edge_pseudo: Vec<f64>,
+    wedges: Vec<Wedge>,
     sector_centres: Vec<DVec2>,
 }
 
@@ -165,10 +180,19 @@ impl SectorGeometry {
     pub fn new(config: &SectorConfig) -> SectorGeometry {
         let n = u64::from(config.total_subsectors());
         let s = u64::from(config.sectors());
+        let edges: Vec<DVec2> = (0..n).map(|j| unit_direction(j, n)).collect();
+        let wedges = (0..n as usize)
+            .map(|j| Wedge {
+                a: edges[j],
+                b: edges[(j + 1) % n as usize],
+                r: unit_direction(2 * j as u64 + 1, 2 * n),
+            })
+            .collect();
         SectorGeometry {
             config: *config,
-            edges: (0..n).map(|j| unit_direction(j, n)).collect(),
-            centres: (0..n).map(|j| unit_direction(2 * j + 1, 2 * n)).collect(),
+            edge_pseudo: edges.iter().map(|e| pseudo_angle(*e)).collect(),
+            edges,
+            wedges,
             sector_centres: (0..s).map(|i| unit_direction(2 * i + 1, 2 * s)).collect(),
         }
     }
@@ -189,12 +213,9 @@ impl SectorGeometry {
     }
 
     /// The wedge of subsector `j`.
+    #[inline]
     pub fn wedge(&self, j: usize) -> Wedge {
-        Wedge {
-            a: self.edge(j),
-            b: self.edge(j + 1),
-            r: self.centres[j],
-        }
+        self.wedges[j]
     }
 
     /// Centre direction `r_i` of sector `i`.
@@ -206,12 +227,27 @@ impl SectorGeometry {
     /// Decided with the exact predicate of [`Wedge::contains`]; `atan2` only narrows the search to three.
     pub fn subsectors_containing(&self, p: DVec2, q: DVec2) -> SubsectorHits {
         let n = self.edges.len();
-        let d = q - p;
-        let turns = d.y.atan2(d.x) / std::f64::consts::TAU;
-        let guess = ((turns.rem_euclid(1.0) * n as f64) as usize).min(n - 1);
+        let position = pseudo_angle(q - p);
+        // The subsector whose half-open pseudo-angle range holds the estimate.
+        let guess = self.edge_pseudo.partition_point(|&e| e <= position).max(1) - 1;
+        let upper = if guess + 1 < n {
+            self.edge_pseudo[guess + 1]
+        } else {
+            4.0
+        };
         let mut hits = SubsectorHits::default();
-        for j in [guess + n - 1, guess, guess + 1] {
-            let j = j % n;
+        // The estimate is within about 1e-15 of the exact pseudo-angle (q − p rounds to within half an ulp per
+        // component, and the pseudo-angle changes no faster than the angle): a direction this far from both
+        // boundaries of its guessed subsector can be in no other wedge, and the exact test of that one suffices.
+        let margin = 1e-9;
+        let inside = position - self.edge_pseudo[guess] > margin && upper - position > margin;
+        let candidates: &[usize] = if inside { &[0] } else { &[n - 1, 0, 1] };
+        for &offset in candidates {
+            let j = if guess + offset >= n {
+                guess + offset - n
+            } else {
+                guess + offset
+            };
             if self.wedge(j).contains(p, q) {
                 hits.push(j as u32);
             }
@@ -307,6 +343,43 @@ mod tests {
         // Strictly inside one wedge.
         let hits = g.subsectors_containing(p, p + DVec2::new(1.0, 0.2));
         assert_eq!(hits.as_slice(), &[0]);
+    }
+
+    #[test]
+    fn pseudo_angle_is_monotone() {
+        let mut last = -1.0;
+        for i in 0..10_000 {
+            let a = std::f64::consts::TAU * i as f64 / 10_000.0;
+            let p = pseudo_angle(DVec2::new(a.cos(), a.sin()));
+            assert!(p > last && (0.0..4.0).contains(&p), "angle {a}: {p} after {last}");
+            last = p;
+        }
+    }
+
+    #[test]
+    fn subsectors_containing_agrees_with_every_wedge() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for (s, k) in [(4, 1), (8, 8), (5, 3), (1024, 1)] {
+            let g = SectorGeometry::new(&SectorConfig::new(s, k).expect("valid"));
+            for _ in 0..2000 {
+                let p = DVec2::new(rng.random_range(-3..3) as f64, rng.random_range(-3..3) as f64);
+                let q = if rng.random_range(0..2) == 0 {
+                    DVec2::new(rng.random_range(-3..3) as f64, rng.random_range(-3..3) as f64)
+                } else {
+                    p + g.edge(rng.random_range(0..g.total())) * rng.random_range(0.1..10.0)
+                };
+                if p == q {
+                    continue;
+                }
+                let expect: Vec<u32> = (0..g.total() as u32)
+                    .filter(|&j| g.wedge(j as usize).contains(p, q))
+                    .collect();
+                let mut got = g.subsectors_containing(p, q).as_slice().to_vec();
+                got.sort_unstable();
+                assert_eq!(got, expect, "{s}x{k}: p {p} q {q}");
+            }
+        }
     }
 
     #[test]

@@ -40,6 +40,9 @@ use crate::oracle::best_in_wedge;
 use crate::predicates::LineKey;
 use crate::sector::Wedge;
 
+/// Leaves of the tree are buckets of this many consecutive leaf positions, scanned directly.
+const BUCKET: usize = 8;
+
 /// Computes, for every vertex, its horizon vertex in the subsector with wedge `wedge` (or [`NO_HORIZON`]), into
 /// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]).
 pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]) {
@@ -89,57 +92,109 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
     }
     drop(order_b);
 
-    // Everything the main loop reads, laid out in visiting order.
-    let leaves = n.next_power_of_two();
+    // Everything the main loop reads, laid out in visiting order; the bucket members in leaf (B) order.
+    let buckets = n.div_ceil(BUCKET);
+    let tree_leaves = buckets.next_power_of_two();
     struct Visit {
         t: f64,
         z: f64,
         vertex: u32,
-        leaf: u32,
-        query_leaf: u32,
+        /// Leaf position of the vertex.
+        pos: u32,
+        /// Last leaf position with the same B.
+        hi: u32,
     }
     let visits: Vec<Visit> = order_a
         .iter()
         .map(|&v| {
-            let leaf = leaf_of[v as usize];
+            let pos = leaf_of[v as usize];
             Visit {
                 t: t[v as usize],
                 z: positions[v as usize].z,
                 vertex: v,
-                leaf: (leaves + leaf as usize) as u32,
-                query_leaf: (leaves + hi[leaf as usize] as usize) as u32,
+                pos,
+                hi: hi[pos as usize],
             }
         })
         .collect();
-    drop((order_a, leaf_of, hi));
-
-    let mut hulls = vec![HullRef::EMPTY; 2 * leaves];
-    // Vertices not yet visited whose query path contains each node: a hull that no later vertex will query
-    // needs no insertions.
-    let mut pending = vec![0u32; 2 * leaves];
+    #[derive(Clone, Copy)]
+    struct Member {
+        t: f64,
+        z: f64,
+        vertex: u32,
+        visited: bool,
+    }
+    let mut members = vec![
+        Member {
+            t: 0.0,
+            z: 0.0,
+            vertex: 0,
+            visited: false
+        };
+        n
+    ];
     for visit in &visits {
-        let mut node = visit.query_leaf as usize;
+        members[visit.pos as usize] = Member {
+            t: visit.t,
+            z: visit.z,
+            vertex: visit.vertex,
+            visited: false,
+        };
+    }
+    drop((order_a, leaf_of, hi));
+    let tree_leaf = |pos: u32| tree_leaves + pos as usize / BUCKET;
+
+    // Per tree node: its covering set, and the number of vertices not yet visited whose query path contains the
+    // node (a hull that no later vertex will query needs no insertions). Kept together for cache locality.
+    #[derive(Clone, Copy)]
+    struct Slot {
+        hull: HullRef,
+        pending: u32,
+    }
+    let mut slots = vec![
+        Slot {
+            hull: HullRef::EMPTY,
+            pending: 0
+        };
+        2 * tree_leaves
+    ];
+    for visit in &visits {
+        let mut node = tree_leaf(visit.hi);
         while node >= 1 {
-            pending[node] += 1;
+            slots[node].pending += 1;
             node >>= 1;
         }
     }
-    let mut arena = HullSet::new(HullSet::DEFAULT_SMALL_LIMIT, 4 * n);
+    let mut hulls = HullSet::new(HullSet::DEFAULT_SMALL_LIMIT, 4 * n);
     for visit in &visits {
         let p = visit.vertex;
         let apex = DVec2::new(visit.t, visit.z);
         let mut best: Option<Candidate> = None;
         let mut degenerate = false;
-        let mut node = visit.query_leaf as usize;
-        loop {
-            let hull = &hulls[node];
-            if let Some(min_t) = arena.min_t(hull) {
-                if min_t <= apex.x {
+        // Visited members of the query bucket up to hi.
+        let first = visit.hi as usize / BUCKET * BUCKET;
+        for m in &members[first..=visit.hi as usize] {
+            if m.visited {
+                if m.t <= apex.x {
                     degenerate = true;
-                    break;
+                } else {
+                    keep_best(&mut best, Candidate::vertex(m.t, m.z, m.vertex), apex);
                 }
-                if let Some(c) = arena.tangent(hull, apex) {
-                    keep_best(&mut best, c, apex);
+            }
+        }
+        // Covering sets on the path of the query bucket.
+        let mut node = tree_leaf(visit.hi);
+        loop {
+            let slot = &mut slots[node];
+            slot.pending -= 1;
+            if !degenerate && !slot.hull.is_empty() {
+                match hulls.min_t(&slot.hull) {
+                    Some(min_t) if min_t <= apex.x => degenerate = true,
+                    _ => {
+                        if let Some(c) = hulls.tangent(&slot.hull, apex) {
+                            keep_best(&mut best, c, apex);
+                        }
+                    }
                 }
             }
             if node == 1 {
@@ -158,20 +213,13 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
             _ => NO_HORIZON,
         };
 
-        // Insert p into its own leaf and into the right siblings of the left children on its path, skipping
-        // nodes whose subtree holds no vertex still to be visited.
-        let mut x = visit.query_leaf as usize;
-        while x >= 1 {
-            pending[x] -= 1;
-            x >>= 1;
-        }
-        let mut node = visit.leaf as usize;
-        if pending[node] > 0 {
-            arena.insert(&mut hulls[node], apex.x, apex.y, p);
-        }
+        // Mark p in its bucket and insert it into the right siblings of the left children on its bucket's path,
+        // skipping nodes that no vertex still to be visited will query.
+        members[visit.pos as usize].visited = true;
+        let mut node = tree_leaf(visit.pos);
         while node > 1 {
-            if node & 1 == 0 && pending[node + 1] > 0 {
-                arena.insert(&mut hulls[node + 1], apex.x, apex.y, p);
+            if node & 1 == 0 && slots[node + 1].pending > 0 {
+                hulls.insert(&mut slots[node + 1].hull, apex.x, apex.y, p);
             }
             node >>= 1;
         }
