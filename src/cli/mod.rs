@@ -2,6 +2,7 @@
 
 mod cull_cmd;
 mod export_cmd;
+mod horizon_cmd;
 
 mod info;
 mod mesh_input;
@@ -32,6 +33,8 @@ pub enum Command {
     Tin(tin_cmd::TinArgs),
     /// Write a seeded synthetic terrain (ridged fractal with valleys) as OBJ.
     Synth(synth::SynthArgs),
+    /// Compute the horizon of every vertex in every subsector (the covering-set sweep), optionally verified.
+    Horizon(horizon_cmd::HorizonArgs),
     /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
     Cull(cull_cmd::CullArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
@@ -45,6 +48,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Tin(args) => tin_cmd::run(&args, args.output.into()),
         Command::Synth(args) => synth::run(&args, args.output.into()),
 
+        Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
         Command::Export(args) => export_cmd::run(
             &args,
