@@ -6,10 +6,25 @@
 
 use std::f64::consts::TAU;
 
-/// The unit centre direction `r_i` of sector `i` of `sectors`, as `[x, y]`.
+/// The unit centre direction `r_i` of sector `i` of `sectors`, as `[x, y]`: azimuth `2π(2i + 1) / (2s)`, with the
+/// exact values at multiples of 45° (the horizon stage uses the same directions, bit for bit).
 pub fn sector_direction(sectors: u32, i: u32) -> [f64; 2] {
-    let angle = TAU * (f64::from(i) + 0.5) / f64::from(sectors);
-    [angle.cos(), angle.sin()]
+    let (num, den) = (2 * u64::from(i) + 1, 2 * u64::from(sectors));
+    if (8 * num).is_multiple_of(den) {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        return match (8 * num / den) % 8 {
+            0 => [1.0, 0.0],
+            1 => [h, h],
+            2 => [0.0, 1.0],
+            3 => [-h, h],
+            4 => [-1.0, 0.0],
+            5 => [-h, -h],
+            6 => [0.0, -1.0],
+            _ => [h, -h],
+        };
+    }
+    let (sin, cos) = (TAU * num as f64 / den as f64).sin_cos();
+    [cos, sin]
 }
 
 /// Azimuth of the direction `(dx, dy)` in `[0, 2π)`.

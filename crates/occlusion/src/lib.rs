@@ -9,4 +9,5 @@ pub mod region;
 pub mod table;
 
 pub use region::{Region, intersect_all};
-pub use table::{RegionTable, SectorHorizon, plane_t};
+pub use horizon::SectorHorizon;
+pub use table::{RegionTable, plane_t};

@@ -4,17 +4,9 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use crate::region::{Region, intersect_all};
+use horizon::{HorizonField, SectorHorizon};
 
-/// A vertex's horizon in one sector, as the region construction needs it: minimum slope over the sector's
-/// subsectors and the largest distance, along the sector's centre direction, to a subsector horizon point.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SectorHorizon {
-    /// Minimum horizon slope `m` over the sector's subsectors.
-    pub slope: f64,
-    /// Largest distance `d` along the sector's centre direction from the vertex to its subsector horizon points.
-    pub distance: f64,
-}
+use crate::region::{Region, intersect_all};
 
 /// The plane coordinate `t = r_i · xy` of a point in sector `sector` of `sectors`.
 pub fn plane_t(sectors: u32, sector: u32, xy: DVec2) -> f64 {
@@ -58,6 +50,11 @@ impl RegionTable {
             })
             .collect();
         RegionTable { sectors, regions }
+    }
+
+    /// The regions of every vertex from a horizon field (see [`RegionTable::of_vertices`]).
+    pub fn from_field(positions: &[DVec3], field: &HorizonField) -> RegionTable {
+        RegionTable::of_vertices(positions, field.config().sectors(), |v, s| field.sector_summary(v, s))
     }
 
     /// The regions of element sets: row `e` is the intersection of the rows of `members(e)` of `self`.
@@ -159,6 +156,17 @@ mod tests {
                 .map(|r| r.height_at(t))
                 .fold(f64::INFINITY, f64::min);
             assert!((r.height_at(t) - lowest).abs() < 1e-9, "t = {t}");
+        }
+    }
+
+    #[test]
+    fn sector_directions_agree_with_the_horizon_stage() {
+        for s in 4..=64 {
+            let geometry = horizon::SectorGeometry::new(&horizon::SectorConfig::new(s, 1).expect("valid"));
+            for i in 0..s {
+                let [x, y] = cull::sector_direction(s, i);
+                assert_eq!(DVec2::new(x, y), geometry.sector_centre(i as usize), "s = {s}, i = {i}");
+            }
         }
     }
 
