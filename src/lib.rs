@@ -9,6 +9,7 @@
 //!
 //! The method follows P. M. Edmondson, *Hierarchical Occlusion Culling for Arbitrarily-Meshed Height Fields* (2004).
 
+pub use crystal;
 pub use cull;
 pub use horizon;
 pub use occlusion;
@@ -16,3 +17,4 @@ pub use tin;
 
 pub mod cli;
 pub mod export;
+pub mod pipeline;

@@ -1,5 +1,6 @@
 //! Command-line interface: argument definitions and dispatch. Each subcommand lives in its own module.
 
+mod build_cmd;
 mod cull_cmd;
 mod export_cmd;
 mod horizon_cmd;
@@ -35,6 +36,8 @@ pub enum Command {
     Synth(synth::SynthArgs),
     /// Compute the horizon of every vertex in every subsector (the covering-set sweep), optionally verified.
     Horizon(horizon_cmd::HorizonArgs),
+    /// Build the occlusion hierarchy of a terrain: horizons, regions, crystal groups, merge hierarchy (.tch).
+    Build(build_cmd::BuildArgs),
     /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
     Cull(cull_cmd::CullArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
@@ -49,6 +52,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Synth(args) => synth::run(&args, args.output.into()),
 
         Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
+        Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
         Command::Export(args) => export_cmd::run(
             &args,

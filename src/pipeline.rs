@@ -1,0 +1,258 @@
+//! The whole preprocessing pipeline: horizons → vertex and triangle regions → crystal grouping → the exported
+//! [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Result;
+use crystal::{Crystal, CrystalParams};
+use cull::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
+use horizon::{HorizonOptions, SectorConfig};
+use occlusion::{Region, RegionTable, plane_t};
+use serde::{Deserialize, Serialize};
+use tin::{Circle, Tin};
+
+/// Everything that controls a build.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BuildParams {
+    /// Number of sectors `s`.
+    pub sectors: u32,
+    /// Subsectors per sector `k`.
+    pub subsectors: u32,
+    /// Radius of the horizon undersampling fix (m), off when `None`.
+    pub undersampling: Option<f64>,
+    /// Crystal grouping parameters.
+    pub crystal: CrystalParams,
+}
+
+impl Default for BuildParams {
+    fn default() -> Self {
+        BuildParams {
+            sectors: 16,
+            subsectors: 4,
+            undersampling: None,
+            crystal: CrystalParams::default(),
+        }
+    }
+}
+
+/// The figures of a build (the thesis' Tables 2 and 3, plus storage).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BuildReport {
+    /// Vertices of the terrain.
+    pub vertices: usize,
+    /// Triangles of the terrain.
+    pub triangles: usize,
+    /// Sectors.
+    pub sectors: u32,
+    /// Subsectors per sector.
+    pub subsectors: u32,
+    /// Seeds of the first crystal pass.
+    pub seeds: usize,
+    /// Wall time of the horizon sweep (s).
+    pub horizon_seconds: f64,
+    /// Wall time of the vertex and triangle regions (s).
+    pub regions_seconds: f64,
+    /// Wall time of crystal growth and the merge hierarchy (s).
+    pub grouping_seconds: f64,
+    /// Orphan passes run after the first pass.
+    pub orphan_passes: u32,
+    /// Triangles in the always-visible set.
+    pub orphans: usize,
+    /// Leaf groups.
+    pub groups: usize,
+    /// Hierarchy nodes (leaves included).
+    pub nodes: usize,
+    /// Levels of the hierarchy.
+    pub levels: u32,
+    /// Top-level nodes.
+    pub top_level: usize,
+    /// Bytes of visibility data in the exported hierarchy.
+    pub visibility_bytes: usize,
+    /// Visibility bytes per triangle.
+    pub visibility_bytes_per_triangle: f64,
+}
+
+/// The result of [`build`]: the exported hierarchy, the figures, and the intermediate data that evaluation reuses.
+pub struct Build {
+    /// The exported hierarchy (mesh reordered).
+    pub hierarchy: Hierarchy,
+    /// Figures.
+    pub report: BuildReport,
+    /// Per-triangle regions, in the terrain's original triangle order.
+    pub triangle_regions: RegionTable,
+    /// The grouping.
+    pub crystal: Crystal,
+}
+
+/// Progress callback of [`build`]: `(stage name, done, total)`.
+pub type BuildProgress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
+
+/// Runs the whole pipeline on `tin`.
+pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -> Result<Build> {
+    let config = SectorConfig::new(params.sectors, params.subsectors)?;
+    params.crystal.validate()?;
+    let report_progress = progress.clone();
+    let opts = HorizonOptions {
+        undersampling_radius: params.undersampling,
+        progress: report_progress
+            .map(|p| Arc::new(move |done: usize, total: usize| p("horizons", done as u64, total as u64)) as _),
+    };
+    let start = Instant::now();
+    let field = horizon::compute(tin, &config, &opts)?;
+    let horizon_seconds = start.elapsed().as_secs_f64();
+
+    if let Some(p) = &progress {
+        p("regions", 0, 1);
+    }
+    let start = Instant::now();
+    let vertex_regions = RegionTable::from_field(tin.positions(), &field);
+    drop(field);
+    let triangles = tin.triangles();
+    let triangle_regions = vertex_regions.intersect_rows(triangles.len(), |t| triangles[t]);
+    let regions_seconds = start.elapsed().as_secs_f64();
+
+    if let Some(p) = &progress {
+        p("grouping", 0, 1);
+    }
+    let start = Instant::now();
+    let crystal = crystal::build(tin, &vertex_regions, &triangle_regions, &params.crystal)?;
+    let grouping_seconds = start.elapsed().as_secs_f64();
+
+    let hierarchy = export_hierarchy(tin, &crystal, params);
+    let s = &crystal.stats;
+    let visibility_bytes = hierarchy.visibility_bytes();
+    let report = BuildReport {
+        vertices: tin.num_vertices(),
+        triangles: tin.num_triangles(),
+        sectors: params.sectors,
+        subsectors: params.subsectors,
+        seeds: params.crystal.first_seeds(tin.num_triangles()),
+        horizon_seconds,
+        regions_seconds,
+        grouping_seconds,
+        orphan_passes: s.orphan_passes,
+        orphans: s.orphans,
+        groups: s.groups,
+        nodes: s.nodes,
+        levels: s.levels,
+        top_level: s.top_level,
+        visibility_bytes,
+        visibility_bytes_per_triangle: visibility_bytes as f64 / tin.num_triangles().max(1) as f64,
+    };
+    Ok(Build {
+        hierarchy,
+        report,
+        triangle_regions,
+        crystal,
+    })
+}
+
+/// Rounds a circle to f32 relative to `origin` so that it still encloses the original one.
+fn stored_circle(c: &Circle, origin: [f64; 3]) -> ([f32; 2], f32) {
+    let rel = [c.centre.x - origin[0], c.centre.y - origin[1]];
+    let centre = [rel[0] as f32, rel[1] as f32];
+    let shift = (f64::from(centre[0]) - rel[0]).hypot(f64::from(centre[1]) - rel[1]);
+    let r = c.radius + shift;
+    let mut radius = r as f32;
+    if f64::from(radius) < r {
+        radius = radius.next_up();
+    }
+    (centre, radius)
+}
+
+/// Rounds per-sector regions to the stored f32 form, relative to `origin`; empty sectors are left out.
+pub fn stored_regions(regions: &[Option<Region>], sectors: u32, origin: [f64; 3]) -> Vec<StoredRegion> {
+    regions
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| {
+            let r = r.as_ref()?;
+            let i = i as u32;
+            let points: Vec<[f64; 2]> = r.points().iter().map(|p| [p.x, p.y]).collect();
+            let origin_t = plane_t(sectors, i, glam::DVec2::new(origin[0], origin[1]));
+            StoredRegion::from_f64(i as u16, &points, r.tail_slope(), origin_t, origin[2])
+        })
+        .collect()
+}
+
+/// The exported hierarchy of a grouping: nodes with f32 circles and regions, the mesh in the grouping's triangle
+/// order.
+pub fn export_hierarchy(tin: &Tin, crystal: &Crystal, params: &BuildParams) -> Hierarchy {
+    let origin = tin.origin().to_array();
+    let sectors = crystal.sectors;
+    let nodes = crystal
+        .hierarchy
+        .nodes
+        .iter()
+        .map(|n| {
+            let (centre, radius) = stored_circle(&n.circle, origin);
+            Node {
+                centre,
+                radius,
+                children: n.children.clone(),
+                triangles: [n.range.start, n.range.end],
+                level: n.level,
+                regions: stored_regions(&n.regions, sectors, origin),
+            }
+        })
+        .collect();
+    let triangles = crystal.order.iter().map(|&t| tin.triangles()[t as usize]).collect();
+    Hierarchy {
+        sectors,
+        origin,
+        nodes,
+        roots: crystal.hierarchy.roots.clone(),
+        always_visible: [crystal.orphan_range.start, crystal.orphan_range.end],
+        mesh: Mesh {
+            positions: tin.positions().iter().map(|p| p.to_array()).collect(),
+            triangles,
+        },
+        build: BuildInfo {
+            subsectors: params.subsectors,
+            seeds: params.crystal.first_seeds(tin.num_triangles()) as u32,
+            orphan_passes: params.crystal.orphan_passes,
+            min_group: params.crystal.min_group as u32,
+            max_expanse: params.crystal.max_expanse,
+            rng_seed: params.crystal.rng_seed,
+            undersampling: params.undersampling,
+        },
+    }
+}
+
+/// The thesis' per-triangle mode (5.1.1) as a flat hierarchy: every triangle is its own top-level leaf with its own
+/// regions and bounding circle, in the original triangle order, and nothing is always visible.
+pub fn per_triangle_hierarchy(tin: &Tin, triangle_regions: &RegionTable) -> Hierarchy {
+    let origin = tin.origin().to_array();
+    let sectors = triangle_regions.sectors();
+    let nodes: Vec<Node> = (0..tin.num_triangles() as u32)
+        .map(|t| {
+            let circle = tin.bounding_circle([t]).unwrap_or(Circle {
+                centre: glam::DVec2::ZERO,
+                radius: 0.0,
+            });
+            let (centre, radius) = stored_circle(&circle, origin);
+            Node {
+                centre,
+                radius,
+                children: vec![],
+                triangles: [t, t + 1],
+                level: 0,
+                regions: stored_regions(triangle_regions.row(t), sectors, origin),
+            }
+        })
+        .collect();
+    let n = nodes.len() as u32;
+    Hierarchy {
+        sectors,
+        origin,
+        nodes,
+        roots: (0..n).collect(),
+        always_visible: [n, n],
+        mesh: Mesh {
+            positions: tin.positions().iter().map(|p| p.to_array()).collect(),
+            triangles: tin.triangles().to_vec(),
+        },
+        build: BuildInfo::default(),
+    }
+}
