@@ -87,14 +87,19 @@ pub struct Growth {
     pub passes: Vec<PassStats>,
 }
 
-/// The vertex-from-point test of [`RegionTable::hidden_from`], with the sector directions computed once.
+/// The vertex-from-point test of [`RegionTable::hidden_from`], with the sector directions computed once and
+/// single-vertex regions (every region [`RegionTable::of_vertices`] makes) copied into a flat table.
 ///
-/// It gives exactly the same answers: the same sector choice and the same plane coordinate `r_i · xy`
-/// (`r_i` from [`cull::sector_direction`]).
+/// It gives exactly the same answers: the same sector choice, the same plane coordinate `r_i · xy` (`r_i` from
+/// [`cull::sector_direction`]) and, for a one-vertex chain `(t0, z0)` with tail slope `m`, the same arithmetic as
+/// [`occlusion::Region::contains`]: `t > t0 && z < z0 + m·(t − t0)`. Longer chains use `contains` itself.
 pub(crate) struct Sight<'a> {
     regions: &'a RegionTable,
     positions: &'a [DVec3],
     directions: Vec<DVec2>,
+    /// Per vertex and sector: `[t0, z0, m]` of a one-vertex region; `t0` NaN for an empty region (never hidden),
+    /// `z0` NaN for a longer chain (see `regions`).
+    wedges: Vec<[f64; 3]>,
 }
 
 impl<'a> Sight<'a> {
@@ -106,10 +111,21 @@ impl<'a> Sight<'a> {
                 DVec2::new(x, y)
             })
             .collect();
+        let wedges = (0..regions.len() as u32)
+            .flat_map(|v| regions.row(v))
+            .map(|r| match r {
+                None => [f64::NAN, 0.0, 0.0],
+                Some(r) => match r.points() {
+                    [p] => [p.x, p.y, r.tail_slope()],
+                    _ => [r.t0(), f64::NAN, 0.0],
+                },
+            })
+            .collect();
         Sight {
             regions,
             positions,
             directions,
+            wedges,
         }
     }
 
@@ -122,17 +138,51 @@ impl<'a> Sight<'a> {
         if d == DVec2::ZERO {
             return false;
         }
-        let sector = cull::sector_of_azimuth(self.regions.sectors(), cull::azimuth(d.x, d.y));
-        self.regions
-            .get(v, sector)
-            .is_some_and(|r| r.contains(self.directions[sector as usize].dot(xy), camera.z))
+        let sectors = self.regions.sectors();
+        let sector = cull::sector_of_azimuth(sectors, cull::azimuth(d.x, d.y));
+        let t = self.directions[sector as usize].dot(xy);
+        let [t0, z0, m] = self.wedges[v as usize * sectors as usize + sector as usize];
+        if t0.is_nan() {
+            false
+        } else if z0.is_nan() {
+            self.regions.get(v, sector).is_some_and(|r| r.contains(t, camera.z))
+        } else {
+            t > t0 && camera.z < z0 + m * (t - t0)
+        }
+    }
+}
+
+/// Remembers, per vertex, the last camera vertex it was tested against and the answer: a crystal tests the same
+/// vertices from the same lowest vertex several times (each vertex lies in about six triangles, each looked at from up
+/// to three sides).
+struct Memo {
+    camera: Vec<u32>,
+    hidden: Vec<bool>,
+}
+
+impl Memo {
+    fn new(vertices: usize) -> Memo {
+        Memo {
+            camera: vec![u32::MAX; vertices],
+            hidden: vec![false; vertices],
+        }
     }
 
     /// Whether no vertex of `tri` is hidden from vertex `low`.
     #[inline]
-    fn sees(&self, tri: [u32; 3], low: u32) -> bool {
-        let camera = self.positions[low as usize];
-        tri.iter().all(|&v| v == low || !self.hidden(v, camera))
+    fn sees(&mut self, sight: &Sight, tri: [u32; 3], low: u32) -> bool {
+        let camera = sight.positions[low as usize];
+        tri.iter().all(|&v| {
+            if v == low {
+                return true;
+            }
+            let i = v as usize;
+            if self.camera[i] != low {
+                self.camera[i] = low;
+                self.hidden[i] = sight.hidden(v, camera);
+            }
+            !self.hidden[i]
+        })
     }
 }
 
@@ -155,6 +205,7 @@ struct Grower<'a> {
     neighbours: &'a [[u32; 3]],
     positions: &'a [DVec3],
     sight: Sight<'a>,
+    memo: Memo,
     owner: Vec<u32>,
     crystals: Vec<Vec<u32>>,
     heads: Vec<usize>,
@@ -182,7 +233,7 @@ impl Grower<'_> {
     fn try_seed(&mut self, t: u32, pass: u32) -> bool {
         let tri = self.triangles[t as usize];
         let low = lowest_of(self.positions, tri);
-        if !self.sight.sees(tri, low) {
+        if !self.memo.sees(&self.sight, tri, low) {
             return false;
         }
         let id = self.crystals.len() as u32;
@@ -227,7 +278,7 @@ impl Grower<'_> {
             }
             let tri = self.triangles[n as usize];
             let low = self.lowest[gi];
-            if !self.sight.sees(tri, low) {
+            if !self.memo.sees(&self.sight, tri, low) {
                 continue;
             }
             if owner == UNASSIGNED {
@@ -278,6 +329,7 @@ pub fn grow(tin: &Tin, vertex_regions: &RegionTable, params: &CrystalParams) -> 
         neighbours: tin.neighbours(),
         positions: tin.positions(),
         sight: Sight::new(vertex_regions, tin.positions()),
+        memo: Memo::new(tin.num_vertices()),
         owner: vec![UNASSIGNED; n],
         crystals: Vec::new(),
         heads: Vec::new(),
@@ -443,6 +495,34 @@ pub(crate) fn settle_small(crystals: Vec<Vec<u32>>, collisions: &[(u32, u32, u64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn sight_answers_like_hidden_from(
+            vertices in prop::collection::vec((-50.0f64..50.0, -50.0f64..50.0, -10.0f64..10.0), 2..12),
+            horizons in prop::collection::vec(prop::option::weighted(0.8, (-1.0f64..1.0, 0.0f64..40.0)), 12 * 8),
+            cameras in prop::collection::vec((-80.0f64..80.0, -80.0f64..80.0, -30.0f64..30.0), 1..20),
+        ) {
+            let positions: Vec<DVec3> = vertices.iter().map(|&(x, y, z)| DVec3::new(x, y, z)).collect();
+            let n = positions.len();
+            let single = RegionTable::of_vertices(&positions, 8, |v, s| {
+                horizons[(v * 8 + s) as usize].map(|(slope, distance)| occlusion::SectorHorizon { slope, distance })
+            });
+            // Two-wedge intersections give longer chains, which take the general path.
+            let double = single.intersect_rows(n, |e| [e as u32, ((e + 1) % n) as u32]);
+            for table in [&single, &double] {
+                let sight = Sight::new(table, &positions);
+                for &(x, y, z) in cameras.iter().chain(vertices.iter()) {
+                    let camera = DVec3::new(x, y, z);
+                    for v in 0..n as u32 {
+                        let at = positions[v as usize].truncate();
+                        prop_assert_eq!(sight.hidden(v, camera), table.hidden_from(v, at, camera));
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn small_groups_merge_with_their_most_collided_small_partner() {

@@ -120,12 +120,12 @@ pub fn build(
         }
     }
     let orphans: Vec<u32> = (0..nt as u32).filter(|&t| group_of[t as usize] == NO_GROUP).collect();
-    let group_regions = triangle_regions.intersect_rows(groups.len(), |g| groups[g].iter().copied());
+    let group_regions = merge::group_regions(triangle_regions, &groups);
     let terrain_area: f64 = (0..nt).map(|t| tin.triangle_area_xy(t)).sum();
     let (mut hierarchy, report) = merge::build_hierarchy(
         tin,
         &groups,
-        &group_regions,
+        group_regions,
         &settled.collisions,
         params.max_expanse,
         terrain_area,

@@ -11,8 +11,10 @@
 //!   order); the most-collided partner is the one with the largest count, ties to the smaller id. A node whose best
 //!   partner is already taken at this level waits for the next level, where the taken partner is replaced by its
 //!   parent; it does not fall back to a less-collided partner.
-//! - **Expanse limit**: the parent's circumscribed circle is the bounding circle of all vertices of its triangles
-//!   ([`tin::bounding_circle_of_points`], Ritter's circle made exact). When its area `π r²` would exceed
+//! - **Circles**: a node's circumscribed circle encloses all vertices of its triangles. It is Ritter's circle
+//!   ([`tin::bounding_circle_of_points`], grown to be exact) of the convex hull of those vertices; a parent's hull is
+//!   the hull of its children's hulls, so a merge costs the hulls' size, not the node's.
+//! - **Expanse limit**: when the parent's circle's area `π r²` would exceed
 //!   `max_expanse × terrain area` (the sum of all triangles' areas in x,y), the merge is not made: the pair's edge is
 //!   removed from the collision graph (their mutual collisions are forgotten, so neither tries the other again, and
 //!   their future parents inherit nothing of that pair), and the node tries its next partner at the same level. A node
@@ -23,6 +25,8 @@
 //!   level the first node with a partner either merges or loses an edge, so this only happens once no edges remain.)
 //! - **Levels**: leaves are level 0, a parent is one more than the higher of its two children. Roots are listed in
 //!   increasing id.
+//! - **Group regions** ([`group_regions`]) are the intersection of the group's triangles' regions, computed as a lower
+//!   envelope of lines (see there); parents intersect their two children's regions with [`Region::intersect`].
 
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -95,19 +99,54 @@ impl Hierarchy {
     }
 }
 
-/// The circle enclosing all vertices of `triangles` (the triangles of one or more groups).
-pub(crate) fn circle_of<'a>(tin: &Tin, groups: impl IntoIterator<Item = &'a [u32]>, buffer: &mut Vec<DVec2>) -> Circle {
-    buffer.clear();
-    let (tris, pos) = (tin.triangles(), tin.positions());
-    for group in groups {
-        for &t in group {
-            buffer.extend(tris[t as usize].iter().map(|&v| pos[v as usize].truncate()));
-        }
+/// The convex hull of `points` (counter-clockwise, Andrew's monotone chain), kept on the safe side of rounding: a point
+/// is dropped only when it lies clearly inside (a right turn larger than `1e-9 × |a−o| × |b−o|`), so every input point
+/// is inside the hull polygon and hence inside any circle that encloses the hull's vertices.
+pub(crate) fn hull_of(mut points: Vec<DVec2>) -> Vec<DVec2> {
+    points.sort_unstable_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
+    points.dedup();
+    if points.len() < 3 {
+        return points;
     }
-    bounding_circle_of_points(buffer).unwrap_or(Circle {
+    // Whether `a` lies clearly to the right of `o → b`, i.e. inside a counter-clockwise chain.
+    let inside = |o: DVec2, a: DVec2, b: DVec2| {
+        let (u, v) = (a - o, b - o);
+        u.perp_dot(v) < -1e-9 * u.length() * v.length()
+    };
+    let chain = |iter: &mut dyn Iterator<Item = DVec2>| {
+        let mut h: Vec<DVec2> = Vec::new();
+        for p in iter {
+            while h.len() >= 2 && inside(h[h.len() - 2], h[h.len() - 1], p) {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop(); // The other chain starts with it.
+        h
+    };
+    let mut hull = chain(&mut points.iter().copied());
+    hull.extend(chain(&mut points.iter().rev().copied()));
+    hull
+}
+
+/// The circle enclosing a hull's points (a zero circle for none).
+fn circle_of_hull(hull: &[DVec2]) -> Circle {
+    bounding_circle_of_points(hull).unwrap_or(Circle {
         centre: DVec2::ZERO,
         radius: 0.0,
     })
+}
+
+/// The hull of a group's vertices.
+fn group_hull(tin: &Tin, group: &[u32]) -> Vec<DVec2> {
+    let (tris, pos) = (tin.triangles(), tin.positions());
+    hull_of(
+        group
+            .iter()
+            .flat_map(|&t| tris[t as usize])
+            .map(|v| pos[v as usize].truncate())
+            .collect(),
+    )
 }
 
 /// Per-sector intersection of two nodes' regions.
@@ -121,6 +160,124 @@ pub(crate) fn intersect_regions(a: &[Option<Region>], b: &[Option<Region>]) -> V
         .collect()
 }
 
+/// The regions of each group: per sector, the intersection of its triangles' regions (empty when any triangle's is).
+///
+/// A region's upper boundary is concave (it is the lower envelope of its vertices' horizon lines), so it is the
+/// minimum of the lines through its chain segments and its tail. The intersection of many regions is then the lower
+/// envelope of all their lines to the right of the largest left bound, built in `O(L log L)` for `L` lines with the
+/// classic convex-hull sweep, instead of `O(m × chain length)` for a running intersection of `m` regions. It is the
+/// same region as [`occlusion::intersect_all`] over the members, up to rounding in the crossing points. A member whose
+/// chain is not concave (possible for hand-made regions) makes the sector fall back to pairwise intersection in a
+/// balanced tree.
+pub fn group_regions(triangle_regions: &RegionTable, groups: &[Vec<u32>]) -> Vec<Vec<Option<Region>>> {
+    let sectors = triangle_regions.sectors();
+    groups
+        .par_iter()
+        .map_init(Vec::new, |lines, members| {
+            (0..sectors)
+                .map(|s| {
+                    let regions: Option<Vec<&Region>> = members.iter().map(|&t| triangle_regions.get(t, s)).collect();
+                    let regions = regions?;
+                    envelope(&regions, lines).or_else(|| intersect_balanced(&regions))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A line `z = a + m·s` with `s = t − T0` measured from the group's left bound `T0`.
+#[derive(Clone, Copy, Debug)]
+struct Line {
+    m: f64,
+    a: f64,
+}
+
+/// The intersection of concave regions as the lower envelope of their lines; `None` for no regions or when a chain is
+/// not concave. `lines` is scratch space.
+fn envelope(regions: &[&Region], lines: &mut Vec<Line>) -> Option<Region> {
+    let t0 = regions.iter().map(|r| r.t0()).reduce(f64::max)?;
+    lines.clear();
+    for r in regions {
+        let pts = r.points();
+        let mut previous = f64::INFINITY;
+        for (k, p) in pts.iter().enumerate() {
+            let m = match pts.get(k + 1) {
+                Some(q) => (q.y - p.y) / (q.x - p.x),
+                None => r.tail_slope(),
+            };
+            if m > previous + 1e-9 * previous.abs().max(m.abs()).max(1.0) {
+                return None; // Not concave.
+            }
+            previous = m;
+            // Segments that end at or before T0 cannot bound the intersection.
+            if pts.get(k + 1).is_some_and(|q| q.x <= t0) {
+                continue;
+            }
+            lines.push(Line {
+                m,
+                a: p.y + m * (t0 - p.x),
+            });
+        }
+    }
+    // Decreasing slope, ties by increasing value at T0 (only the lowest of parallel lines matters).
+    lines.sort_unstable_by(|x, y| y.m.total_cmp(&x.m).then(x.a.total_cmp(&y.a)));
+    lines.dedup_by(|later, kept| later.m == kept.m);
+    // Lower envelope over all s: with decreasing slopes, lines take over from left to right. `b` is dropped when the
+    // crossing of `a` and `c` is not to the right of the crossing of `a` and `b`.
+    let mut hull: Vec<Line> = Vec::with_capacity(lines.len());
+    for &c in lines.iter() {
+        while hull.len() >= 2 {
+            let (a, b) = (hull[hull.len() - 2], hull[hull.len() - 1]);
+            if (c.a - a.a) * (a.m - b.m) <= (b.a - a.a) * (a.m - c.m) {
+                hull.pop();
+            } else {
+                break;
+            }
+        }
+        hull.push(c);
+    }
+    // Walk the envelope from s = 0.
+    let cross = |x: Line, y: Line| (y.a - x.a) / (x.m - y.m);
+    let mut i = 0;
+    while i + 1 < hull.len() && cross(hull[i], hull[i + 1]) <= 0.0 {
+        i += 1;
+    }
+    let mut points = vec![DVec2::new(t0, hull[i].a)];
+    while i + 1 < hull.len() {
+        let s = cross(hull[i], hull[i + 1]);
+        let t = t0 + s;
+        if t > points.last().map_or(t0, |p| p.x) {
+            let z = (hull[i].a + hull[i].m * s).min(hull[i + 1].a + hull[i + 1].m * s);
+            points.push(DVec2::new(t, z));
+        }
+        i += 1;
+    }
+    Region::from_chain(points, hull[i].m)
+}
+
+/// Intersects regions pairwise in a balanced tree; `None` for no regions.
+fn intersect_balanced(regions: &[&Region]) -> Option<Region> {
+    let mut level: Vec<Region> = regions
+        .chunks(2)
+        .map(|c| match c {
+            [a, b] => a.intersect(b),
+            _ => c[0].clone(),
+        })
+        .collect();
+    while level.len() > 1 {
+        let mut next = Vec::with_capacity(level.len().div_ceil(2));
+        let mut it = level.into_iter();
+        while let Some(a) = it.next() {
+            next.push(match it.next() {
+                Some(b) => a.intersect(&b),
+                None => a,
+            });
+        }
+        level = next;
+    }
+    level.pop()
+}
+
 /// What building the hierarchy did, besides the hierarchy itself.
 pub(crate) struct MergeReport {
     /// Merges refused by the expanse limit.
@@ -132,14 +289,15 @@ pub(crate) struct MergeReport {
 pub(crate) fn build_hierarchy(
     tin: &Tin,
     groups: &[Vec<u32>],
-    group_regions: &RegionTable,
+    group_regions: Vec<Vec<Option<Region>>>,
     collisions: &[(u32, u32, u64)],
     max_expanse: f64,
     terrain_area: f64,
 ) -> (Hierarchy, MergeReport) {
     let count = groups.len();
     let limit = max_expanse * terrain_area;
-    let mut buffer = Vec::new();
+    // The convex hull of each node's vertices: a parent's circle is computed from its children's hulls.
+    let mut hulls: Vec<Vec<DVec2>> = groups.par_iter().map(|g| group_hull(tin, g)).collect();
     let mut graph: UnGraphMap<u32, u64> = UnGraphMap::with_capacity(count, collisions.len());
     for g in 0..count as u32 {
         graph.add_node(g);
@@ -147,19 +305,19 @@ pub(crate) fn build_hierarchy(
     for &(a, b, w) in collisions {
         graph.add_edge(a, b, w);
     }
-    let mut nodes: Vec<Node> = (0..count)
-        .map(|g| Node {
+    let mut nodes: Vec<Node> = group_regions
+        .into_iter()
+        .enumerate()
+        .map(|(g, regions)| Node {
             children: Vec::new(),
             parent: None,
             level: 0,
-            circle: circle_of(tin, [groups[g].as_slice()], &mut buffer),
+            circle: circle_of_hull(&hulls[g]),
             range: 0..0,
-            regions: group_regions.row(g as u32).to_vec(),
+            regions,
             collisions: record(&graph, g as u32),
         })
         .collect();
-    // The groups under each node in play.
-    let mut leaves_of: Vec<Vec<u32>> = (0..count as u32).map(|g| vec![g]).collect();
     let mut active: Vec<u32> = (0..count as u32).collect();
     let mut roots = Vec::new();
     let mut expanse_rejections = 0;
@@ -176,7 +334,7 @@ pub(crate) fn build_hierarchy(
             break;
         }
         let mut taken = vec![false; nodes.len()];
-        let mut merges: Vec<(u32, u32, Circle)> = Vec::new();
+        let mut merges: Vec<(u32, u32, Circle, Vec<DVec2>)> = Vec::new();
         let mut rejected_here = 0;
         for &g in &active {
             if taken[g as usize] {
@@ -186,8 +344,8 @@ pub(crate) fn build_hierarchy(
                 if taken[p as usize] {
                     break;
                 }
-                let under = leaves_of[g as usize].iter().chain(&leaves_of[p as usize]);
-                let circle = circle_of(tin, under.map(|&l| groups[l as usize].as_slice()), &mut buffer);
+                let hull = hull_of([&hulls[g as usize][..], &hulls[p as usize][..]].concat());
+                let circle = circle_of_hull(&hull);
                 if PI * circle.radius * circle.radius > limit {
                     graph.remove_edge(g, p);
                     rejected_here += 1;
@@ -195,7 +353,7 @@ pub(crate) fn build_hierarchy(
                 }
                 taken[g as usize] = true;
                 taken[p as usize] = true;
-                merges.push((g.min(p), g.max(p), circle));
+                merges.push((g.min(p), g.max(p), circle, hull));
                 break;
             }
         }
@@ -210,11 +368,11 @@ pub(crate) fn build_hierarchy(
         // Make the parents.
         let regions: Vec<Vec<Option<Region>>> = merges
             .par_iter()
-            .map(|&(a, b, _)| intersect_regions(&nodes[a as usize].regions, &nodes[b as usize].regions))
+            .map(|&(a, b, _, _)| intersect_regions(&nodes[a as usize].regions, &nodes[b as usize].regions))
             .collect();
         let mut map: Vec<u32> = (0..nodes.len() as u32).collect();
         let mut parents = Vec::with_capacity(merges.len());
-        for ((a, b, circle), regions) in merges.into_iter().zip(regions) {
+        for ((a, b, circle, hull), regions) in merges.into_iter().zip(regions) {
             let id = nodes.len() as u32;
             map[a as usize] = id;
             map[b as usize] = id;
@@ -230,9 +388,7 @@ pub(crate) fn build_hierarchy(
                 regions,
                 collisions: Vec::new(),
             });
-            let mut under = std::mem::take(&mut leaves_of[a as usize]);
-            under.append(&mut leaves_of[b as usize]);
-            leaves_of.push(under);
+            hulls.push(hull);
             parents.push(id);
         }
         // Redirect the collision graph to the parents.
@@ -270,4 +426,96 @@ fn record(graph: &UnGraphMap<u32, u64>, g: u32) -> Vec<(u32, u64)> {
     let mut r: Vec<(u32, u64)> = graph.edges(g).map(|(_, x, &w)| (x, w)).collect();
     r.sort_unstable();
     r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Upper boundaries within rounding at the chain vertices of both, between them and beyond; equal left bounds.
+    fn close(a: &Region, b: &Region) -> bool {
+        let mut ts: Vec<f64> = a.points().iter().chain(b.points()).map(|p| p.x).collect();
+        ts.sort_by(f64::total_cmp);
+        let mids: Vec<f64> = ts.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+        let last = ts[ts.len() - 1];
+        ts.extend(mids);
+        ts.extend([last + 1.0, last + 1000.0]);
+        a.t0() == b.t0()
+            && ts
+                .iter()
+                .filter(|&&t| t >= a.t0())
+                .all(|&t| (a.height_at(t) - b.height_at(t)).abs() <= 1e-9 * (1.0 + a.height_at(t).abs() + t.abs()))
+    }
+
+    fn wedge() -> impl Strategy<Value = Region> {
+        (-100.0f64..100.0, -50.0f64..50.0, -2.0f64..2.0, 0.0f64..60.0)
+            .prop_map(|(t, z, m, d)| Region::of_vertex(t, z, m, d))
+    }
+
+    /// A triangle-like region: the intersection of three vertex wedges.
+    fn triangle_region() -> impl Strategy<Value = Region> {
+        (wedge(), wedge(), wedge()).prop_map(|(a, b, c)| a.intersect(&b).intersect(&c))
+    }
+
+    proptest! {
+        #[test]
+        fn envelope_is_the_running_intersection(regions in prop::collection::vec(triangle_region(), 1..40)) {
+            let refs: Vec<&Region> = regions.iter().collect();
+            let want = occlusion::intersect_all(refs.iter().map(|r| Some(*r))).expect("non-empty");
+            let got = envelope(&refs, &mut Vec::new()).expect("concave input");
+            prop_assert!(close(&got, &want), "{got:?} vs {want:?}");
+            let balanced = intersect_balanced(&refs).expect("non-empty");
+            prop_assert!(close(&balanced, &want), "{balanced:?} vs {want:?}");
+        }
+
+        #[test]
+        fn hull_circle_encloses_every_point(
+            points in prop::collection::vec((-1e3f64..1e3, -1e3f64..1e3), 1..80),
+            offset in prop_oneof![Just(0.0), Just(5e5), Just(5e6)],
+        ) {
+            let pts: Vec<DVec2> = points.iter().map(|&(x, y)| DVec2::new(x + offset, y + offset)).collect();
+            let hull = hull_of(pts.clone());
+            prop_assert!(hull.len() <= pts.len());
+            let circle = circle_of_hull(&hull);
+            for p in &pts {
+                prop_assert!(p.distance(circle.centre) <= circle.radius, "{p} outside {circle:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn non_concave_chains_fall_back_to_pairwise_intersection() {
+        // A convex kink: slope 0 then slope 1.
+        let kinked = Region::from_chain(vec![DVec2::new(0.0, 0.0), DVec2::new(10.0, 0.0)], 1.0).expect("valid chain");
+        let other = Region::of_vertex(-5.0, 3.0, -0.1, 7.0);
+        assert!(envelope(&[&kinked, &other], &mut Vec::new()).is_none());
+        let table = RegionTable::from_rows(1, vec![Some(kinked.clone()), Some(other.clone())]);
+        let regions = group_regions(&table, &[vec![0, 1]]);
+        assert_eq!(regions[0][0], Some(kinked.intersect(&other)));
+    }
+
+    #[test]
+    fn hull_of_a_square_with_inner_and_edge_points() {
+        let mut pts = vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(4.0, 0.0),
+            DVec2::new(4.0, 4.0),
+            DVec2::new(0.0, 4.0),
+            DVec2::new(2.0, 2.0),
+            DVec2::new(1.0, 3.0),
+        ];
+        pts.push(DVec2::new(2.0, 0.0)); // On an edge: kept (collinear points are never dropped).
+        let hull = hull_of(pts);
+        assert_eq!(
+            hull,
+            vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(2.0, 0.0),
+                DVec2::new(4.0, 0.0),
+                DVec2::new(4.0, 4.0),
+                DVec2::new(0.0, 4.0)
+            ]
+        );
+    }
 }
