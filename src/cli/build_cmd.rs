@@ -59,9 +59,15 @@ impl ParamArgs {
         p.subsectors = self.subsectors.or(from_file.subsectors).unwrap_or(d.subsectors);
         p.undersampling = self.undersampling.or(from_file.undersampling);
         p.crystal.seeds = self.seeds.or(from_file.seeds);
-        p.crystal.orphan_passes = self.orphan_passes.or(from_file.orphan_passes).unwrap_or(d.crystal.orphan_passes);
+        p.crystal.orphan_passes = self
+            .orphan_passes
+            .or(from_file.orphan_passes)
+            .unwrap_or(d.crystal.orphan_passes);
         p.crystal.min_group = self.min_group.or(from_file.min_group).unwrap_or(d.crystal.min_group);
-        p.crystal.max_expanse = self.max_expanse.or(from_file.max_expanse).unwrap_or(d.crystal.max_expanse);
+        p.crystal.max_expanse = self
+            .max_expanse
+            .or(from_file.max_expanse)
+            .unwrap_or(d.crystal.max_expanse);
         p.crystal.rng_seed = self.rng_seed.or(from_file.rng_seed).unwrap_or(d.crystal.rng_seed);
         if let Some(r) = p.undersampling
             && !(r.is_finite() && r > 0.0)
@@ -136,7 +142,7 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     let params = args.params.resolve(args.config.as_deref())?;
     let (tin, _) = args.mesh.load(out)?;
     let result = build(&tin, &params, Some(stage_progress(out)))?;
-    result.hierarchy.save(&args.out).with_context(|| format!("cannot write {}", args.out.display()))?;
+    result.hierarchy.save(&args.out)?;
     print_report(&result.report, out);
     out.say(format!("wrote {}", args.out.display()));
     if let Some(path) = &args.export_json {

@@ -67,7 +67,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !(args.fov > 0.0 && args.fov <= 360.0) {
         bail!("--fov must be in (0, 360], got {}", args.fov);
     }
-    let h = Hierarchy::load(&args.hierarchy).with_context(|| format!("cannot load {}", args.hierarchy.display()))?;
+    let h = Hierarchy::load(&args.hierarchy)?;
     let culler = Culler::new(&h);
     let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
         (Some(e), _) => vec![*e],

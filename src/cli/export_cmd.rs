@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use cull::Hierarchy;
 
@@ -28,7 +28,7 @@ pub struct ExportArgs {
 
 /// Runs `tincull export`.
 pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
-    let h = Hierarchy::load(&args.hierarchy).with_context(|| format!("cannot load {}", args.hierarchy.display()))?;
+    let h = Hierarchy::load(&args.hierarchy)?;
     if let Some(path) = &args.json {
         write_json(&h, path)?;
         out.say(format!("wrote {}", path.display()));

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use horizon::{HorizonField, HorizonOptions, HorizonPoint, SectorConfig};
 use serde_json::json;
@@ -114,7 +114,9 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         if mismatches > 0 {
             let first = field.first_mismatch(&oracle);
             out.json(&report)?;
-            anyhow::bail!("the sweep disagrees with the oracle on {mismatches} vertex-subsector pairs (first: {first:?})");
+            anyhow::bail!(
+                "the sweep disagrees with the oracle on {mismatches} vertex-subsector pairs (first: {first:?})"
+            );
         }
     }
     if let Some(path) = &args.export_json {
@@ -156,5 +158,5 @@ fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path) -> Resul
         }
         w.write_all(b"]}\n")
     };
-    tin::write_atomic(path, write).with_context(|| format!("cannot write {}", path.display()))
+    Ok(tin::write_atomic(path, write)?)
 }

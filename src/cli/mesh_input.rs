@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use tin::{DedupePolicy, ObjImportOptions, ObjImportReport, Tin};
 
@@ -55,8 +55,7 @@ impl MeshArgs {
             },
         };
         let spinner = out.spinner("reading mesh");
-        let (tin, report) =
-            tin::read_obj(&self.mesh, &opts).with_context(|| format!("cannot import {}", self.mesh.display()))?;
+        let (tin, report) = tin::read_obj(&self.mesh, &opts)?;
         spinner.finish_and_clear();
         if report.merged_duplicates > 0 {
             out.warn(format!(

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 use tin::SynthOptions;
@@ -47,7 +47,7 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
     let spinner = out.spinner("synthesising");
     let tin = tin::synth_tin(&opts)?;
     spinner.set_message("writing");
-    tin::write_obj(&tin, &args.out).with_context(|| format!("cannot write {}", args.out.display()))?;
+    tin::write_obj(&tin, &args.out)?;
     spinner.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
     out.say(format!(

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 use tin::{DemOptions, SimplifyOptions};
@@ -54,7 +54,7 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
         z_scale: args.z_scale,
     };
     let spinner = out.spinner("reading DEM");
-    let grid = tin::read_dem(&args.dem, &dem_opts).with_context(|| format!("cannot read {}", args.dem.display()))?;
+    let grid = tin::read_dem(&args.dem, &dem_opts)?;
     spinner.finish_and_clear();
     let opts = SimplifyOptions {
         max_vertices: args.vertices,
@@ -65,7 +65,7 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let progress = |v: usize| bar.set_position(v as u64);
     let (tin, report) = tin::simplify(&grid, &opts, Some(&progress))?;
     bar.finish_and_clear();
-    tin::write_obj(&tin, &args.out).with_context(|| format!("cannot write {}", args.out.display()))?;
+    tin::write_obj(&tin, &args.out)?;
     let seconds = start.elapsed().as_secs_f64();
     out.say(format!(
         "{} ({} x {} samples, {} voids) -> {}: {} vertices, {} triangles, max error {:.3} m, rms {:.3} m; \

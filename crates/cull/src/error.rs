@@ -5,8 +5,8 @@ use std::path::PathBuf;
 /// What can go wrong reading or writing a `.tch` hierarchy file.
 #[derive(Debug, thiserror::Error)]
 pub enum HierarchyError {
-    /// The file could not be read or written.
-    #[error("{path}: {source}")]
+    /// The file could not be read or written (the I/O error is the source).
+    #[error("{path}")]
     Io {
         /// The file.
         path: PathBuf,

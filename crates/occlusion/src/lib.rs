@@ -8,6 +8,6 @@
 pub mod region;
 pub mod table;
 
-pub use region::{Region, intersect_all};
 pub use horizon::SectorHorizon;
+pub use region::{Region, intersect_all};
 pub use table::{RegionTable, plane_t};

@@ -101,8 +101,8 @@ pub enum TinError {
         /// The other.
         second: usize,
     },
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    /// A file could not be read or written (the I/O error is the source).
+    #[error("{path}")]
     Io {
         /// The file.
         path: PathBuf,
