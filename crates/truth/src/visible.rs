@@ -35,7 +35,7 @@ use rayon::prelude::*;
 use tin::Tin;
 
 use crate::locate::{Locator, plane_height};
-use crate::walk::{segment_clear, tolerance};
+use crate::walk::{Outcome, edge_blocks, segment_clear, tolerance, walk_outcome};
 
 /// Largest angle (degrees) that neighbouring grid samples of a triangle may subtend from the eye.
 pub const SAMPLE_ANGLE_DEG: f64 = 0.25;
@@ -46,6 +46,9 @@ pub const MAX_LEVELS: usize = 64;
 /// How far every sample is pulled toward the centroid, in barycentric terms: each barycentric coordinate of a
 /// sample is at least this.
 pub const NUDGE: f64 = 1e-6;
+
+/// Number of blocking edges remembered while the samples of one triangle are tested.
+const BLOCKER_CACHE: usize = 4;
 
 /// Triangle visibility from any number of eyes over one TIN, reusing its [`Locator`].
 #[derive(Clone, Debug)]
@@ -145,7 +148,29 @@ impl<'a> GroundTruth<'a> {
         if self.back_facing(eye, t) {
             return false;
         }
-        self.any_sample(eye, t, |p| segment_clear(self.tin, &self.locator, Some(t), p, eye))
+        // Edges that blocked earlier samples of this triangle: a sample whose segment crosses one of them below the
+        // terrain is hidden without a walk (the same crossing the walk would reach). Kept per triangle, so the
+        // result does not depend on the order in which threads take triangles.
+        let mut blockers: [(u32, u32); BLOCKER_CACHE] = [(u32::MAX, u32::MAX); BLOCKER_CACHE];
+        let mut next = 0;
+        self.any_sample(eye, t, |p| {
+            let cached = blockers
+                .iter()
+                .take_while(|e| e.0 != u32::MAX)
+                .any(|&e| edge_blocks(self.tin, &self.locator, e, p, eye));
+            if cached {
+                return false;
+            }
+            match walk_outcome(self.tin, &self.locator, Some(t), p, eye) {
+                Outcome::Visible => true,
+                Outcome::Hidden(Some(edge)) => {
+                    blockers[next % BLOCKER_CACHE] = edge;
+                    next += 1;
+                    false
+                }
+                Outcome::Hidden(None) => false,
+            }
+        })
     }
 
     /// Calls `f` on the samples of `t` in order until it returns true; returns whether it did.

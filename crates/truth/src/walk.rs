@@ -60,9 +60,34 @@ pub(crate) fn segment_clear(tin: &Tin, loc: &Locator, hint: Option<usize>, targe
     if !loc.matches(tin) {
         // A locator of another mesh: build the right one rather than index out of bounds.
         let own = Locator::new(tin);
-        return Walk::new(tin, &own, target, eye).run(None);
+        return Walk::new(tin, &own, target, eye).run(None) == Outcome::Visible;
     }
+    Walk::new(tin, loc, target, eye).run(hint) == Outcome::Visible
+}
+
+/// [`segment_clear`] reporting the blocking edge; `loc` must match `tin` and the inputs must be finite.
+pub(crate) fn walk_outcome(tin: &Tin, loc: &Locator, hint: Option<usize>, target: DVec3, eye: DVec3) -> Outcome {
     Walk::new(tin, loc, target, eye).run(hint)
+}
+
+/// Whether the segment target -> eye crosses edge `(a, b)` (properly, decided exactly) below the terrain by more
+/// than the tolerance: a certificate that the target is hidden, computed exactly as the walk computes that crossing.
+pub(crate) fn edge_blocks(tin: &Tin, loc: &Locator, (a, b): (u32, u32), target: DVec3, eye: DVec3) -> bool {
+    let walk = Walk::new(tin, loc, target, eye);
+    let (pa, pb) = (tin.position(a), tin.position(b));
+    let oa = orient(walk.q0, walk.q1, pa.truncate());
+    let ob = orient(walk.q0, walk.q1, pb.truncate());
+    if !((oa < 0.0 && ob > 0.0) || (oa > 0.0 && ob < 0.0)) {
+        return false;
+    }
+    let ea = orient(pa.truncate(), pb.truncate(), walk.q0);
+    let eb = orient(pa.truncate(), pb.truncate(), walk.q1);
+    if !((ea < 0.0 && eb > 0.0) || (ea > 0.0 && eb < 0.0)) {
+        return false;
+    }
+    let w = oa / (oa - ob);
+    let x = pa.truncate() + w * (pb.truncate() - pa.truncate());
+    walk.cross_edge(pa, pb, walk.param(x), 0.0).is_none()
 }
 
 /// What the walk left through when it left the footprint (excluded when looking for re-entry).
@@ -91,6 +116,26 @@ enum State {
 enum Step {
     Go(State),
     Done(bool),
+    /// Below the terrain where the segment crosses the edge between these two vertices.
+    BlockedAt(u32, u32),
+}
+
+/// Result of a walk, with the edge that blocked it when there is one (a certificate that can be re-checked cheaply
+/// for nearby segments, see [`edge_blocks`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    Visible,
+    Hidden(Option<(u32, u32)>),
+}
+
+impl Outcome {
+    fn of(visible: bool) -> Outcome {
+        if visible {
+            Outcome::Visible
+        } else {
+            Outcome::Hidden(None)
+        }
+    }
 }
 
 const NONE_KNOWN: [(u32, f64); 2] = [(u32::MAX, 0.0), (u32::MAX, 0.0)];
@@ -180,19 +225,19 @@ impl<'a> Walk<'a> {
         self.z1 - plane_height(&self.tin.corners(t), self.q1) >= -self.eps
     }
 
-    fn run(&self, hint: Option<usize>) -> bool {
+    fn run(&self, hint: Option<usize>) -> Outcome {
         let nt = self.tin.num_triangles();
         let start = hint
             .filter(|&t| t < nt && triangle_contains(self.tin, t, self.q0))
             .or_else(|| self.loc.locate(self.tin, self.q0));
         if self.q0 == self.q1 {
-            return match start {
+            return Outcome::of(match start {
                 None => true,
                 Some(t) => {
                     let ground = plane_height(&self.tin.corners(t), self.q0);
                     self.z0.min(self.z1) - ground >= -self.eps
                 }
-            };
+            });
         }
         let mut state = match start {
             None => State::Outside {
@@ -201,7 +246,8 @@ impl<'a> Walk<'a> {
             },
             Some(t) => match self.start_in(t) {
                 Step::Go(s) => s,
-                Step::Done(b) => return b,
+                Step::Done(b) => return Outcome::of(b),
+                Step::BlockedAt(a, b) => return Outcome::Hidden(Some((a, b))),
             },
         };
         let cap = 2 * (nt + self.tin.num_vertices()) + 64;
@@ -213,10 +259,11 @@ impl<'a> Walk<'a> {
             };
             match step {
                 Step::Go(s) => state = s,
-                Step::Done(b) => return b,
+                Step::Done(b) => return Outcome::of(b),
+                Step::BlockedAt(a, b) => return Outcome::Hidden(Some((a, b))),
             }
         }
-        self.brute_force()
+        Outcome::of(self.brute_force())
     }
 
     /// The target lies in closed triangle `t`: check it and find where the segment goes.
@@ -309,7 +356,7 @@ impl<'a> Walk<'a> {
                 let w = o[i] / (o[i] - o[j]);
                 let x = a.truncate() + w * (b.truncate() - a.truncate());
                 let Some(s) = self.cross_edge(a, b, self.param(x), lo) else {
-                    return Step::Done(false);
+                    return Step::BlockedAt(tri[i], tri[j]);
                 };
                 return match self.tin.neighbours()[t][i] {
                     NO_NEIGHBOUR => Step::Go(State::Outside {
@@ -492,7 +539,7 @@ impl<'a> Walk<'a> {
                 ..
             }) => {
                 let Some(s) = self.cross_edge(self.pos(a), self.pos(b), s, lo) else {
-                    return Step::Done(false);
+                    return Step::BlockedAt(a, b);
                 };
                 if eb == 0.0 {
                     return Step::Done(self.eye_clear(t));

@@ -169,3 +169,28 @@ fn triangle_visibility_does_not_depend_on_threads() {
         "{visible} visible: a non-trivial case"
     );
 }
+
+/// `visible_triangles` (back faces skipped, blocking edges reused between samples) against the definition applied
+/// directly: not back-facing and some sample visible by an independent walk from the located sample.
+#[test]
+fn triangle_visibility_is_the_sample_definition() {
+    let tin = common::grid_tin(25, 25, 10.0, |x, y| {
+        15.0 * (x / 30.0).sin() * (y / 45.0).cos() + 8.0 * ((x + y) / 17.0).sin() + 0.05 * x
+    });
+    let gt = GroundTruth::new(&tin);
+    let mut visible_total = 0;
+    for eye in [
+        DVec3::new(120.0, 120.0, 30.0),
+        DVec3::new(13.0, 201.0, 25.0),
+        DVec3::new(-40.0, 80.0, 35.0),
+        DVec3::new(200.0, 3.0, 80.0),
+    ] {
+        let vis = gt.visible_triangles(eye);
+        for (t, &v) in vis.iter().enumerate() {
+            let expected = !gt.back_facing(eye, t) && gt.samples(eye, t).iter().any(|&s| gt.point_visible(eye, s));
+            assert_eq!(v, expected, "triangle {t} from {eye}");
+        }
+        visible_total += vis.iter().filter(|&&v| v).count();
+    }
+    assert!(visible_total > 100 && visible_total < 4 * tin.num_triangles() - 100);
+}
