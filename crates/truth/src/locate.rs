@@ -1,16 +1,21 @@
-//! Point location in a TIN: a uniform grid of triangle bounding boxes, plus the footprint's boundary.
+//! Point location in a TIN and the triangle layout of the segment walk.
 //!
-//! The grid has about one cell per two triangles over the TIN's x,y bounding box; each cell lists, in increasing
-//! order, the triangles whose bounding box meets it. [`Locator::locate`] tests the triangles of one cell with
-//! Shewchuk's exact orientation predicate (the `robust` crate), so a point on a shared edge or vertex is found
-//! deterministically (in the lowest-numbered triangle that contains it, boundary included).
+//! A uniform grid over the TIN's x,y bounding box (about one cell per two triangles) lists in each cell the
+//! triangles whose bounding box meets it. [`Locator::locate`] tests the triangles of one cell with Shewchuk's exact
+//! orientation predicate (the `robust` crate), so a point on a shared edge or vertex is found deterministically
+//! (always the same one of the triangles that contain it, boundary included).
 //!
-//! The locator also records the footprint's boundary edges and whether the footprint is convex, which the segment
-//! walk ([`crate::walk`]) needs once a segment leaves the TIN: a segment that leaves a convex footprint never comes
-//! back, otherwise the walk looks for the next boundary edge where it re-enters.
+//! For speed the walk ([`crate::walk`]) does not read the [`Tin`] directly: the locator keeps a copy of the triangles
+//! in Morton order of their centroids, one record per triangle with corners, vertex ids and neighbours, so that a
+//! walk from neighbour to neighbour mostly reads memory it has just read (about twice as fast on 200k triangles as
+//! following the TIN's own order). Indices given to and returned by the public functions are always the TIN's.
+//!
+//! The locator also records the footprint's boundary edges and whether the footprint is convex, which the walk needs
+//! once a segment leaves the TIN: a segment that leaves a convex footprint never comes back, otherwise the walk
+//! looks for the next boundary edge where it re-enters.
 
 use glam::{DVec2, DVec3};
-use tin::{NO_NEIGHBOUR, Tin, VertexTriangles};
+use tin::{NO_NEIGHBOUR, Tin};
 
 /// Largest number of grid cells (keeps memory bounded for huge TINs).
 const MAX_CELLS: usize = 1 << 22;
@@ -40,26 +45,43 @@ pub(crate) fn plane_height(corners: &[DVec3; 3], p: DVec2) -> f64 {
     a.z + beta * (b.z - a.z) + gamma * (c.z - a.z)
 }
 
-/// Whether `p` lies in the closed triangle `t` (exact).
+/// Whether `p` lies in the closed triangle with corners `c` (counter-clockwise in x,y; exact).
 #[inline]
-pub(crate) fn triangle_contains(tin: &Tin, t: usize, p: DVec2) -> bool {
-    let [a, b, c] = tin.corners(t).map(|q| q.truncate());
+pub(crate) fn corners_contain(c: &[DVec3; 3], p: DVec2) -> bool {
+    let [a, b, c] = c.map(|q| q.truncate());
     orient(a, b, p) >= 0.0 && orient(b, c, p) >= 0.0 && orient(c, a, p) >= 0.0
 }
 
-/// An edge of the footprint's boundary: edge `edge` (from corner `edge` to corner `edge + 1`) of triangle `tri`.
+/// One triangle as the walk sees it: corner positions, vertex ids (of the [`Tin`]) and neighbours (walk indices,
+/// [`NO_NEIGHBOUR`] on the boundary), in one record so that a walk step touches one place in memory.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WalkTri {
+    /// Corner positions, counter-clockwise in x,y.
+    pub p: [DVec3; 3],
+    /// Vertex ids of the corners.
+    pub v: [u32; 3],
+    /// Neighbour across edge `i` (corner `i` to `i + 1`), as a walk index.
+    pub n: [u32; 3],
+}
+
+/// An edge of the footprint's boundary: edge `edge` (from corner `edge` to corner `edge + 1`) of walk triangle `tri`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct BoundaryEdge {
     pub tri: u32,
     pub edge: u8,
 }
 
-/// A point locator for one [`Tin`]: uniform grid over triangle bounding boxes, vertex-triangle incidence and the
-/// footprint boundary.
+/// A point locator for one [`Tin`], and the TIN's triangles laid out for segment walks.
 ///
-/// A locator belongs to the TIN it was built from; using it with another TIN gives meaningless (but never
-/// out-of-bounds) answers only when both have the same counts, and [`Locator::matches`] tells the two apart
-/// otherwise.
+/// - A uniform grid over the triangles' bounding boxes (about one cell per two triangles) finds the triangle that
+///   contains a point.
+/// - The triangles are stored again in Morton (Z-curve) order of their centroids, each as one record with its corner
+///   positions, vertex ids and neighbours, so that a walk, which moves between neighbours, mostly stays within
+///   memory it has just touched. Results are always reported in the TIN's own triangle order.
+/// - The footprint's boundary edges and whether it is convex.
+///
+/// A locator belongs to the TIN it was built from: [`Locator::matches`] checks the vertex and triangle counts, and
+/// the functions of this crate rebuild the locator when they do not match rather than read out of bounds.
 #[derive(Clone, Debug)]
 pub struct Locator {
     num_vertices: usize,
@@ -70,38 +92,83 @@ pub struct Locator {
     ny: usize,
     cell_start: Vec<u32>,
     cell_tris: Vec<u32>,
-    vertex_triangles: VertexTriangles,
+    tris: Vec<WalkTri>,
+    walk_of: Vec<u32>,
+    tin_of: Vec<u32>,
+    vertex_start: Vec<u32>,
+    vertex_tris: Vec<u32>,
     boundary: Vec<BoundaryEdge>,
     convex: bool,
 }
 
 impl Locator {
-    /// Builds the locator of `tin` (O(triangles)).
+    /// Builds the locator of `tin` (O(triangles log triangles)).
     pub fn new(tin: &Tin) -> Locator {
         let bbox = tin.bbox();
         let min = bbox.min.truncate();
         let size = bbox.size().truncate().max(DVec2::splat(f64::MIN_POSITIVE));
-        let cells = (tin.num_triangles() / 2).clamp(1, MAX_CELLS) as f64;
+        let nt = tin.num_triangles();
+        let cells = (nt / 2).clamp(1, MAX_CELLS) as f64;
         let aspect = size.x / size.y;
         let nx = ((cells * aspect).sqrt().ceil() as usize).clamp(1, MAX_CELLS);
         let ny = ((cells / nx as f64).ceil() as usize).clamp(1, MAX_CELLS / nx);
         let inv_cell = DVec2::new(nx as f64 / size.x, ny as f64 / size.y);
+
+        // Walk order: Morton code of the centroid, ties by TIN index.
+        let morton = |t: usize| {
+            let c = tin.corners(t).iter().map(|p| p.truncate()).sum::<DVec2>() / 3.0;
+            let r = ((c - min) / size).clamp(DVec2::ZERO, DVec2::ONE) * 65535.0;
+            interleave(r.x as u32) | (interleave(r.y as u32) << 1)
+        };
+        let mut tin_of: Vec<u32> = (0..nt as u32).collect();
+        let keys: Vec<u32> = (0..nt).map(morton).collect();
+        tin_of.sort_by_key(|&t| (keys[t as usize], t));
+        let mut walk_of = vec![0u32; nt];
+        for (w, &t) in tin_of.iter().enumerate() {
+            walk_of[t as usize] = w as u32;
+        }
+        let tris: Vec<WalkTri> = tin_of
+            .iter()
+            .map(|&t| {
+                let t = t as usize;
+                WalkTri {
+                    p: tin.corners(t),
+                    v: tin.triangles()[t],
+                    n: tin.neighbours()[t].map(|n| {
+                        if n == NO_NEIGHBOUR {
+                            NO_NEIGHBOUR
+                        } else {
+                            walk_of[n as usize]
+                        }
+                    }),
+                }
+            })
+            .collect();
+
+        let vt = tin.vertex_triangles();
+        let vertex_start = vt.offsets.clone();
+        let vertex_tris = vt.indices.iter().map(|&t| walk_of[t as usize]).collect();
+
         let mut loc = Locator {
             num_vertices: tin.num_vertices(),
-            num_triangles: tin.num_triangles(),
+            num_triangles: nt,
             min,
             inv_cell,
             nx,
             ny,
             cell_start: Vec::new(),
             cell_tris: Vec::new(),
-            vertex_triangles: tin.vertex_triangles(),
+            tris,
+            walk_of,
+            tin_of,
+            vertex_start,
+            vertex_tris,
             boundary: Vec::new(),
             convex: false,
         };
-        loc.fill_grid(tin);
-        loc.boundary = boundary_edges(tin);
-        loc.convex = footprint_is_convex(tin, &loc.boundary);
+        loc.fill_grid();
+        loc.boundary = boundary_edges(&loc.tris);
+        loc.convex = footprint_is_convex(tin.num_vertices(), &loc.tris, &loc.boundary);
         loc
     }
 
@@ -110,24 +177,21 @@ impl Locator {
         self.num_vertices == tin.num_vertices() && self.num_triangles == tin.num_triangles()
     }
 
-    /// The triangle whose closed x,y footprint contains `p` (the lowest-numbered one when `p` is on a shared edge or
-    /// vertex), or `None` outside the TIN.
+    /// The triangle (TIN index) whose closed x,y footprint contains `p`, or `None` outside the TIN. When `p` is on
+    /// an edge or vertex shared by several triangles, one of them is returned, always the same one.
     pub fn locate(&self, tin: &Tin, p: DVec2) -> Option<usize> {
-        if !p.is_finite() || !self.matches(tin) {
+        if !self.matches(tin) {
             return None;
         }
-        let (ix, iy) = self.cell_of(p)?;
-        let cell = iy * self.nx + ix;
-        let range = self.cell_start[cell] as usize..self.cell_start[cell + 1] as usize;
-        self.cell_tris[range]
-            .iter()
-            .map(|&t| t as usize)
-            .find(|&t| triangle_contains(tin, t, p))
+        self.locate_walk(p).map(|w| self.tin_of[w as usize] as usize)
     }
 
     /// Terrain height at `p` (the plane of the triangle that [`Locator::locate`] finds), or `None` outside the TIN.
     pub fn ground_height(&self, tin: &Tin, p: DVec2) -> Option<f64> {
-        self.locate(tin, p).map(|t| plane_height(&tin.corners(t), p))
+        if !self.matches(tin) {
+            return None;
+        }
+        self.locate_walk(p).map(|w| plane_height(&self.tris[w as usize].p, p))
     }
 
     /// Whether the TIN's footprint is convex (one boundary loop turning left or straight at every vertex), as for
@@ -141,8 +205,37 @@ impl Locator {
         self.boundary.len()
     }
 
-    pub(crate) fn vertex_triangles(&self) -> &VertexTriangles {
-        &self.vertex_triangles
+    /// The walk triangle containing `p` (closed), or `None`.
+    pub(crate) fn locate_walk(&self, p: DVec2) -> Option<u32> {
+        if !p.is_finite() {
+            return None;
+        }
+        let (ix, iy) = self.cell_of(p)?;
+        let cell = iy * self.nx + ix;
+        let range = self.cell_start[cell] as usize..self.cell_start[cell + 1] as usize;
+        self.cell_tris[range]
+            .iter()
+            .copied()
+            .find(|&w| corners_contain(&self.tris[w as usize].p, p))
+    }
+
+    /// Walk triangles, in walk order.
+    pub(crate) fn tris(&self) -> &[WalkTri] {
+        &self.tris
+    }
+
+    /// Walk index of TIN triangle `t` (`None` out of range).
+    pub(crate) fn walk_index(&self, t: usize) -> Option<u32> {
+        self.walk_of.get(t).copied()
+    }
+
+    /// Walk triangles around vertex `v`.
+    pub(crate) fn vertex_tris(&self, v: u32) -> &[u32] {
+        let v = v as usize;
+        match (self.vertex_start.get(v), self.vertex_start.get(v + 1)) {
+            (Some(&a), Some(&b)) => &self.vertex_tris[a as usize..b as usize],
+            _ => &[],
+        }
     }
 
     pub(crate) fn boundary(&self) -> &[BoundaryEdge] {
@@ -166,11 +259,13 @@ impl Locator {
         (ix, iy)
     }
 
-    fn fill_grid(&mut self, tin: &Tin) {
+    fn fill_grid(&mut self) {
         let ncells = self.nx * self.ny;
-        let ranges: Vec<((usize, usize), (usize, usize))> = (0..tin.num_triangles())
-            .map(|t| {
-                let [a, b, c] = tin.corners(t).map(|q| q.truncate());
+        let ranges: Vec<((usize, usize), (usize, usize))> = self
+            .tris
+            .iter()
+            .map(|tri| {
+                let [a, b, c] = tri.p.map(|q| q.truncate());
                 (self.clamped_cell(a.min(b).min(c)), self.clamped_cell(a.max(b).max(c)))
             })
             .collect();
@@ -187,11 +282,11 @@ impl Locator {
         }
         let mut fill = counts.clone();
         let mut tris = vec![0u32; counts[ncells] as usize];
-        for (t, &((x0, y0), (x1, y1))) in ranges.iter().enumerate() {
+        for (w, &((x0, y0), (x1, y1))) in ranges.iter().enumerate() {
             for iy in y0..=y1 {
                 for ix in x0..=x1 {
                     let cell = iy * self.nx + ix;
-                    tris[fill[cell] as usize] = t as u32;
+                    tris[fill[cell] as usize] = w as u32;
                     fill[cell] += 1;
                 }
             }
@@ -201,66 +296,64 @@ impl Locator {
     }
 }
 
-/// All boundary edges, in triangle order.
-fn boundary_edges(tin: &Tin) -> Vec<BoundaryEdge> {
-    tin.neighbours()
-        .iter()
+/// Spreads the low 16 bits of `x` to the even bit positions.
+fn interleave(x: u32) -> u32 {
+    let mut x = x & 0xffff;
+    x = (x | (x << 8)) & 0x00ff_00ff;
+    x = (x | (x << 4)) & 0x0f0f_0f0f;
+    x = (x | (x << 2)) & 0x3333_3333;
+    (x | (x << 1)) & 0x5555_5555
+}
+
+/// All boundary edges, in walk order.
+fn boundary_edges(tris: &[WalkTri]) -> Vec<BoundaryEdge> {
+    tris.iter()
         .enumerate()
-        .flat_map(|(t, n)| {
+        .flat_map(|(w, tri)| {
             (0..3u8)
-                .filter(move |&i| n[i as usize] == NO_NEIGHBOUR)
-                .map(move |edge| BoundaryEdge { tri: t as u32, edge })
+                .filter(move |&i| tri.n[i as usize] == NO_NEIGHBOUR)
+                .map(move |edge| BoundaryEdge { tri: w as u32, edge })
         })
         .collect()
 }
 
 /// One boundary loop, no pinched vertex, and no right turn along it.
-fn footprint_is_convex(tin: &Tin, boundary: &[BoundaryEdge]) -> bool {
+fn footprint_is_convex(num_vertices: usize, tris: &[WalkTri], boundary: &[BoundaryEdge]) -> bool {
     if boundary.is_empty() {
         return false;
     }
     let ends = |e: &BoundaryEdge| {
-        let tri = tin.triangles()[e.tri as usize];
-        (tri[e.edge as usize], tri[(e.edge as usize + 1) % 3])
+        let tri = &tris[e.tri as usize];
+        let (i, j) = (e.edge as usize, (e.edge as usize + 1) % 3);
+        (tri.v[i], tri.v[j], tri.p[i].truncate(), tri.p[j].truncate())
     };
     // next[v] = boundary edge starting at v; a vertex starting two boundary edges is pinched.
-    let mut next = vec![u32::MAX; tin.num_vertices()];
+    let mut next = vec![u32::MAX; num_vertices];
     for (i, e) in boundary.iter().enumerate() {
-        let (a, _) = ends(e);
+        let (a, ..) = ends(e);
         if next[a as usize] != u32::MAX {
             return false;
         }
         next[a as usize] = i as u32;
     }
+    // Follow the loop from edge 0: it must come back after exactly |boundary| edges, turning left or straight.
     let mut i = 0usize;
-    for _ in 0..boundary.len() {
-        let (a, b) = ends(&boundary[i]);
+    for step in 0..boundary.len() {
+        let (_, b, pa, pb) = ends(&boundary[i]);
         let j = next[b as usize];
         if j == u32::MAX {
             return false;
         }
-        let (_, c) = ends(&boundary[j as usize]);
-        let [pa, pb, pc] = [a, b, c].map(|v| tin.position(v).truncate());
+        let (.., pc) = ends(&boundary[j as usize]);
         if orient(pa, pb, pc) < 0.0 {
             return false;
         }
         i = j as usize;
-    }
-    // Back at the start after exactly |boundary| steps, and no shorter loop: one loop.
-    if i != 0 {
-        return false;
-    }
-    let mut len = 0;
-    let mut k = 0usize;
-    loop {
-        let (_, b) = ends(&boundary[k]);
-        k = next[b as usize] as usize;
-        len += 1;
-        if k == 0 || len > boundary.len() {
-            break;
+        if i == 0 && step + 1 < boundary.len() {
+            return false;
         }
     }
-    len == boundary.len()
+    i == 0
 }
 
 #[cfg(test)]

@@ -33,7 +33,7 @@
 use glam::{DVec2, DVec3};
 use tin::{NO_NEIGHBOUR, Tin};
 
-use crate::locate::{BoundaryEdge, Locator, orient, plane_height, triangle_contains};
+use crate::locate::{BoundaryEdge, Locator, WalkTri, corners_contain, orient, plane_height};
 
 /// Relative tolerance of the height comparison (see the module documentation).
 pub const EPS_REL: f64 = 1e-9;
@@ -87,7 +87,7 @@ pub(crate) fn edge_blocks(tin: &Tin, loc: &Locator, (a, b): (u32, u32), target: 
     }
     let w = oa / (oa - ob);
     let x = pa.truncate() + w * (pb.truncate() - pa.truncate());
-    walk.cross_edge(pa, pb, walk.param(x), 0.0).is_none()
+    walk.cross_edge(pa, pb, w, walk.param(x), 0.0).is_none()
 }
 
 /// What the walk left through when it left the footprint (excluded when looking for re-entry).
@@ -140,16 +140,19 @@ impl Outcome {
 
 const NONE_KNOWN: [(u32, f64); 2] = [(u32::MAX, 0.0), (u32::MAX, 0.0)];
 
-/// One segment walk, from `q0` (the target, parameter 0) to `q1` (the eye, parameter 1).
+/// One segment walk, from `q0` (the target, parameter 0) to `q1` (the eye, parameter 1). Triangle indices are the
+/// locator's walk indices.
 struct Walk<'a> {
     tin: &'a Tin,
     loc: &'a Locator,
+    tris: &'a [WalkTri],
     q0: DVec2,
     q1: DVec2,
     z0: f64,
     z1: f64,
     d: DVec2,
-    dd: f64,
+    /// `1 / |d|²`.
+    inv_dd: f64,
     eps: f64,
     /// Index (0 = x, 1 = y) of the dominant axis of `d`, and the sign of `d` along it: points exactly on the
     /// segment's line are ordered exactly by `sign * coordinate`.
@@ -167,12 +170,13 @@ impl<'a> Walk<'a> {
         Walk {
             tin,
             loc,
+            tris: loc.tris(),
             q0,
             q1,
             z0: target.z,
             z1: eye.z,
             d,
-            dd: d.length_squared(),
+            inv_dd: 1.0 / d.length_squared(),
             eps: tolerance(target, eye),
             axis,
             sign,
@@ -190,7 +194,7 @@ impl<'a> Walk<'a> {
 
     /// Segment parameter of a point on (or rounded near) the line.
     fn param(&self, p: DVec2) -> f64 {
-        (p - self.q0).dot(self.d) / self.dd
+        (p - self.q0).dot(self.d) * self.inv_dd
     }
 
     /// Whether the segment at parameter `s` is not below terrain height `terrain`.
@@ -203,16 +207,22 @@ impl<'a> Walk<'a> {
         self.param(p).clamp(lo, 1.0)
     }
 
-    /// Checks the clearance where the segment crosses edge `a`-`b`, at the rounded parameter `s_guess`, and returns
-    /// the parameter used, or `None` when the segment is below the terrain there.
+    /// Checks the clearance where the segment crosses edge `a`-`b`, at the rounded edge point `a + w (b - a)` whose
+    /// parameter on the segment is `s_guess`, and returns the parameter used, or `None` when the segment is below the
+    /// terrain there.
     ///
-    /// When the segment runs nearly along the edge, the crossing is ill-conditioned and `s_guess` may even fall
-    /// outside the part of the segment still to walk. The parameter is therefore clamped to `[lo, 1]` and the
-    /// terrain is taken at the edge point nearest to that segment point. In that case the segment stays within
-    /// rounding distance of the edge over the whole stretch, so this is the clearance of a true point of the
+    /// The edge point lies within rounding distance of the segment's line (its side-of-line value interpolates
+    /// those of `a` and `b` to zero), so comparing the terrain there with the segment at `s_guess` is exact up to
+    /// rounding. When the segment runs nearly along the edge, though, the crossing is ill-conditioned and
+    /// `s_guess` may fall outside the part of the segment still to walk. The parameter is then clamped to
+    /// `[lo, 1]` and the terrain is taken at the edge point nearest to that segment point: the segment stays within
+    /// rounding distance of the edge over the whole stretch, so this is still the clearance of a true point of the
     /// segment, and the extremes of the (linear) clearance along the stretch are checked where the segment meets
     /// and leaves the edge.
-    fn cross_edge(&self, a: DVec3, b: DVec3, s_guess: f64, lo: f64) -> Option<f64> {
+    fn cross_edge(&self, a: DVec3, b: DVec3, w: f64, s_guess: f64, lo: f64) -> Option<f64> {
+        if (lo..=1.0).contains(&s_guess) {
+            return self.clear_at(s_guess, a.z + w * (b.z - a.z)).then_some(s_guess);
+        }
         let s = s_guess.clamp(lo, 1.0);
         let q = self.q0 + s * self.d;
         let e = (b - a).truncate();
@@ -220,21 +230,23 @@ impl<'a> Walk<'a> {
         self.clear_at(s, a.z + w * (b.z - a.z)).then_some(s)
     }
 
-    /// Final check: the eye, inside closed triangle `t`.
+    /// Final check: the eye, inside closed walk triangle `t`.
     fn eye_clear(&self, t: usize) -> bool {
-        self.z1 - plane_height(&self.tin.corners(t), self.q1) >= -self.eps
+        self.z1 - plane_height(&self.tris[t].p, self.q1) >= -self.eps
     }
 
+    /// Walks the segment; `hint` is a TIN triangle that probably contains the target.
     fn run(&self, hint: Option<usize>) -> Outcome {
-        let nt = self.tin.num_triangles();
         let start = hint
-            .filter(|&t| t < nt && triangle_contains(self.tin, t, self.q0))
-            .or_else(|| self.loc.locate(self.tin, self.q0));
+            .and_then(|t| self.loc.walk_index(t))
+            .filter(|&w| corners_contain(&self.tris[w as usize].p, self.q0))
+            .or_else(|| self.loc.locate_walk(self.q0))
+            .map(|w| w as usize);
         if self.q0 == self.q1 {
             return Outcome::of(match start {
                 None => true,
                 Some(t) => {
-                    let ground = plane_height(&self.tin.corners(t), self.q0);
+                    let ground = plane_height(&self.tris[t].p, self.q0);
                     self.z0.min(self.z1) - ground >= -self.eps
                 }
             });
@@ -250,7 +262,7 @@ impl<'a> Walk<'a> {
                 Step::BlockedAt(a, b) => return Outcome::Hidden(Some((a, b))),
             },
         };
-        let cap = 2 * (nt + self.tin.num_vertices()) + 64;
+        let cap = 2 * (self.tris.len() + self.tin.num_vertices()) + 64;
         for _ in 0..cap {
             let step = match state {
                 State::InTri { t, s, known } => self.in_triangle(t, s, known),
@@ -266,41 +278,35 @@ impl<'a> Walk<'a> {
         Outcome::of(self.brute_force())
     }
 
-    /// The target lies in closed triangle `t`: check it and find where the segment goes.
+    /// The target lies in closed walk triangle `t`: check it and find where the segment goes.
     fn start_in(&self, t: usize) -> Step {
-        let corners = self.tin.corners(t);
-        if self.z0 - plane_height(&corners, self.q0) < -self.eps {
+        let tri = &self.tris[t];
+        if self.z0 - plane_height(&tri.p, self.q0) < -self.eps {
             return Step::Done(false);
         }
-        let p = corners.map(|c| c.truncate());
+        let p = tri.p.map(|c| c.truncate());
         let e = [0, 1, 2].map(|i| orient(p[i], p[(i + 1) % 3], self.q0));
         let zeros = e.iter().filter(|&&x| x == 0.0).count();
+        let inside = State::InTri {
+            t,
+            s: 0.0,
+            known: NONE_KNOWN,
+        };
         if zeros == 0 {
-            return Step::Go(State::InTri {
-                t,
-                s: 0.0,
-                known: NONE_KNOWN,
-            });
+            return Step::Go(inside);
         }
         if zeros >= 2 {
             // On two edges: at the vertex they share (edge i-1 ends and edge i starts at corner i).
             let i = (0..3).find(|&i| e[(i + 2) % 3] == 0.0 && e[i] == 0.0).unwrap_or(0);
-            return Step::Go(State::AtVertex {
-                v: self.tin.triangles()[t][i],
-                s: 0.0,
-            });
+            return Step::Go(State::AtVertex { v: tri.v[i], s: 0.0 });
         }
         let i = (0..3).find(|&i| e[i] == 0.0).unwrap_or(0);
         let j = (i + 1) % 3;
         let side = orient(p[i], p[j], self.q1);
         if side > 0.0 {
-            Step::Go(State::InTri {
-                t,
-                s: 0.0,
-                known: NONE_KNOWN,
-            })
+            Step::Go(inside)
         } else if side < 0.0 {
-            match self.tin.neighbours()[t][i] {
+            match tri.n[i] {
                 NO_NEIGHBOUR => Step::Go(State::Outside {
                     after: 0.0,
                     exited: Exited::Edge(BoundaryEdge {
@@ -315,17 +321,16 @@ impl<'a> Walk<'a> {
                 }),
             }
         } else {
-            let tri = self.tin.triangles()[t];
             let ahead = if self.key(p[j]) > self.key(p[i]) {
-                tri[j]
+                tri.v[j]
             } else {
-                tri[i]
+                tri.v[i]
             };
             self.along_edge(ahead, t, 0.0)
         }
     }
 
-    /// The segment runs exactly along an edge of triangle `t`, from parameter `lo` toward the edge's vertex `v`.
+    /// The segment runs exactly along an edge of walk triangle `t`, from parameter `lo` toward the edge's vertex `v`.
     fn along_edge(&self, v: u32, t: usize, lo: f64) -> Step {
         let p = self.pos(v);
         if self.key(self.q1) <= self.key(p.truncate()) {
@@ -338,27 +343,33 @@ impl<'a> Walk<'a> {
         Step::Go(State::AtVertex { v, s })
     }
 
-    /// The segment passes through the interior of `t`: find where it leaves.
+    /// The segment passes through the interior of walk triangle `t` from parameter `lo`: find where it leaves.
     fn in_triangle(&self, t: usize, lo: f64, known: [(u32, f64); 2]) -> Step {
-        let tri = self.tin.triangles()[t];
-        let o = tri.map(|v| match known.iter().find(|k| k.0 == v) {
-            Some(&(_, x)) => x,
-            None => orient(self.q0, self.q1, self.pos(v).truncate()),
+        let tri = &self.tris[t];
+        let o: [f64; 3] = std::array::from_fn(|i| {
+            let v = tri.v[i];
+            if known[0].0 == v {
+                known[0].1
+            } else if known[1].0 == v {
+                known[1].1
+            } else {
+                orient(self.q0, self.q1, tri.p[i].truncate())
+            }
         });
         for i in 0..3 {
             let j = (i + 1) % 3;
             if o[i] < 0.0 && o[j] > 0.0 {
                 // Leaves through the interior of edge i (corner i on the right, corner j on the left).
-                let (a, b) = (self.pos(tri[i]), self.pos(tri[j]));
+                let (a, b) = (tri.p[i], tri.p[j]);
                 if orient(a.truncate(), b.truncate(), self.q1) >= 0.0 {
                     return Step::Done(self.eye_clear(t));
                 }
                 let w = o[i] / (o[i] - o[j]);
                 let x = a.truncate() + w * (b.truncate() - a.truncate());
-                let Some(s) = self.cross_edge(a, b, self.param(x), lo) else {
-                    return Step::BlockedAt(tri[i], tri[j]);
+                let Some(s) = self.cross_edge(a, b, w, self.param(x), lo) else {
+                    return Step::BlockedAt(tri.v[i], tri.v[j]);
                 };
-                return match self.tin.neighbours()[t][i] {
+                return match tri.n[i] {
                     NO_NEIGHBOUR => Step::Go(State::Outside {
                         after: s,
                         exited: Exited::Edge(BoundaryEdge {
@@ -369,7 +380,7 @@ impl<'a> Walk<'a> {
                     n => Step::Go(State::InTri {
                         t: n as usize,
                         s,
-                        known: [(tri[i], o[i]), (tri[j], o[j])],
+                        known: [(tri.v[i], o[i]), (tri.v[j], o[j])],
                     }),
                 };
             }
@@ -378,35 +389,34 @@ impl<'a> Walk<'a> {
             let (j, k) = ((i + 1) % 3, (i + 2) % 3);
             if o[i] == 0.0 && o[j] > 0.0 && o[k] < 0.0 {
                 // Leaves through corner i (enters through the opposite edge).
-                let p = tri.map(|v| self.pos(v).truncate());
+                let p = tri.p.map(|c| c.truncate());
                 if orient(p[k], p[i], self.q1) >= 0.0 && orient(p[i], p[j], self.q1) >= 0.0 {
                     return Step::Done(self.eye_clear(t));
                 }
-                let v = self.pos(tri[i]);
-                let s = self.vertex_param(v.truncate(), lo);
-                if !self.clear_at(s, v.z) {
+                let s = self.vertex_param(p[i], lo);
+                if !self.clear_at(s, tri.p[i].z) {
                     return Step::Done(false);
                 }
-                return Step::Go(State::AtVertex { v: tri[i], s });
+                return Step::Go(State::AtVertex { v: tri.v[i], s });
             }
         }
         // The line does not cross the interior: impossible on a valid TIN.
         Step::Done(self.brute_force())
     }
 
-    /// At vertex `v` on the segment: continue into the triangle or along the edge that contains the direction.
+    /// At vertex `v` on the segment, at parameter `s`: continue into the triangle or along the edge that contains
+    /// the direction.
     fn at_vertex(&self, v: u32, s: f64) -> Step {
         let pv = self.pos(v);
         let p = pv.truncate();
         if p == self.q1 {
             return Step::Done(self.z1 - pv.z >= -self.eps);
         }
-        let tris = self.tin.triangles();
-        for &t in self.loc.vertex_triangles().of(v) {
-            let tri = tris[t as usize];
-            let k = tri.iter().position(|&x| x == v).unwrap_or(0);
-            let (b, c) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            let (pb, pc) = (self.pos(b).truncate(), self.pos(c).truncate());
+        for &t in self.loc.vertex_tris(v) {
+            let tri = &self.tris[t as usize];
+            let k = tri.v.iter().position(|&x| x == v).unwrap_or(0);
+            let (kb, kc) = ((k + 1) % 3, (k + 2) % 3);
+            let (pb, pc) = (tri.p[kb].truncate(), tri.p[kc].truncate());
             let ob = orient(p, pb, self.q1);
             let oc = orient(p, self.q1, pc);
             if ob > 0.0 && oc > 0.0 {
@@ -417,10 +427,10 @@ impl<'a> Walk<'a> {
                 });
             }
             if ob == 0.0 && self.key(pb) > self.key(p) {
-                return self.along_edge(b, t as usize, s);
+                return self.along_edge(tri.v[kb], t as usize, s);
             }
             if oc == 0.0 && self.key(pc) > self.key(p) {
-                return self.along_edge(c, t as usize, s);
+                return self.along_edge(tri.v[kc], t as usize, s);
             }
         }
         Step::Go(State::Outside {
@@ -439,34 +449,36 @@ impl<'a> Walk<'a> {
         if self.loc.footprint_is_convex() && exited != Exited::Nothing {
             return Step::Done(true);
         }
-        let tris = self.tin.triangles();
         #[derive(Clone, Copy)]
         struct Candidate {
             s: f64,
-            /// Boundary edge (triangle, ends, side-of-line values of the ends, eye side), or `None` for a vertex.
+            /// Boundary edge (walk triangle, ends, side-of-line values of the ends, eye side), or `None` for a vertex.
             edge: Option<(usize, u32, u32, f64, f64, f64)>,
             vertex: u32,
         }
+        let ends = |e: BoundaryEdge| {
+            let tri = &self.tris[e.tri as usize];
+            let (i, j) = (e.edge as usize, (e.edge as usize + 1) % 3);
+            (tri.v[i], tri.v[j], tri.p[i].truncate(), tri.p[j].truncate())
+        };
         let exit_ends = match exited {
             Exited::Edge(e) => {
-                let tri = tris[e.tri as usize];
-                Some((tri[e.edge as usize], tri[(e.edge as usize + 1) % 3]))
+                let (a, b, ..) = ends(e);
+                Some((a, b))
             }
             _ => None,
         };
-        // Whether candidate edge (a, b) crossed at rounded parameter s lies past the exit.
-        let past_exit = |a: u32, b: u32, s: f64| match exit_ends {
-            Some((x, y)) => match shared_vertex((x, y), (a, b)) {
-                Some((v, from, to)) => self.crosses_before(v, from, to),
-                None => s > after,
-            },
-            None => {
-                if exited == Exited::Nothing {
-                    s >= after
-                } else {
-                    s > after
-                }
+        let beyond = |s: f64| {
+            if exited == Exited::Nothing {
+                s >= after
+            } else {
+                s > after
             }
+        };
+        // Whether candidate edge (a, b) crossed at rounded parameter s lies past the exit.
+        let past_exit = |a: u32, b: u32, s: f64| match exit_ends.and_then(|x| shared_vertex(x, (a, b))) {
+            Some((v, from, to)) => self.crosses_before(v, from, to),
+            None => beyond(s),
         };
         let before = |c: &Candidate, best: &Candidate| match (c.edge, best.edge) {
             (Some((_, a, b, ..)), Some((_, x, y, ..))) => match shared_vertex((a, b), (x, y)) {
@@ -478,24 +490,17 @@ impl<'a> Walk<'a> {
         let mut best: Option<Candidate> = None;
         let (k0, k1) = (self.key(self.q0), self.key(self.q1));
         for &e in self.loc.boundary() {
-            let tri = tris[e.tri as usize];
-            let (a, b) = (tri[e.edge as usize], tri[(e.edge as usize + 1) % 3]);
-            let (pa, pb) = (self.pos(a).truncate(), self.pos(b).truncate());
+            let (a, b, pa, pb) = ends(e);
             let oa = orient(self.q0, self.q1, pa);
             if oa == 0.0 && exited != Exited::Vertex(a) {
                 let ka = self.key(pa);
                 let s = self.param(pa);
-                let beyond = if exited == Exited::Nothing {
-                    s >= after
-                } else {
-                    s > after
-                };
                 let c = Candidate {
                     s,
                     edge: None,
                     vertex: a,
                 };
-                if ka >= k0 && ka <= k1 && beyond && best.is_none_or(|bc| before(&c, &bc)) {
+                if ka >= k0 && ka <= k1 && beyond(s) && best.is_none_or(|bc| before(&c, &bc)) {
                     best = Some(c);
                 }
             }
@@ -534,11 +539,13 @@ impl<'a> Walk<'a> {
                 Step::Go(State::AtVertex { v: vertex, s })
             }
             Some(Candidate {
-                s,
                 edge: Some((t, a, b, oa, ob, eb)),
                 ..
             }) => {
-                let Some(s) = self.cross_edge(self.pos(a), self.pos(b), s, lo) else {
+                let w = oa / (oa - ob);
+                let (pa, pb) = (self.pos(a), self.pos(b));
+                let x = pa.truncate() + w * (pb.truncate() - pa.truncate());
+                let Some(s) = self.cross_edge(pa, pb, w, self.param(x), lo) else {
                     return Step::BlockedAt(a, b);
                 };
                 if eb == 0.0 {
@@ -568,9 +575,8 @@ impl<'a> Walk<'a> {
     /// Fallback for meshes the walk cannot traverse: the segment against every triangle (clip the segment's x,y
     /// projection to the triangle; the clearance is linear there, so check both ends of the clipped piece).
     fn brute_force(&self) -> bool {
-        (0..self.tin.num_triangles()).all(|t| {
-            let corners = self.tin.corners(t);
-            let p = corners.map(|c| c.truncate());
+        self.tris.iter().all(|tri| {
+            let p = tri.p.map(|c| c.truncate());
             let (mut lo, mut hi) = (0.0f64, 1.0f64);
             for i in 0..3 {
                 let (a, b) = (p[i], p[(i + 1) % 3]);
@@ -591,7 +597,7 @@ impl<'a> Walk<'a> {
             }
             [lo, hi].iter().all(|&s| {
                 let q = self.q0 + s * self.d;
-                self.clear_at(s, plane_height(&corners, q))
+                self.clear_at(s, plane_height(&tri.p, q))
             })
         })
     }
