@@ -87,6 +87,7 @@ pub struct Locator {
     num_vertices: usize,
     num_triangles: usize,
     min: DVec2,
+    max: DVec2,
     inv_cell: DVec2,
     nx: usize,
     ny: usize,
@@ -153,6 +154,7 @@ impl Locator {
             num_vertices: tin.num_vertices(),
             num_triangles: nt,
             min,
+            max: bbox.max.truncate(),
             inv_cell,
             nx,
             ny,
@@ -244,8 +246,7 @@ impl Locator {
 
     /// Grid cell of `p`, or `None` when `p` is outside the bounding box.
     fn cell_of(&self, p: DVec2) -> Option<(usize, usize)> {
-        let r = (p - self.min) * self.inv_cell;
-        if r.x < 0.0 || r.y < 0.0 || r.x > self.nx as f64 || r.y > self.ny as f64 {
+        if p.x < self.min.x || p.y < self.min.y || p.x > self.max.x || p.y > self.max.y {
             return None;
         }
         Some(self.clamped_cell(p))
@@ -383,6 +384,34 @@ mod tests {
         assert!(loc.locate(&tin, DVec2::new(8.0, 8.0)).is_some());
         assert!(loc.footprint_is_convex());
         assert_eq!(loc.num_boundary_edges(), 32);
+    }
+
+    #[test]
+    fn vertices_on_the_bounding_box_edge_are_located() {
+        // (p.x - min.x) * (nx / size.x) can round above nx for the largest x: the bounding-box test must not scale.
+        let pts: Vec<DVec3> = [
+            (8.156624807949786, 0.0),
+            (29.729122177091924, 12.60582476815652),
+            (73.20491810439292, 66.0112775111784),
+            (98.89484077348024, 8.211054437121584),
+            (56.63987684829212, 57.67675456863607),
+            (10.580489938960318, 0.0),
+            (79.51829885705037, 67.55058638655619),
+        ]
+        .iter()
+        .map(|&(x, y)| DVec3::new(x, y, 1.0))
+        .collect();
+        for n in 1..pts.len() - 2 {
+            let (tin, _) = triangulate(&pts[..n + 3], DedupePolicy::Reject).expect("points");
+            let loc = Locator::new(&tin);
+            for p in tin.positions() {
+                assert!(
+                    loc.locate(&tin, p.truncate()).is_some(),
+                    "vertex {p} of {} points",
+                    n + 3
+                );
+            }
+        }
     }
 
     #[test]

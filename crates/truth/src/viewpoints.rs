@@ -14,8 +14,8 @@
 //! - "Uniform over the footprint": a triangle is drawn with probability proportional to its x,y area, then a
 //!   uniform point inside it; the terrain height there is the triangle's plane. This is exactly uniform over the
 //!   footprint, whatever its shape, without rejection.
-//! - A local minimum (maximum) is a vertex strictly lower (higher) than every vertex it shares a triangle with. Vertices
-//!   on the footprint boundary are left out: their neighbourhood is cut off by the edge of the data, so they are not
+//! - A local minimum (maximum) is a vertex strictly lower (higher) than every vertex it shares a triangle with.
+//!   Vertices that belong to no triangle are ignored everywhere. Vertices on the footprint boundary are left out: their neighbourhood is cut off by the edge of the data, so they are not
 //!   known to be extrema. When no interior vertex qualifies, the candidates are all vertices, lowest (highest) first.
 //!   `n` viewpoints are drawn from the candidates without replacement (a seeded shuffle) while candidates last, then
 //!   with replacement. With the fallback, the first `n` lowest (highest) vertices are used in order instead.
@@ -151,6 +151,7 @@ enum Extremum {
 fn local_extrema(tin: &Tin, kind: Extremum) -> Vec<u32> {
     let nv = tin.num_vertices();
     let mut on_boundary = vec![false; nv];
+    let used = used_vertices(tin);
     // better[v]: some neighbour is at least as low (high) as v.
     let mut beaten = vec![false; nv];
     for (t, tri) in tin.triangles().iter().enumerate() {
@@ -174,16 +175,28 @@ fn local_extrema(tin: &Tin, kind: Extremum) -> Vec<u32> {
         }
     }
     (0..nv as u32)
-        .filter(|&v| !on_boundary[v as usize] && !beaten[v as usize])
+        .filter(|&v| used[v as usize] && !on_boundary[v as usize] && !beaten[v as usize])
         .collect()
+}
+
+/// Which vertices belong to at least one triangle.
+fn used_vertices(tin: &Tin) -> Vec<bool> {
+    let mut used = vec![false; tin.num_vertices()];
+    for tri in tin.triangles() {
+        for &v in tri {
+            used[v as usize] = true;
+        }
+    }
+    used
 }
 
 fn extremum_points(tin: &Tin, n: usize, rng: &mut ChaCha8Rng, kind: Extremum) -> Vec<DVec3> {
     let above = |v: u32| tin.position(v) + DVec3::new(0.0, 0.0, EXTREMUM_OFFSET);
     let mut candidates = local_extrema(tin, kind);
     if candidates.is_empty() {
-        // Fallback: the lowest (highest) vertices, ties by index.
-        let mut all: Vec<u32> = (0..tin.num_vertices() as u32).collect();
+        // Fallback: the lowest (highest) vertices of the mesh, ties by index.
+        let used = used_vertices(tin);
+        let mut all: Vec<u32> = (0..tin.num_vertices() as u32).filter(|&v| used[v as usize]).collect();
         all.sort_by(|&a, &b| {
             let (za, zb) = (tin.position(a).z, tin.position(b).z);
             let o = if kind == Extremum::Minimum {
@@ -292,6 +305,48 @@ mod tests {
             xy.sort_unstable();
             xy.dedup();
             assert_eq!(xy.len(), ext.len());
+        }
+    }
+
+    proptest::proptest! {
+        /// On random TINs, some with triangles removed (holes, non-convex footprints), every viewpoint stands over
+        /// the footprint at its class's height.
+        #[test]
+        fn viewpoints_stand_over_the_footprint(
+            pts in proptest::collection::vec((0.0f64..100.0, 0.0f64..100.0, 0.0f64..30.0), 3..40),
+            drop_every in 0usize..4,
+            seed in 0u64..1000,
+        ) {
+            let points: Vec<DVec3> = pts.iter().map(|&(x, y, z)| DVec3::new(x, y, z)).collect();
+            let Ok((tin, _)) = triangulate(&points, DedupePolicy::KeepHighest) else { return Ok(()) };
+            let tin = if drop_every > 1 && tin.num_triangles() > drop_every {
+                let keep: Vec<[u32; 3]> = tin.triangles().iter().enumerate()
+                    .filter(|(t, _)| t % drop_every != 0).map(|(_, &tri)| tri).collect();
+                Tin::from_parts(tin.positions().to_vec(), keep).expect("subset of a valid TIN")
+            } else {
+                tin
+            };
+            let loc = Locator::new(&tin);
+            let b = tin.bbox();
+            for class in ViewpointClass::ALL {
+                let pts = viewpoints(&tin, class, 5, seed);
+                proptest::prop_assert_eq!(pts.len(), 5);
+                for p in pts {
+                    let ground = loc.ground_height(&tin, p.truncate());
+                    proptest::prop_assert!(ground.is_some(), "{} viewpoint {} off the footprint", class, p);
+                    let above = p.z - ground.unwrap_or(f64::NAN);
+                    let expected = match class {
+                        ViewpointClass::Ground | ViewpointClass::Valley | ViewpointClass::Ridge => Some(2.0),
+                        ViewpointClass::Low => Some(20.0),
+                        ViewpointClass::High => Some(200.0),
+                        ViewpointClass::Sky => None,
+                    };
+                    match expected {
+                        Some(h) => proptest::prop_assert!((above - h).abs() < 1e-9, "{} at {} m", class, above),
+                        None => proptest::prop_assert_eq!(p.z, b.max.z + 0.1 * (b.max.z - b.min.z)),
+                    }
+                }
+            }
         }
     }
 
