@@ -71,6 +71,17 @@ fn flat_terrain_is_visible_everywhere_and_forms_few_big_groups() {
     // Without an expanse limit, groups that all see each other merge into one tree.
     assert_eq!(c.hierarchy.roots.len(), 1, "all groups collide and merge into one tree");
     assert_eq!(c.stats.nodes, 11);
+    // With no horizons at all (empty regions everywhere) growth sees exactly the same: identical groups.
+    let empty = |rows: usize| RegionTable::from_rows(8, vec![None; rows * 8]);
+    let bare = build(&tin, &empty(tin.num_vertices()), &empty(tin.num_triangles()), &params).expect("valid");
+    bare.check_invariants(&tin).expect("invariants");
+    assert_eq!(bare.groups, c.groups);
+    assert!(
+        bare.hierarchy
+            .nodes
+            .iter()
+            .all(|n| n.regions.iter().all(Option::is_none))
+    );
 }
 
 #[test]
