@@ -8,8 +8,10 @@ mod horizon_cmd;
 mod info;
 mod mesh_input;
 pub mod output;
+mod render_cmd;
 mod synth;
 mod tin_cmd;
+mod view_cmd;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -42,6 +44,10 @@ pub enum Command {
     Cull(cull_cmd::CullArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
     Export(export_cmd::ExportArgs),
+    /// Render a hierarchy or mesh to PNG without a window: map, orbit overview with culling, or eye view.
+    Render(render_cmd::RenderArgs),
+    /// Open the interactive viewer: fly/orbit camera, live culling, ground truth, rebuild and export.
+    View(view_cmd::ViewArgs),
 }
 
 /// Runs a parsed command line.
@@ -55,6 +61,14 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
         Command::Export(args) => export_cmd::run(
+            &args,
+            Output {
+                json: false,
+                quiet: args.quiet,
+            },
+        ),
+        Command::Render(args) => render_cmd::run(&args, args.output.into()),
+        Command::View(args) => view_cmd::run(
             &args,
             Output {
                 json: false,

@@ -90,6 +90,33 @@ pub struct ScreenshotRequest {
     pub after_frames: u32,
 }
 
+/// Actions the viewer takes by itself once the window is up, for tests and demonstrations: first the rebuild
+/// (with the panel's parameters), then the ground truth for the viewpoint. A screenshot waits for both.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Startup {
+    /// Press Rebuild at the first frame (needs a [`RebuildFn`]).
+    pub rebuild: bool,
+    /// Press "Ground truth here" once the hierarchy is ready.
+    pub ground_truth: bool,
+}
+
+/// What happened during a [`run`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunSummary {
+    /// Frames drawn.
+    pub frames: u64,
+    /// Frames drawn while a rebuild was running (the window stayed responsive).
+    pub frames_during_rebuild: u64,
+    /// Rebuilds completed and shown.
+    pub rebuilds: u32,
+    /// Triangles of the hierarchy shown last.
+    pub triangles: usize,
+    /// Leaf groups of the hierarchy shown last.
+    pub groups: usize,
+    /// The last ground truth: `(visible triangles, false culls)`.
+    pub truth: Option<(usize, usize)>,
+}
+
 /// Everything [`run`] needs.
 pub struct ViewerOptions {
     /// Window title.
@@ -110,6 +137,8 @@ pub struct ViewerOptions {
     pub screenshot: Option<ScreenshotRequest>,
     /// Window size in points.
     pub window_size: [f32; 2],
+    /// Actions to take by itself.
+    pub startup: Startup,
 }
 
 impl std::fmt::Debug for ViewerOptions {
@@ -158,7 +187,7 @@ impl Model {
 }
 
 /// Opens the viewer window and runs until it is closed.
-pub fn run(options: ViewerOptions) -> Result<()> {
+pub fn run(options: ViewerOptions) -> Result<RunSummary> {
     let ViewerOptions {
         title,
         source,
@@ -169,7 +198,9 @@ pub fn run(options: ViewerOptions) -> Result<()> {
         eye,
         screenshot,
         window_size,
+        startup,
     } = options;
+    let summary = Arc::new(Mutex::new(RunSummary::default()));
     let model = Model::new(source)?;
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -185,6 +216,8 @@ pub fn run(options: ViewerOptions) -> Result<()> {
         export_stem,
         eye,
         screenshot,
+        startup,
+        summary: Arc::clone(&summary),
     };
     eframe::run_native(
         &title,
@@ -194,7 +227,9 @@ pub fn run(options: ViewerOptions) -> Result<()> {
             Ok(Box::new(app) as Box<dyn eframe::App>)
         }),
     )
-    .map_err(|e| ViewerError::Window(e.to_string()))
+    .map_err(|e| ViewerError::Window(e.to_string()))?;
+    let result = summary.lock().map(|s| *s).unwrap_or_default();
+    Ok(result)
 }
 
 struct Setup {
@@ -205,6 +240,8 @@ struct Setup {
     export_stem: PathBuf,
     eye: Option<[f64; 3]>,
     screenshot: Option<ScreenshotRequest>,
+    startup: Startup,
+    summary: Arc<Mutex<RunSummary>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -318,6 +355,8 @@ struct ViewerApp {
     status: String,
     screenshot: Option<ScreenshotRequest>,
     screenshot_rx: Option<Receiver<Arc<egui::ColorImage>>>,
+    startup: Startup,
+    summary: Arc<Mutex<RunSummary>>,
 }
 
 const MAP_SIDE: u32 = 280;
@@ -338,6 +377,8 @@ impl ViewerApp {
             export_stem,
             eye,
             screenshot,
+            startup,
+            summary,
         } = setup;
         let t = &model.terrain;
         let colour = if t.hierarchy.is_some() {
@@ -351,15 +392,15 @@ impl ViewerApp {
         let map_size = map_size(aspect);
         let main = View::new(&gpu, &egui_renderer, [640, 480])?;
         let map = View::new(&gpu, &egui_renderer, map_size)?;
-        let eye_height = 20.0;
         let eye = eye.unwrap_or_else(|| {
             let c = t.to_world([(t.min[0] + t.max[0]) * 0.5, (t.min[1] + t.max[1]) * 0.5, 0.0]);
             let ground = t.height_at(c[0], c[1]).unwrap_or(c[2]);
-            [c[0], c[1], ground + eye_height]
+            [c[0], c[1], ground + 20.0]
         });
+        let eye_height = t.height_at(eye[0], eye[1]).map_or(20.0, |g| (eye[2] - g).max(0.5));
         Ok(ViewerApp {
             map_view: MapView::fit(t.min, t.max, map_size[0] as f32 / map_size[1] as f32),
-            orbit: Orbit::overview(t.min, t.max, None, None),
+            orbit: Orbit::overview(t.min, t.max, 1.4, None, None),
             level: t.max_level(),
             gpu,
             egui_renderer,
@@ -393,6 +434,8 @@ impl ViewerApp {
             status: String::new(),
             screenshot,
             screenshot_rx: None,
+            startup,
+            summary,
             model,
         })
     }
@@ -485,11 +528,19 @@ impl ViewerApp {
                 style: DrawStyle::Solid,
             }]);
         }
+        // With a ground truth, culled triangles are drawn solid so that the false culls (painted red) show.
+        let truth = self.truth.is_some();
         let items = split_items(&self.list.ranges, n);
         clip(
             items
                 .into_iter()
-                .filter(|i| i.style == DrawStyle::Solid || self.culled_wire)
+                .filter(|i| i.style == DrawStyle::Solid || self.culled_wire || truth)
+                .map(|mut i| {
+                    if truth {
+                        i.style = DrawStyle::Solid;
+                    }
+                    i
+                })
                 .collect(),
         )
     }
@@ -498,13 +549,11 @@ impl ViewerApp {
         let t = self.terrain();
         let extent = Vec3::from(t.max) - Vec3::from(t.min);
         let p = Vec3::from(t.to_local(self.eye));
-        let ground = t
-            .height_at(self.eye[0], self.eye[1])
-            .map_or(t.min[2], |z| (z - t.origin[2]) as f32);
+        let diagonal = extent.truncate().length();
         Marker {
             position: p,
-            size: extent.truncate().length() * 0.01,
-            ground,
+            size: diagonal * 0.008,
+            height: diagonal * 0.05,
         }
     }
 
@@ -673,21 +722,7 @@ impl ViewerApp {
             .add_enabled(can, egui::Button::new("Ground truth here (false culls in red)"))
             .clicked()
         {
-            let (tx, rx) = channel();
-            let tin = Arc::clone(&self.model.tin);
-            let eye = self.eye;
-            let ctx = ui.ctx().clone();
-            std::thread::spawn(move || {
-                let visible = truth::visible_triangles(&tin, DVec3::from_array(eye));
-                let _ = tx.send(visible);
-                ctx.request_repaint();
-            });
-            let n = self.terrain().num_triangles();
-            self.truth_job = Some(TruthJob {
-                eye,
-                drawn: self.list.mask(n),
-                result: rx,
-            });
+            self.start_truth(ui.ctx());
         }
         if busy {
             ui.horizontal(|ui| {
@@ -746,35 +781,65 @@ impl ViewerApp {
             }
             (Some(rebuild), None) => {
                 if ui.button("Rebuild").clicked() {
-                    let progress = Arc::new(Mutex::new(("starting".to_string(), 0u64, 0u64)));
-                    let (tx, rx) = channel();
                     let rebuild = Arc::clone(rebuild);
-                    let tin = Arc::clone(&self.model.tin);
-                    let params = self.params.clone();
-                    let ctx = ui.ctx().clone();
-                    let shared = Arc::clone(&progress);
-                    let repaint = ctx.clone();
-                    let report: Progress = Arc::new(move |stage: &str, done: u64, total: u64| {
-                        if let Ok(mut g) = shared.lock() {
-                            *g = (stage.to_string(), done, total);
-                        }
-                        repaint.request_repaint();
-                    });
-                    std::thread::spawn(move || {
-                        let result = rebuild(&tin, &params, report)
-                            .map_err(|e| e.to_string())
-                            .and_then(|h| Model::from_hierarchy(h).map_err(|e| e.to_string()));
-                        let _ = tx.send(result);
-                        ctx.request_repaint();
-                    });
-                    self.rebuild_job = Some(RebuildJob {
-                        progress,
-                        result: rx,
-                        started: Instant::now(),
-                    });
+                    self.start_rebuild(ui.ctx(), rebuild);
                 }
             }
         }
+    }
+
+    /// Computes the ground truth for the current viewpoint in a background thread.
+    fn start_truth(&mut self, ctx: &egui::Context) {
+        if self.truth_job.is_some() || self.model.culler.is_none() {
+            return;
+        }
+        let (tx, rx) = channel();
+        let tin = Arc::clone(&self.model.tin);
+        let eye = self.eye;
+        let ctx = ctx.clone();
+        std::thread::spawn(move || {
+            let visible = truth::visible_triangles(&tin, DVec3::from_array(eye));
+            let _ = tx.send(visible);
+            ctx.request_repaint();
+        });
+        let n = self.terrain().num_triangles();
+        self.truth_job = Some(TruthJob {
+            eye,
+            drawn: self.list.mask(n),
+            result: rx,
+        });
+    }
+
+    /// Rebuilds the hierarchy with the panel's parameters in a background thread, with progress.
+    fn start_rebuild(&mut self, ctx: &egui::Context, rebuild: RebuildFn) {
+        if self.rebuild_job.is_some() {
+            return;
+        }
+        let progress = Arc::new(Mutex::new(("starting".to_string(), 0u64, 0u64)));
+        let (tx, rx) = channel();
+        let tin = Arc::clone(&self.model.tin);
+        let params = self.params.clone();
+        let ctx = ctx.clone();
+        let shared = Arc::clone(&progress);
+        let repaint = ctx.clone();
+        let report: Progress = Arc::new(move |stage: &str, done: u64, total: u64| {
+            if let Ok(mut g) = shared.lock() {
+                *g = (stage.to_string(), done, total);
+            }
+            repaint.request_repaint();
+        });
+        std::thread::spawn(move || {
+            let result = rebuild(&tin, &params, report)
+                .map_err(|e| e.to_string())
+                .and_then(|h| Model::from_hierarchy(h).map_err(|e| e.to_string()));
+            let _ = tx.send(result);
+            ctx.request_repaint();
+        });
+        self.rebuild_job = Some(RebuildJob {
+            progress,
+            result: rx,
+            started: Instant::now(),
+        });
     }
 
     fn export_ui(&mut self, ui: &mut egui::Ui) {
@@ -822,6 +887,9 @@ impl ViewerApp {
                     self.rebuild_job = None;
                     self.install(model);
                     self.status = format!("rebuilt in {secs:.1} s");
+                    if let Ok(mut s) = self.summary.lock() {
+                        s.rebuilds += 1;
+                    }
                 }
                 Ok(Err(e)) => {
                     self.rebuild_job = None;
@@ -838,12 +906,16 @@ impl ViewerApp {
             match job.result.try_recv() {
                 Ok(visible) => {
                     let false_culls: Vec<bool> = visible.iter().zip(&job.drawn).map(|(&v, &d)| v && !d).collect();
-                    self.truth = Some(Truth {
+                    let truth = Truth {
                         eye: job.eye,
                         visible: visible.iter().filter(|&&v| v).count(),
                         count: false_culls.iter().filter(|&&f| f).count(),
                         false_culls,
-                    });
+                    };
+                    if let Ok(mut s) = self.summary.lock() {
+                        s.truth = Some((truth.visible, truth.count));
+                    }
+                    self.truth = Some(truth);
                     self.truth_job = None;
                 }
                 Err(TryRecvError::Disconnected) => {
@@ -1002,9 +1074,34 @@ impl ViewerApp {
         Ok(())
     }
 
-    fn screenshot_step(&mut self, ctx: &egui::Context) {
+    /// Starts the startup actions in order; true once they are all done.
+    fn startup_step(&mut self, ctx: &egui::Context) -> bool {
+        if self.startup.rebuild {
+            match &self.rebuild {
+                Some(rebuild) => {
+                    let rebuild = Arc::clone(rebuild);
+                    self.start_rebuild(ctx, rebuild);
+                }
+                None => self.status = "no rebuild available".into(),
+            }
+            self.startup.rebuild = false;
+        }
+        if self.rebuild_job.is_some() {
+            return false;
+        }
+        if self.startup.ground_truth && self.model.culler.is_some() {
+            self.start_truth(ctx);
+            self.startup.ground_truth = false;
+        }
+        self.truth_job.is_none()
+    }
+
+    fn screenshot_step(&mut self, ctx: &egui::Context, ready: bool) {
         let Some(req) = &self.screenshot else { return };
         ctx.request_repaint();
+        if !ready {
+            return;
+        }
         if let Some(rx) = &self.screenshot_rx {
             if let Ok(image) = rx.try_recv() {
                 let [w, h] = image.size;
@@ -1065,7 +1162,14 @@ impl eframe::App for ViewerApp {
             ctx.request_repaint_after(std::time::Duration::from_millis(100));
         }
         self.frame_count += 1;
-        self.screenshot_step(&ctx);
+        if let Ok(mut s) = self.summary.lock() {
+            s.frames += 1;
+            s.frames_during_rebuild += u64::from(self.rebuild_job.is_some());
+            s.triangles = self.model.terrain.num_triangles();
+            s.groups = self.model.terrain.groups;
+        }
+        let ready = self.startup_step(&ctx);
+        self.screenshot_step(&ctx, ready);
     }
 }
 

@@ -88,17 +88,50 @@ pub struct Orbit {
 
 impl Orbit {
     /// An overview of `[min, max]` from the south-west, 35° down, looking north-east (or along `yaw`/`pitch`
-    /// when given), far enough back that the whole box is in view.
-    pub fn overview(min: [f32; 3], max: [f32; 3], yaw: Option<f32>, pitch: Option<f32>) -> Orbit {
+    /// when given), as close as possible while the whole box stays in an image of aspect `aspect`.
+    pub fn overview(min: [f32; 3], max: [f32; 3], aspect: f32, yaw: Option<f32>, pitch: Option<f32>) -> Orbit {
         let (lo, hi) = (Vec3::from(min), Vec3::from(max));
-        let radius = ((hi - lo).length() * 0.5).max(1.0);
-        let fov_y = 40f32.to_radians();
-        Orbit {
+        let mut orbit = Orbit {
             target: (lo + hi) * 0.5,
             yaw: yaw.unwrap_or(45f32.to_radians()),
             pitch: pitch.unwrap_or(-35f32.to_radians()).clamp(-1.55, 1.55),
-            distance: radius / (fov_y * 0.5).sin() * 1.02,
-            fov_y,
+            distance: 1.0,
+            fov_y: 40f32.to_radians(),
+        };
+        orbit.distance = orbit.fit_distance(lo, hi, aspect);
+        orbit
+    }
+
+    /// The smallest distance from the target at which every corner of `[lo, hi]` is in view (5% margin).
+    pub fn fit_distance(&self, lo: Vec3, hi: Vec3, aspect: f32) -> f32 {
+        let f = direction(self.yaw, self.pitch);
+        let r = f.cross(Vec3::Z).normalize_or(Vec3::X);
+        let u = r.cross(f);
+        let fov_y = self.effective_fov_y(aspect);
+        let tan_y = (fov_y * 0.5).tan() * 0.95;
+        let tan_x = tan_y * aspect.max(1e-6);
+        let mut d: f32 = 1.0;
+        for k in 0..8 {
+            let corner = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            ) - self.target;
+            // The corner's depth in front of a camera at target − f·d is d + corner·f.
+            let ahead = corner.dot(f);
+            d = d
+                .max(corner.dot(r).abs() / tan_x - ahead)
+                .max(corner.dot(u).abs() / tan_y - ahead);
+        }
+        d
+    }
+
+    fn effective_fov_y(&self, aspect: f32) -> f32 {
+        // Keep the whole scene in view at narrow aspect ratios too.
+        if aspect < 1.0 {
+            vertical_fov(self.fov_y, 1.0 / aspect).max(self.fov_y)
+        } else {
+            self.fov_y
         }
     }
 
@@ -111,13 +144,7 @@ impl Orbit {
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
         let view = look_to_mat4(self.eye(), direction(self.yaw, self.pitch), Vec3::Z);
         let near = (self.distance * 1e-3).max(0.05);
-        // Keep the whole scene in view at narrow aspect ratios too.
-        let fov_y = if aspect < 1.0 {
-            vertical_fov(self.fov_y, 1.0 / aspect).max(self.fov_y)
-        } else {
-            self.fov_y
-        };
-        perspective_infinite_reverse(fov_y, aspect.max(1e-6), near) * view
+        perspective_infinite_reverse(self.effective_fov_y(aspect), aspect.max(1e-6), near) * view
     }
 }
 

@@ -194,10 +194,11 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
     let marker = options.eye.map(|e| {
         let p = Vec3::from(terrain.to_local(e));
         let extent = Vec3::from(terrain.max) - Vec3::from(terrain.min);
+        let diagonal = extent.truncate().length();
         Marker {
             position: p,
-            size: extent.truncate().length() * 0.012,
-            ground: terrain.min[2],
+            size: diagonal * 0.012,
+            height: diagonal * 0.07,
         }
     });
     let (view_proj, items, marker) = match options.view {
@@ -210,6 +211,7 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
             let orbit = Orbit::overview(
                 terrain.min,
                 terrain.max,
+                aspect,
                 options.yaw_deg.map(|d| (d as f32).to_radians()),
                 options.pitch_deg.map(|d| (d as f32).to_radians()),
             );

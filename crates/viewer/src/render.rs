@@ -115,15 +115,16 @@ pub struct DrawItem {
     pub style: DrawStyle,
 }
 
-/// The viewpoint marker: an octahedron at the eye on a thin pole down to the ground.
+/// The viewpoint marker: a pin standing on the eye, a thin pole up to an octahedron head, so that a viewpoint
+/// down in a valley still shows from afar.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Marker {
-    /// Eye position (local).
+    /// Eye position (local): the foot of the pin.
     pub position: Vec3,
-    /// Radius of the octahedron (m).
+    /// Radius of the head (m).
     pub size: f32,
-    /// Local z where the pole ends.
-    pub ground: f32,
+    /// Height of the head's centre above the eye (m).
+    pub height: f32,
 }
 
 /// What one render did.
@@ -573,11 +574,11 @@ fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
 
 /// The marker's triangles (unshared vertices with face normals) and their colours.
 fn marker_mesh(m: &Marker) -> (Vec<[f32; 6]>, Vec<[u8; 4]>) {
-    let c = m.position;
     let r = m.size.max(1e-3);
+    let c = m.position + Vec3::Z * m.height.max(0.0);
     let mut positions: Vec<[f32; 3]> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
-    // Octahedron.
+    // The head: an octahedron.
     let tips = [
         c + Vec3::X * r,
         c + Vec3::Y * r,
@@ -592,11 +593,10 @@ fn marker_mesh(m: &Marker) -> (Vec<[f32; 6]>, Vec<[u8; 4]>) {
         triangles.push([k, next, 4]);
         triangles.push([next, k, 5]);
     }
-    // A thin square pole from the octahedron down to the ground.
-    let w = r * 0.15;
-    let bottom = m.ground.min(c.z - r);
+    // The pole: a thin square prism from the eye up to the head.
+    let w = r * 0.2;
     let base = positions.len() as u32;
-    for z in [c.z - r, bottom] {
+    for z in [m.position.z, c.z] {
         for (dx, dy) in [(w, w), (-w, w), (-w, -w), (w, -w)] {
             positions.push([c.x + dx, c.y + dy, z]);
         }
@@ -604,8 +604,8 @@ fn marker_mesh(m: &Marker) -> (Vec<[f32; 6]>, Vec<[u8; 4]>) {
     for k in 0..4u32 {
         let next = (k + 1) % 4;
         let (a, b, a2, b2) = (base + k, base + next, base + 4 + k, base + 4 + next);
-        triangles.push([a2, b2, b]);
-        triangles.push([a2, b, a]);
+        triangles.push([a, b, b2]);
+        triangles.push([a, b2, a2]);
     }
     let vertices = flat_vertices(&positions, &triangles);
     let colour = palette::to_rgba8(palette::MARKER_COLOUR);

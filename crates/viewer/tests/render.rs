@@ -95,7 +95,7 @@ fn orbit_draws_culled_groups_as_light_wireframe() {
     // The culler hides B only.
     let ranges = culled.ranges.clone().unwrap();
     assert_eq!(ranges, vec![[0, 8], [16, 32]]);
-    let orbit = Orbit::overview(t.min, t.max, None, None);
+    let orbit = Orbit::overview(t.min, t.max, 1.0, None, None);
     let (bx, by) = project(orbit.view_proj(1.0), Vec3::new(70.0, 22.0, 0.0), SIZE);
     let (ax, ay) = project(orbit.view_proj(1.0), Vec3::new(20.0, 22.0, 0.0), SIZE);
     let solid_b = shaded(group_colour(1));

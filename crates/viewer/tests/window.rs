@@ -1,6 +1,9 @@
-//! The interactive viewer in a real window: starts it under a virtual X server (Xvfb), lets it draw a few frames,
-//! takes a screenshot through egui's screenshot request, and checks the picture: not blank, the side panel on the
-//! left, the terrain's group colours in the 3-D view.
+//! The interactive viewer in a real window: starts it under a virtual X server (Xvfb), lets it rebuild the hierarchy
+//! through an injected (slow, fake) build in the background, compute the ground truth for the viewpoint, takes a
+//! screenshot through egui's screenshot request, and checks the picture: not blank, the side panel on the left, the
+//! terrain's group colours and the false culls in red in the 3-D view. The child also checks that frames kept
+//! coming during the rebuild (the window stayed responsive) and that the ground truth found the fixture's false
+//! culls.
 //!
 //! The viewer runs in a child process (winit wants the main thread and one event loop per process). Without
 //! Xvfb or a GPU adapter the test prints a SKIP notice and passes, unless `TINCULL_REQUIRE_GPU` is set.
@@ -11,7 +14,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use viewer::app::{ScreenshotRequest, Source, ViewerOptions, ViewerParams};
+use std::sync::Arc;
+
+use viewer::app::{Progress, RebuildFn, ScreenshotRequest, Source, Startup, ViewerOptions, ViewerParams};
 use viewer::{RgbaImage, gpu_required};
 
 const CHILD_ENV: &str = "TINCULL_VIEWER_TEST_CHILD";
@@ -59,11 +64,21 @@ fn main() {
 /// Runs the viewer on the fixture and exits after the screenshot.
 fn child(out: &Path) {
     let h = common::tiny_hierarchy();
+    // A slow stand-in for the pipeline: reports progress for about a second, then returns the fixture again.
+    let rebuild: RebuildFn = Arc::new(|tin, params, progress: Progress| {
+        assert_eq!(tin.num_triangles(), 32, "the rebuild gets the shown terrain");
+        assert_eq!(params.sectors, 16);
+        for step in 0..=10 {
+            progress("grouping", step, 10);
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        Ok(common::tiny_hierarchy())
+    });
     let result = viewer::app::run(ViewerOptions {
         title: "tincull viewer test".into(),
         source: Source::Hierarchy(h),
         params: ViewerParams::default(),
-        rebuild: None,
+        rebuild: Some(rebuild),
         export_obj: None,
         export_stem: std::env::temp_dir().join("tincull-viewer-test"),
         eye: Some(common::world(5.0, 25.0, 30.0)),
@@ -72,15 +87,31 @@ fn child(out: &Path) {
             after_frames: 5,
         }),
         window_size: [WIDTH as f32, HEIGHT as f32],
+        startup: Startup {
+            rebuild: true,
+            ground_truth: true,
+        },
     });
-    if let Err(e) = result {
-        eprintln!("viewer failed: {e}");
-        std::process::exit(2);
-    }
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("viewer failed: {e}");
+            std::process::exit(2);
+        }
+    };
     if !out.exists() {
         eprintln!("the viewer closed without a screenshot");
         std::process::exit(3);
     }
+    eprintln!("{summary:?}");
+    assert_eq!(summary.rebuilds, 1);
+    assert!(
+        summary.frames_during_rebuild >= 5,
+        "the window froze during the rebuild: {summary:?}"
+    );
+    assert_eq!((summary.triangles, summary.groups), (32, 3));
+    // Seen from (5, 25, 30) over flat ground every triangle is visible, and B's 8 are culled: 8 false culls.
+    assert_eq!(summary.truth, Some((32, 8)));
 }
 
 fn check(image: &RgbaImage) {
