@@ -52,6 +52,9 @@ pub struct RenderArgs {
     /// pixels (false culls on screen) and frame times.
     #[arg(long)]
     pub compare: bool,
+    /// With --compare: timed repetitions of each frame (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub runs: u32,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -125,7 +128,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         colour,
         level: args.level,
         compare: args.compare,
-        ..Default::default()
+        timing_runs: args.runs,
     };
     let result = viewer::render(&gpu, &terrain, &options)?;
     viewer::write_png(&args.out, &result.image)?;

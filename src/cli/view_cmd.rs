@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use viewer::app::{Progress, ScreenshotRequest, Source, ViewerOptions, ViewerParams};
+use viewer::app::{Progress, ScreenshotRequest, Source, Startup, ViewerOptions, ViewerParams};
 
 use super::Output;
 use super::build_cmd::ParamArgs;
@@ -26,7 +26,14 @@ pub struct ViewArgs {
     /// Initial build parameters of the side panel (the hierarchy's own, when it records them).
     #[command(flatten)]
     pub params: ParamArgs,
-    /// Write a screenshot of the window to this PNG after a few frames, then close.
+    /// Build the hierarchy with the panel's parameters right away, in the background (as the Rebuild button does).
+    #[arg(long)]
+    pub rebuild: bool,
+    /// Compute the ground truth for the initial viewpoint right away (after --rebuild), showing false culls in red.
+    #[arg(long)]
+    pub truth: bool,
+    /// Write a screenshot of the window to this PNG after a few frames (and after --rebuild and --truth), then
+    /// close.
     #[arg(long, value_name = "PNG")]
     pub screenshot: Option<PathBuf>,
     /// Frames drawn before the screenshot.
@@ -104,7 +111,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
-    viewer::app::run(ViewerOptions {
+    let summary = viewer::app::run(ViewerOptions {
         title,
         source,
         params,
@@ -117,10 +124,24 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             after_frames: args.screenshot_after,
         }),
         window_size: [args.size[0] as f32, args.size[1] as f32],
-        startup: Default::default(),
+        startup: Startup {
+            rebuild: args.rebuild,
+            ground_truth: args.truth,
+        },
     })?;
     if let Some(path) = &args.screenshot {
         out.say(format!("wrote {}", path.display()));
+    }
+    if summary.rebuilds > 0 {
+        out.say(format!(
+            "built the hierarchy {} time(s); the last has {} groups",
+            summary.rebuilds, summary.groups
+        ));
+    }
+    if let Some((visible, false_culls)) = summary.truth {
+        out.say(format!(
+            "ground truth: {visible} visible triangles, {false_culls} false culls"
+        ));
     }
     Ok(())
 }

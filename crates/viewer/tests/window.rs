@@ -42,6 +42,8 @@ fn main() {
     display.stop();
     match status {
         Some(s) if s.success() => {}
+        // A panic in the child is a failed check, never a missing GPU.
+        Some(s) if s.code() == Some(101) => panic!("the viewer process failed a check ({s})"),
         other => {
             let msg = format!("the viewer process ended with {other:?} (no window, no adapter, or a crash)");
             if gpu_required() {

@@ -1,0 +1,70 @@
+//! End-to-end test of `tincull view`: the interactive viewer on a plain OBJ mesh under a virtual X server
+//! (`xvfb-run`), building the hierarchy in the background with the real pipeline (`--rebuild`), computing the ground
+//! truth (`--truth`), and writing a screenshot taken through egui's screenshot request.
+//!
+//! Without `xvfb-run` or a GPU the test prints a SKIP notice and passes, unless `TINCULL_REQUIRE_GPU` is set.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn find_program(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|d| d.join(name)).find(|p| p.is_file())
+}
+
+fn skip(why: &str) {
+    if viewer::gpu_required() {
+        panic!("TINCULL_REQUIRE_GPU is set but {why}");
+    }
+    eprintln!("SKIP: {why}; viewer test not run (set TINCULL_REQUIRE_GPU=1 to make this an error)");
+}
+
+#[test]
+fn view_rebuilds_an_obj_and_shows_ground_truth() {
+    let Some(xvfb_run) = find_program("xvfb-run") else {
+        return skip("xvfb-run is not installed");
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    let shot = dir.path().join("shot.png");
+    let status = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["synth", "-o", obj.to_str().unwrap(), "--vertices", "800", "-q"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = Command::new(xvfb_run)
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 1280x1024x24",
+            env!("CARGO_BIN_EXE_tincull"),
+            "view",
+        ])
+        .arg(&obj)
+        .args(["--rebuild", "--truth", "--size", "1000x700", "--screenshot"])
+        .arg(&shot)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        // Only a missing display or GPU is a reason to skip; any other failure is a failure.
+        if stderr.contains("viewer window") || stderr.contains("no GPU adapter") || stderr.contains("xvfb-run") {
+            return skip(&format!(
+                "the viewer could not open a window ({}): {stderr}",
+                out.status
+            ));
+        }
+        panic!("tincull view failed ({}):\n{stdout}\n{stderr}", out.status);
+    }
+    assert!(stdout.contains("built the hierarchy 1 time(s)"), "{stdout}");
+    assert!(stdout.contains("ground truth:"), "{stdout}");
+    let img = viewer::read_png(&shot).unwrap();
+    assert!(img.width >= 500 && img.height >= 350, "{}x{}", img.width, img.height);
+    // After the rebuild the terrain is coloured by group: the 3-D view holds many distinct colours.
+    let mut colours: Vec<&[u8]> = img.pixels.chunks_exact(4).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(colours.len() > 50, "{} colours", colours.len());
+}
