@@ -1,0 +1,182 @@
+//! Background work of the viewer: the rebuild (the caller's injected pipeline) and the ground truth for a
+//! viewpoint run in threads; the UI polls their channels each frame and stays responsive meanwhile. Also the
+//! startup actions that press those buttons by themselves.
+
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use eframe::egui;
+use glam::DVec3;
+
+use super::{Model, Progress, RebuildFn, ViewerApp};
+use crate::scene::{ColourMode, GpuScene};
+
+pub(super) struct RebuildJob {
+    pub(super) progress: Arc<Mutex<(String, u64, u64)>>,
+    pub(super) result: Receiver<std::result::Result<Model, String>>,
+    pub(super) started: Instant,
+}
+
+pub(super) struct TruthJob {
+    pub(super) eye: [f64; 3],
+    pub(super) drawn: Vec<bool>,
+    pub(super) result: Receiver<Vec<bool>>,
+}
+
+pub(super) struct Truth {
+    pub(super) eye: [f64; 3],
+    pub(super) visible: usize,
+    pub(super) false_culls: Vec<bool>,
+    pub(super) count: usize,
+}
+
+impl ViewerApp {
+    /// Computes the ground truth for the current viewpoint in a background thread.
+    pub(super) fn start_truth(&mut self, ctx: &egui::Context) {
+        if self.truth_job.is_some() || self.model.culler.is_none() {
+            return;
+        }
+        let (tx, rx) = channel();
+        let tin = Arc::clone(&self.model.tin);
+        let eye = self.eye;
+        let ctx = ctx.clone();
+        std::thread::spawn(move || {
+            let visible = truth::visible_triangles(&tin, DVec3::from_array(eye));
+            let _ = tx.send(visible);
+            ctx.request_repaint();
+        });
+        let n = self.terrain().num_triangles();
+        self.truth_job = Some(TruthJob {
+            eye,
+            drawn: self.list.mask(n),
+            result: rx,
+        });
+    }
+
+    /// Rebuilds the hierarchy with the panel's parameters in a background thread, with progress.
+    pub(super) fn start_rebuild(&mut self, ctx: &egui::Context, rebuild: RebuildFn) {
+        if self.rebuild_job.is_some() {
+            return;
+        }
+        let progress = Arc::new(Mutex::new(("starting".to_string(), 0u64, 0u64)));
+        let (tx, rx) = channel();
+        let tin = Arc::clone(&self.model.tin);
+        let params = self.params.clone();
+        let ctx = ctx.clone();
+        let shared = Arc::clone(&progress);
+        let repaint = ctx.clone();
+        let report: Progress = Arc::new(move |stage: &str, done: u64, total: u64| {
+            if let Ok(mut g) = shared.lock() {
+                *g = (stage.to_string(), done, total);
+            }
+            repaint.request_repaint();
+        });
+        std::thread::spawn(move || {
+            let result = rebuild(&tin, &params, report)
+                .map_err(|e| e.to_string())
+                .and_then(|h| Model::from_hierarchy(h).map_err(|e| e.to_string()));
+            let _ = tx.send(result);
+            ctx.request_repaint();
+        });
+        self.rebuild_job = Some(RebuildJob {
+            progress,
+            result: rx,
+            started: Instant::now(),
+        });
+    }
+
+    pub(super) fn poll_jobs(&mut self) {
+        if let Some(job) = &self.rebuild_job {
+            match job.result.try_recv() {
+                Ok(Ok(model)) => {
+                    let secs = job.started.elapsed().as_secs_f64();
+                    self.rebuild_job = None;
+                    self.install(model);
+                    self.status = format!("rebuilt in {secs:.1} s");
+                    if let Ok(mut s) = self.summary.lock() {
+                        s.rebuilds += 1;
+                    }
+                }
+                Ok(Err(e)) => {
+                    self.rebuild_job = None;
+                    self.status = format!("rebuild failed: {e}");
+                }
+                Err(TryRecvError::Disconnected) => {
+                    self.rebuild_job = None;
+                    self.status = "rebuild failed: the build thread stopped".into();
+                }
+                Err(TryRecvError::Empty) => {}
+            }
+        }
+        if let Some(job) = &self.truth_job {
+            match job.result.try_recv() {
+                Ok(visible) => {
+                    let false_culls: Vec<bool> = visible.iter().zip(&job.drawn).map(|(&v, &d)| v && !d).collect();
+                    let truth = Truth {
+                        eye: job.eye,
+                        visible: visible.iter().filter(|&&v| v).count(),
+                        count: false_culls.iter().filter(|&&f| f).count(),
+                        false_culls,
+                    };
+                    if let Ok(mut s) = self.summary.lock() {
+                        s.truth = Some((truth.visible, truth.count));
+                    }
+                    self.truth = Some(truth);
+                    self.truth_job = None;
+                }
+                Err(TryRecvError::Disconnected) => {
+                    self.truth_job = None;
+                    self.status = "ground truth failed".into();
+                }
+                Err(TryRecvError::Empty) => {}
+            }
+        }
+    }
+
+    pub(super) fn install(&mut self, model: Model) {
+        let colour = if model.terrain.hierarchy.is_some() {
+            ColourMode::Groups
+        } else {
+            ColourMode::Height
+        };
+        let scene = model
+            .terrain
+            .colours(colour, None, None)
+            .and_then(|c| GpuScene::new(&self.gpu, &model.terrain, &c));
+        match scene {
+            Ok(scene) => {
+                self.scene = scene;
+                self.colour = colour;
+                self.colours_key = Some((colour, 0, 0));
+                self.level = model.terrain.max_level();
+                self.truth = None;
+                self.model = model;
+                self.map_dirty = true;
+            }
+            Err(e) => self.status = format!("cannot show the new hierarchy: {e}"),
+        }
+    }
+
+    /// Starts the startup actions in order; true once they are all done.
+    pub(super) fn startup_step(&mut self, ctx: &egui::Context) -> bool {
+        if self.startup.rebuild {
+            match &self.rebuild {
+                Some(rebuild) => {
+                    let rebuild = Arc::clone(rebuild);
+                    self.start_rebuild(ctx, rebuild);
+                }
+                None => self.status = "no rebuild available".into(),
+            }
+            self.startup.rebuild = false;
+        }
+        if self.rebuild_job.is_some() {
+            return false;
+        }
+        if self.startup.ground_truth && self.model.culler.is_some() {
+            self.start_truth(ctx);
+            self.startup.ground_truth = false;
+        }
+        self.truth_job.is_none()
+    }
+}

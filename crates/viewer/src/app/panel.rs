@@ -1,0 +1,274 @@
+//! The viewer's side panel: terrain and GPU facts, the map inset (click to place the viewpoint), camera and colour
+//! controls, live culling statistics, ground truth, build parameters with the Rebuild button, and exports.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use eframe::egui;
+use glam::{Vec2, Vec3};
+
+use super::{ViewMode, ViewerApp};
+use crate::scene::ColourMode;
+
+impl ViewerApp {
+    pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("tincull");
+        let t = &self.model.terrain;
+        ui.label(format!(
+            "{} vertices, {} triangles, {} groups, {} levels",
+            t.positions.len(),
+            t.num_triangles(),
+            t.groups,
+            t.hierarchy.as_ref().map_or(0, |_| t.max_level() + 1)
+        ));
+        ui.label(format!("GPU: {}", self.gpu.describe()));
+        ui.separator();
+        self.map_ui(ui);
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.mode, ViewMode::Eye, "Eye");
+            ui.selectable_value(&mut self.mode, ViewMode::Orbit, "Orbit");
+        });
+        let mut eye_changed = false;
+        eye_changed |= ui
+            .add(egui::Slider::new(&mut self.fov_deg, 10.0..=360.0).text("field of view °"))
+            .changed();
+        eye_changed |= ui
+            .add(egui::Slider::new(&mut self.yaw_deg, -180.0..=180.0).text("yaw °"))
+            .changed();
+        ui.add(egui::Slider::new(&mut self.pitch_deg, -89.0..=89.0).text("pitch °"));
+        if ui
+            .add(
+                egui::Slider::new(&mut self.eye_height, 0.5..=500.0)
+                    .logarithmic(true)
+                    .text("height above ground m"),
+            )
+            .changed()
+            && let Some(z) = self.terrain().height_at(self.eye[0], self.eye[1])
+        {
+            self.eye[2] = z + self.eye_height;
+            eye_changed = true;
+        }
+        if eye_changed {
+            self.map_dirty = true;
+        }
+        ui.label(format!(
+            "eye {:.1}, {:.1}, {:.1}",
+            self.eye[0], self.eye[1], self.eye[2]
+        ));
+        ui.separator();
+        ui.label("Colour");
+        ui.horizontal_wrapped(|ui| {
+            let has_h = self.model.terrain.hierarchy.is_some();
+            ui.add_enabled_ui(has_h, |ui| {
+                ui.selectable_value(&mut self.colour, ColourMode::Groups, "groups");
+                ui.selectable_value(&mut self.colour, ColourMode::Level, "level");
+                ui.selectable_value(&mut self.colour, ColourMode::Visibility, "visibility");
+            });
+            ui.selectable_value(&mut self.colour, ColourMode::Height, "height");
+        });
+        if self.colour == ColourMode::Level {
+            let max = self.model.terrain.max_level();
+            ui.add(egui::Slider::new(&mut self.level, 0..=max).text("hierarchy level"));
+        }
+        ui.checkbox(&mut self.culling, "cull");
+        ui.checkbox(&mut self.show_orphans, "orphans (always visible)");
+        ui.checkbox(&mut self.culled_wire, "culled groups as wireframe");
+        ui.separator();
+        self.stats_ui(ui);
+        ui.separator();
+        self.truth_ui(ui);
+        ui.separator();
+        self.rebuild_ui(ui);
+        ui.separator();
+        self.export_ui(ui);
+        if !self.status.is_empty() {
+            ui.separator();
+            ui.label(&self.status);
+        }
+    }
+
+    pub(super) fn map_ui(&mut self, ui: &mut egui::Ui) {
+        let [w, h] = self.map.renderer.size();
+        let ppp = ui.ctx().pixels_per_point();
+        let size = egui::vec2(w as f32 / ppp, h as f32 / ppp);
+        let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click());
+        ui.painter().image(
+            self.map.texture,
+            rect,
+            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+            egui::Color32::WHITE,
+        );
+        let to_px = |p: Vec2| {
+            let q = self.map_view.local_to_pixel(p, rect.width(), rect.height());
+            rect.min + egui::vec2(q.x, q.y)
+        };
+        let eye = Vec3::from(self.terrain().to_local(self.eye)).truncate();
+        let centre = to_px(eye);
+        if self.fov_deg < 360.0 {
+            let reach = self.map_view.half.length() * 0.25;
+            for side in [-0.5, 0.5] {
+                let a = (self.yaw_deg + side * self.fov_deg).to_radians() as f32;
+                let tip = to_px(eye + Vec2::new(a.cos(), a.sin()) * reach);
+                ui.painter()
+                    .line_segment([centre, tip], egui::Stroke::new(1.5, egui::Color32::BLACK));
+            }
+        }
+        let m = crate::palette::to_rgba8(crate::palette::MARKER_COLOUR);
+        ui.painter().circle(
+            centre,
+            4.0,
+            egui::Color32::from_rgb(m[0], m[1], m[2]),
+            egui::Stroke::new(1.0, egui::Color32::BLACK),
+        );
+        if let Some(pos) = response.interact_pointer_pos()
+            && response.clicked()
+        {
+            let q = pos - rect.min;
+            let p = self.map_view.pixel_to_local(q.x, q.y, rect.width(), rect.height());
+            let world = self.terrain().to_world([p.x, p.y, 0.0]);
+            self.place_eye(world[0], world[1]);
+        }
+        ui.label("click the map to place the viewpoint");
+    }
+
+    pub(super) fn stats_ui(&mut self, ui: &mut egui::Ui) {
+        let s = self.list.stats;
+        let n = self.terrain().num_triangles();
+        if self.model.culler.is_some() {
+            ui.label(format!(
+                "nodes tested {}, culled {} (occlusion {}, frustum {}), skipped {}",
+                s.nodes_tested,
+                s.culled_by_occlusion + s.culled_by_frustum,
+                s.culled_by_occlusion,
+                s.culled_by_frustum,
+                s.nodes_skipped
+            ));
+            ui.label(format!(
+                "triangles drawn {} of {} ({:.1}%), {} ranges",
+                s.triangles_drawn,
+                n,
+                100.0 * f64::from(s.triangles_drawn) / n.max(1) as f64,
+                self.list.ranges.len()
+            ));
+            ui.label(format!("cull {:.1} µs", self.cull_us.0.unwrap_or(0.0)));
+        } else {
+            ui.label("no hierarchy: Rebuild to cull");
+        }
+        ui.label(format!(
+            "frame {:.2} ms culled, {:.2} ms everything",
+            self.ms_culled.0.unwrap_or(f64::NAN),
+            self.ms_all.0.unwrap_or(f64::NAN)
+        ));
+    }
+
+    pub(super) fn truth_ui(&mut self, ui: &mut egui::Ui) {
+        let busy = self.truth_job.is_some();
+        let can = self.model.culler.is_some() && !busy;
+        if ui
+            .add_enabled(can, egui::Button::new("Ground truth here (false culls in red)"))
+            .clicked()
+        {
+            self.start_truth(ui.ctx());
+        }
+        if busy {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("computing ground truth…");
+            });
+        }
+        if let Some(t) = &self.truth {
+            ui.label(format!(
+                "{} visible triangles, {} false culls at {:.0}, {:.0}, {:.0}",
+                t.visible, t.count, t.eye[0], t.eye[1], t.eye[2]
+            ));
+        }
+    }
+
+    pub(super) fn rebuild_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label("Build parameters");
+        let p = &mut self.params;
+        egui::Grid::new("params").num_columns(2).show(ui, |ui| {
+            ui.label("sectors");
+            ui.add(egui::DragValue::new(&mut p.sectors).range(1..=1024));
+            ui.end_row();
+            ui.label("subsectors");
+            ui.add(egui::DragValue::new(&mut p.subsectors).range(1..=64));
+            ui.end_row();
+            ui.label("seeds (0 = default)");
+            let mut seeds = p.seeds.unwrap_or(0);
+            if ui.add(egui::DragValue::new(&mut seeds).range(0..=1_000_000)).changed() {
+                p.seeds = (seeds > 0).then_some(seeds);
+            }
+            ui.end_row();
+            ui.label("orphan passes");
+            ui.add(egui::DragValue::new(&mut p.orphan_passes).range(0..=100));
+            ui.end_row();
+            ui.label("min group");
+            ui.add(egui::DragValue::new(&mut p.min_group).range(1..=100_000));
+            ui.end_row();
+            ui.label("max expanse");
+            ui.add(egui::DragValue::new(&mut p.max_expanse).range(0.001..=1.0).speed(0.005));
+            ui.end_row();
+            ui.label("rng seed");
+            ui.add(egui::DragValue::new(&mut p.rng_seed));
+            ui.end_row();
+        });
+        match (&self.rebuild, &self.rebuild_job) {
+            (None, _) => {
+                ui.label("(rebuild not available)");
+            }
+            (Some(_), Some(job)) => {
+                let (stage, done, total) = job.progress.lock().map(|g| g.clone()).unwrap_or_default();
+                let f = if total > 0 { done as f32 / total as f32 } else { 0.0 };
+                ui.add(egui::ProgressBar::new(f).text(format!(
+                    "{stage} {done}/{total} ({:.0} s)",
+                    job.started.elapsed().as_secs_f64()
+                )));
+            }
+            (Some(rebuild), None) => {
+                if ui.button("Rebuild").clicked() {
+                    let rebuild = Arc::clone(rebuild);
+                    self.start_rebuild(ui.ctx(), rebuild);
+                }
+            }
+        }
+    }
+
+    pub(super) fn export_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label("Export (path without extension)");
+        ui.text_edit_singleline(&mut self.export_stem);
+        let Some(h) = self.model.terrain.hierarchy.as_ref() else {
+            ui.label("(no hierarchy to export)");
+            return;
+        };
+        let stem = PathBuf::from(&self.export_stem);
+        let mut result: Option<std::result::Result<PathBuf, String>> = None;
+        ui.horizontal(|ui| {
+            if ui.button(".tch").clicked() {
+                let path = stem.with_extension("tch");
+                result = Some(h.save(&path).map(|_| path).map_err(|e| e.to_string()));
+            }
+            if ui.button("JSON").clicked() {
+                let path = stem.with_extension("json");
+                result = Some(
+                    h.to_json()
+                        .map_err(|e| e.to_string())
+                        .and_then(|text| cull::write_atomically(&path, text.as_bytes()).map_err(|e| e.to_string()))
+                        .map(|_| path),
+                );
+            }
+            if let Some(export) = &self.export_obj
+                && ui.button("grouped OBJ").clicked()
+            {
+                let path = stem.with_extension("obj");
+                result = Some(export(h, &path).map(|_| path).map_err(|e| e.to_string()));
+            }
+        });
+        match result {
+            Some(Ok(path)) => self.status = format!("wrote {}", path.display()),
+            Some(Err(e)) => self.status = format!("export failed: {e}"),
+            None => {}
+        }
+    }
+}
