@@ -1,7 +1,9 @@
 //! Command-line interface: argument definitions and dispatch. Each subcommand lives in its own module.
 
 mod build_cmd;
-mod cull_cmd;
+pub mod cull_cmd;
+mod demo_cmd;
+mod eval_cmd;
 mod export_cmd;
 mod horizon_cmd;
 
@@ -28,6 +30,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// The main job: build and evaluate the bundled default terrain, print a report and write out/.
+    Demo(demo_cmd::DemoArgs),
     /// Describe a terrain mesh: counts, bounding box, relief, height-field check, triangle quality.
     Info(info::InfoArgs),
     /// Turn a DEM grid (.npy, .asc, .hgt, .png) into a simplified TIN by greedy insertion, written as OBJ.
@@ -40,6 +44,8 @@ pub enum Command {
     Build(build_cmd::BuildArgs),
     /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
     Cull(cull_cmd::CullArgs),
+    /// Evaluate every culling method against ground truth from seeded viewpoints: false culls, occlusion captured.
+    Eval(eval_cmd::EvalArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
     Export(export_cmd::ExportArgs),
 }
@@ -47,6 +53,7 @@ pub enum Command {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Demo(args) => demo_cmd::run(&args, args.output.into()),
         Command::Info(args) => info::run(&args, args.output.into()),
         Command::Tin(args) => tin_cmd::run(&args, args.output.into()),
         Command::Synth(args) => synth::run(&args, args.output.into()),
@@ -54,6 +61,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
         Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
+        Command::Eval(args) => eval_cmd::run(&args),
         Command::Export(args) => export_cmd::run(
             &args,
             Output {
