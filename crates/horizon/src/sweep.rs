@@ -46,6 +46,11 @@ const BUCKET: usize = 8;
 /// Computes, for every vertex, its horizon vertex in the subsector with wedge `wedge` (or [`NO_HORIZON`]), into
 /// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]).
 pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]) {
+    sweep_with(positions, origin, wedge, out, BUCKET, HullSet::DEFAULT_SMALL_LIMIT);
+}
+
+/// [`sweep_subsector`] with a given bucket size and small-hull limit (tests vary both).
+fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32], bucket: usize, small_limit: usize) {
     let n = positions.len();
     debug_assert_eq!(out.len(), n);
     if n == 0 {
@@ -93,7 +98,7 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
     drop(order_b);
 
     // Everything the main loop reads, laid out in visiting order; the bucket members in leaf (B) order.
-    let buckets = n.div_ceil(BUCKET);
+    let buckets = n.div_ceil(bucket);
     let tree_leaves = buckets.next_power_of_two();
     struct Visit {
         t: f64,
@@ -142,7 +147,7 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
         };
     }
     drop((order_a, leaf_of, hi));
-    let tree_leaf = |pos: u32| tree_leaves + pos as usize / BUCKET;
+    let tree_leaf = |pos: u32| tree_leaves + pos as usize / bucket;
 
     // Per tree node: its covering set, and the number of vertices not yet visited whose query path contains the
     // node (a hull that no later vertex will query needs no insertions). Kept together for cache locality.
@@ -165,14 +170,14 @@ pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge,
             node >>= 1;
         }
     }
-    let mut hulls = HullSet::new(HullSet::DEFAULT_SMALL_LIMIT, 4 * n);
+    let mut hulls = HullSet::new(small_limit, 4 * n);
     for visit in &visits {
         let p = visit.vertex;
         let apex = DVec2::new(visit.t, visit.z);
         let mut best: Option<Candidate> = None;
         let mut degenerate = false;
         // Visited members of the query bucket up to hi.
-        let first = visit.hi as usize / BUCKET * BUCKET;
+        let first = visit.hi as usize / bucket * bucket;
         for m in &members[first..=visit.hi as usize] {
             if m.visited {
                 if m.t <= apex.x {
@@ -244,4 +249,51 @@ fn sort_exact(n: usize, approx: impl Fn(u32) -> f64, gap: f64, exact: impl Fn(u3
         start = end;
     }
     keyed.into_iter().map(|(_, v)| v).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::oracle::vertex_horizons;
+    use crate::sector::{SectorConfig, SectorGeometry};
+    use proptest::prelude::*;
+
+    fn grid_or_random(n: usize, grid: bool, heights: &[i32]) -> Vec<DVec3> {
+        (0..n)
+            .map(|i| {
+                let z = heights[i % heights.len()] as f64;
+                if grid {
+                    DVec3::new((i % 7) as f64, (i / 7) as f64, z)
+                } else {
+                    DVec3::new(
+                        ((i * 7919) % 1013) as f64 * 0.37,
+                        ((i * 104_729) % 997) as f64 * 0.41,
+                        z,
+                    )
+                }
+            })
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 150, ..ProptestConfig::default() })]
+
+        /// Every bucket size (1 = the thesis' tree down to single leaves) and a tiny small-hull limit (treaps
+        /// inside the sweep) give the oracle's answer.
+        #[test]
+        fn any_bucket_and_hull_limit_matches_the_oracle(n in 1usize..90, grid in any::<bool>(),
+                                                        heights in prop::collection::vec(-2i32..3, 1..20),
+                                                        bucket in 1usize..6, limit in 1usize..4, cfg in 0usize..3) {
+            let positions = grid_or_random(n, grid, &heights);
+            let (s, k) = [(4, 1), (8, 8), (5, 3)][cfg];
+            let g = SectorGeometry::new(&SectorConfig::new(s, k).expect("valid"));
+            let origin = DVec2::new(1.0, 2.0);
+            let expect = vertex_horizons(&positions, origin, &g);
+            for j in 0..g.total() {
+                let mut out = vec![0; n];
+                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit);
+                prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {}", j);
+            }
+        }
+    }
 }

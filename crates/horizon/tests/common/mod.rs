@@ -22,7 +22,7 @@ pub enum Kind {
     Uniform,
     /// A few tight clusters.
     Clustered,
-    /// Integer grid with heights in {0, 1, 2} (many exact boundary directions and slope ties).
+    /// Integer grid around the origin with heights in {±0, 1, 2} (many exact boundary directions and slope ties).
     IntegerGrid,
     /// Integer grid at UTM-sized coordinates, small integer heights.
     UtmGrid,
@@ -86,7 +86,15 @@ pub fn points(kind: Kind, n: usize, seed: u64) -> Vec<DVec3> {
                 })
                 .collect()
         }
-        Kind::IntegerGrid => grid(&mut rng, (0.0, 0.0), 3),
+        Kind::IntegerGrid => {
+            // Centred on the origin, with zero heights of both signs: −0.0 must behave like 0.0.
+            let half = (side / 2) as f64;
+            grid(&mut rng, (-half, -half), 3)
+                .into_iter()
+                .enumerate()
+                .map(|(i, p)| DVec3::new(p.x, p.y, if p.z == 0.0 && i % 2 == 1 { -0.0 } else { p.z }))
+                .collect()
+        }
         Kind::UtmGrid => grid(&mut rng, (500_000.0, 5_000_000.0), 4),
         Kind::Flat => {
             if seed % 2 == 0 {
