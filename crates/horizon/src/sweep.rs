@@ -9,25 +9,37 @@
 //!    the vertices visited before it are exactly those with `A(q) > A(p)`, or `A(q) = A(p)` and `B(q) < B(p)`,
 //!    (or an identical position with a smaller index): together with `B(q) ≤ B(p)` these are exactly the wedge's
 //!    members (ties on a boundary ray included, as the closed wedge demands).
-//! 2. Leaves of a static complete binary tree (heap layout, `L` = next power of two ≥ n leaves) hold the vertices
-//!    by increasing `B` (ties by index). For `p`, `hi(p)` is the last leaf whose `B` equals `B(p)`, so
-//!    `B(q) ≤ B(p)` ⇔ `leaf(q) ≤ hi(p)`.
-//! 3. A visited vertex `q` is inserted into the covering set (upper hull, [`crate::hull`]) of its own leaf and of
-//!    the right sibling of every left child on its leaf-to-root path. The thesis, with mirrored orders, inserts
-//!    into the left children; here `p` then queries every node on the path of leaf `hi(p)`. A node on that path
-//!    holds `q` iff it is `q`'s leaf (`leaf(q) = hi(p)`) or the right child of the lowest common ancestor of the
-//!    two leaves while `q` lies in its left child (`leaf(q) < hi(p)`): every candidate is seen exactly once.
-//! 4. Each node answers the leftmost steepest hull vertex seen from `p̂`; the best of those by the candidate order
-//!    ([`crate::candidate`]) is the horizon.
+//! 2. Leaf positions `0..n` hold the vertices by increasing `B` (ties by index). For `p`, `hi(p)` is the last
+//!    position whose `B` equals `B(p)`, so `B(q) ≤ B(p)` ⇔ `pos(q) ≤ hi(p)`. Positions are grouped into buckets
+//!    of `BUCKET` (8) consecutive positions, the leaves of a static complete binary tree (heap layout).
+//! 3. A visited vertex `q` is marked in its bucket and inserted into the covering set (upper hull,
+//!    [`crate::hull`]) of the right sibling of every left child on its bucket's leaf-to-root path. The thesis,
+//!    with mirrored orders and single-vertex leaves, inserts into the left children. Here `p` scans the visited
+//!    members of its query bucket `bucket(hi(p))` up to `hi(p)`, then queries every node on that bucket's path. A
+//!    node on the path holds `q` iff it is the right child of the lowest common ancestor of the two buckets while
+//!    `q` lies in its left child (`bucket(q) < bucket(hi(p))`): every candidate is seen exactly once, in the scan
+//!    or in one covering set.
+//! 4. Each node answers the leftmost steepest hull vertex seen from `p̂`; the best of those and of the scanned
+//!    members by the candidate order ([`crate::candidate`]) is the horizon.
+//!
+//! Choices beyond the thesis, for speed (none changes the result; the tests run several bucket sizes, including
+//! the thesis' single leaves, against the oracle):
+//! - buckets of a few positions at the bottom of the tree replace its lowest levels by a scan of one cache line;
+//! - every node counts the vertices still to be visited whose query path passes through it; insertions into a
+//!   node that no one will query again are skipped (for narrow wedges the `A` and `B` orders nearly coincide, so
+//!   whole subtrees are finished early);
+//! - the sorts compare the f64 approximations of `A` and `B` and re-sort only runs of near-ties exactly;
+//! - everything the main loop reads is laid out in visiting order.
 //!
 //! Degenerate input: a member `q` with `t_q ≤ t_p` (identical positions, or points closer than the rounding of
 //! `t`) is no candidate by definition, and it would break the tangent search, which needs the apex left of every
 //! hull point. A node's leftmost hull vertex has the smallest `t` of every point inserted into it, so the sweep
 //! notices such a member on the query path and answers that vertex by the brute-force scan of
-//! [`crate::oracle::best_in_wedge`] instead. On valid TINs this never happens.
+//! `oracle::best_in_wedge` instead. On valid TINs this never happens.
 //!
-//! Cost per subsector: two O(n log n) sorts, then for each vertex O(log n) nodes with an O(log h) tangent query
-//! or amortised O(log h) insertion each: O(n log² n) time; at most O(n log n) hull vertices alive.
+//! Cost per subsector: two O(n log n) sorts, then for each vertex a scan of one bucket and O(log n) nodes with an
+//! O(log h) tangent query or amortised O(log h) insertion each: O(n log² n) time; at most O(n log n) hull
+//! vertices alive.
 
 use std::cmp::Ordering;
 

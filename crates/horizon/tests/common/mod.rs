@@ -97,7 +97,7 @@ pub fn points(kind: Kind, n: usize, seed: u64) -> Vec<DVec3> {
         }
         Kind::UtmGrid => grid(&mut rng, (500_000.0, 5_000_000.0), 4),
         Kind::Flat => {
-            if seed % 2 == 0 {
+            if seed.is_multiple_of(2) {
                 grid(&mut rng, (0.0, 0.0), 1)
                     .into_iter()
                     .map(|p| DVec3::new(p.x, p.y, 7.0))
@@ -138,6 +138,12 @@ pub fn terrain(kind: Kind, n: usize, seed: u64) -> Option<Tin> {
 
 /// Panics with a readable message unless the two fields agree everywhere.
 pub fn assert_same(sweep: &HorizonField, oracle: &HorizonField, what: &str) {
+    sweep
+        .check_invariants()
+        .unwrap_or_else(|e| panic!("{what}: sweep field invalid: {e}"));
+    oracle
+        .check_invariants()
+        .unwrap_or_else(|e| panic!("{what}: oracle field invalid: {e}"));
     let mismatches = sweep.mismatches(oracle);
     assert_eq!(
         mismatches,
