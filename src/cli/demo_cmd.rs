@@ -34,7 +34,7 @@ pub struct DemoArgs {
 
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
-    let mesh = args.mesh.clone().unwrap_or_else(|| default_mesh());
+    let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
     let mesh_args = MeshArgs {
         mesh: mesh.clone(),
         keep_faces: false,
