@@ -25,9 +25,15 @@ fn bench(c: &mut Criterion) {
     let mut eyes = viewpoints(&htin, ViewpointClass::Ground, 20, 1);
     eyes.extend(viewpoints(&htin, ViewpointClass::High, 20, 1));
     let cameras: Vec<Camera> = eyes.iter().map(|e| Camera::all_around(e.to_array())).collect();
-    let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let mut group = c.benchmark_group(format!("cull/{name}"));
-    for (method, culler) in [("hierarchy", Culler::new(&h)), ("per_triangle", Culler::new(&per_triangle))] {
+    for (method, culler) in [
+        ("hierarchy", Culler::new(&h)),
+        ("per_triangle", Culler::new(&per_triangle)),
+    ] {
         let mut list = DrawList::default();
         let mut i = 0;
         group.bench_function(method, |b| {
