@@ -284,17 +284,18 @@ pub struct ComboResult {
     pub lines: Vec<String>,
 }
 
-/// Builds `combo` on `tin` and scores it (hierarchy, per-triangle, frustum only, none) against `truth`, which must
-/// have been computed on `tin`.
+/// Builds `combo` on `tin` and scores it (hierarchy, per-triangle when `per_triangle`, frustum only, none) against
+/// `truth`, which must have been computed on `tin`.
 pub fn run_combo(
     tin: &Tin,
     truth: &GroundTruthSet,
     combo: &Combo,
+    per_triangle: bool,
     progress: Option<BuildProgress>,
 ) -> Result<ComboResult> {
     let b = build(tin, &combo.params, progress)?;
-    let per_triangle = per_triangle_hierarchy(tin, &b.triangle_regions);
-    let methods = standard_methods(&b.hierarchy, Some(&per_triangle), Some(&b.crystal.order));
+    let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &b.triangle_regions));
+    let methods = standard_methods(&b.hierarchy, per_triangle.as_ref(), Some(&b.crystal.order));
     let evaluation = score(tin, truth, &methods)?;
     let lines = csv_lines(&combo.key, &b.report, &evaluation);
     Ok(ComboResult {
@@ -402,7 +403,7 @@ mod tests {
             },
             params: params.clone(),
         };
-        let swept = run_combo(&tin, &truth, &combo, None).unwrap();
+        let swept = run_combo(&tin, &truth, &combo, true, None).unwrap();
         let b = build(&tin, &params, None).unwrap();
         let htin = hierarchy_tin(&b.hierarchy).unwrap();
         // The direct evaluation draws its viewpoints over the reordered mesh; score the same eyes both ways.

@@ -151,6 +151,17 @@ fn sweep_writes_every_combination_and_resumes() {
 }
 
 #[test]
+fn sweep_without_per_triangle_has_three_methods() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("s.csv");
+    let v = sweep(&csv, &["--sectors", "4", "--subsectors", "1", "--no-per-triangle"]);
+    assert_eq!(v["ran"], 1);
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    assert_eq!(text.lines().count(), 1 + 3 * 3);
+    assert!(!text.contains("per_triangle"));
+}
+
+#[test]
 fn sweep_rejects_bad_lists() {
     let dir = tempfile::tempdir().expect("temp dir");
     for (opt, val) in [("--sectors", "4,x"), ("--rng-seeds", "5..1"), ("--subsectors", "")] {

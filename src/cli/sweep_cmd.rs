@@ -58,6 +58,9 @@ pub struct SweepArgs {
     /// Radius (m) of the horizon undersampling fix [default: off].
     #[arg(long, value_name = "RADIUS")]
     pub undersampling: Option<f64>,
+    /// Skip the per-triangle method (its culler tests every triangle: by far the slowest part of scoring).
+    #[arg(long)]
+    pub no_per_triangle: bool,
     /// The CSV file of results; combinations already in it are skipped.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -116,7 +119,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         classes: args.classes.clone(),
         rng_seed: args.view_seed,
         fov_deg: args.fov,
-        per_triangle: true,
+        per_triangle: !args.no_per_triangle,
     };
     anyhow::ensure!(
         eval.fov_deg > 0.0 && eval.fov_deg <= 360.0,
@@ -165,7 +168,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         for combo in &todo {
             let k = &combo.key;
             bar.set_message(format!("s{} k{} r{}", k.sectors, k.subsectors, k.rng_seed));
-            let r = run_combo(&tin, &truth, combo, None)
+            let r = run_combo(&tin, &truth, combo, !args.no_per_triangle, None)
                 .with_context(|| format!("sectors {} x subsectors {}", k.sectors, k.subsectors))?;
             table.insert(combo.key, r.lines);
             let text = table.to_csv();
