@@ -157,81 +157,198 @@ fn in_view(tin: &Tin, eye: DVec3, yaw: f64, half: f64) -> Vec<bool> {
         .collect()
 }
 
-/// Evaluates `h` (whose mesh is `tin`) from the viewpoints of `opts`. `progress` is called after each viewpoint.
-pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(usize, usize)) -> Result<Evaluation> {
-    anyhow::ensure!(
-        opts.fov_deg > 0.0 && opts.fov_deg <= 360.0,
-        "the field of view must be in (0, 360] degrees"
-    );
-    anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
-    let start = Instant::now();
-    let per_triangle = if opts.per_triangle {
-        Some(per_triangle_of(h, tin)?)
-    } else {
-        None
-    };
-    let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
-    let mut frustum_only = h.clone();
-    for n in &mut frustum_only.nodes {
+/// One viewpoint of a [`GroundTruthSet`].
+#[derive(Clone, Debug)]
+pub struct TruthView {
+    /// Class the viewpoint was drawn from.
+    pub class: ViewpointClass,
+    /// Eye position.
+    pub eye: DVec3,
+    /// View direction (radians; 0 when the field of view is 360°).
+    pub yaw: f64,
+    /// Ground-truth visible set restricted to the view wedge, one flag per triangle of the TIN it was computed on.
+    pub visible: Vec<bool>,
+}
+
+/// The ground truth of every viewpoint of an evaluation over one TIN, in that TIN's triangle order.
+///
+/// It depends only on the mesh and the viewpoint options (classes, count, seed, field of view), never on the build
+/// parameters, so a parameter sweep computes it once and scores every build against it (see [`score`], whose
+/// methods may draw in another triangle order).
+#[derive(Clone, Debug)]
+pub struct GroundTruthSet {
+    /// Options the viewpoints were drawn with.
+    pub options: EvalOptions,
+    /// Triangles of the TIN.
+    pub triangles: usize,
+    /// Every viewpoint, class by class in the options' order.
+    pub views: Vec<TruthView>,
+    /// Seconds of ground truth per viewpoint (mean).
+    pub seconds_per_viewpoint: f64,
+}
+
+impl GroundTruthSet {
+    /// Draws the viewpoints of `opts` over `tin` and computes their visible sets. `progress` is called after each
+    /// viewpoint with `(done, total)`.
+    pub fn compute(tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(usize, usize)) -> Result<GroundTruthSet> {
+        anyhow::ensure!(
+            opts.fov_deg > 0.0 && opts.fov_deg <= 360.0,
+            "the field of view must be in (0, 360] degrees, got {}",
+            opts.fov_deg
+        );
+        anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
+        let truth = GroundTruth::new(tin);
+        let all_around = opts.fov_deg >= 360.0;
+        let total = opts.viewpoints * opts.classes.len();
+        let mut views = Vec::with_capacity(total);
+        let mut truth_seconds = 0.0;
+        for (ci, &class) in opts.classes.iter().enumerate() {
+            let seed = opts
+                .rng_seed
+                .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                .wrapping_add(ci as u64);
+            let eyes = truth::viewpoints(tin, class, opts.viewpoints, seed);
+            let mut yaw_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
+            for eye in eyes {
+                let yaw = if all_around {
+                    0.0
+                } else {
+                    yaw_rng.random_range(0.0..TAU)
+                };
+                let t0 = Instant::now();
+                let mut visible = truth.visible_triangles(eye);
+                truth_seconds += t0.elapsed().as_secs_f64();
+                if !all_around {
+                    let view = in_view(tin, eye, yaw, opts.fov_deg.to_radians() * 0.5);
+                    visible.iter_mut().zip(view).for_each(|(v, inside)| *v &= inside);
+                }
+                views.push(TruthView {
+                    class,
+                    eye,
+                    yaw,
+                    visible,
+                });
+                progress(views.len(), total);
+            }
+        }
+        Ok(GroundTruthSet {
+            options: opts.clone(),
+            triangles: tin.num_triangles(),
+            seconds_per_viewpoint: truth_seconds / views.len().max(1) as f64,
+            views,
+        })
+    }
+}
+
+/// A culling method to score with [`score`].
+pub struct Method<'a> {
+    /// Name (see [`METHODS`]).
+    pub name: &'a str,
+    /// The culler; `None` draws every triangle.
+    pub culler: Option<Culler>,
+    /// Where each of the culler's triangles is in the scored TIN: triangle `i` of the culler's mesh is triangle
+    /// `order[i]` of the TIN (a build's `crystal.order`). `None`: the same order.
+    pub order: Option<&'a [u32]>,
+}
+
+/// The hierarchy's frustum test alone: `h` with every region removed.
+pub fn frustum_only(h: &Hierarchy) -> Hierarchy {
+    let mut f = h.clone();
+    for n in &mut f.nodes {
         n.regions.clear();
     }
-    let cullers: Vec<(&str, Option<Culler>)> = vec![
-        ("hierarchy", Some(Culler::new(h))),
-        ("per_triangle", per_triangle.as_ref().map(Culler::new)),
-        ("frustum_only", Some(Culler::new(&frustum_only))),
-        ("none", None),
-    ];
-    let truth = GroundTruth::new(tin);
+    f
+}
+
+/// The methods of [`METHODS`] for a hierarchy `h` whose triangle `i` is triangle `order[i]` of the scored TIN
+/// (`None`: same order), and an optional per-triangle hierarchy in the TIN's own order.
+pub fn standard_methods<'a>(
+    h: &Hierarchy,
+    per_triangle: Option<&Hierarchy>,
+    order: Option<&'a [u32]>,
+) -> Vec<Method<'a>> {
+    vec![
+        Method {
+            name: "hierarchy",
+            culler: Some(Culler::new(h)),
+            order,
+        },
+        Method {
+            name: "per_triangle",
+            culler: per_triangle.map(Culler::new),
+            order: None,
+        },
+        Method {
+            name: "frustum_only",
+            culler: Some(Culler::new(&frustum_only(h))),
+            order,
+        },
+        Method {
+            name: "none",
+            culler: None,
+            order: None,
+        },
+    ]
+}
+
+/// Scores `methods` against the ground truth `truth` of `tin` (every mask in `tin`'s triangle order). A method named
+/// other than `none` without a culler is left out (e.g. `per_triangle` when not evaluated).
+pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method]) -> Result<Evaluation> {
+    let n = tin.num_triangles();
+    anyhow::ensure!(
+        truth.triangles == n,
+        "the ground truth has {} triangles, the mesh {n}",
+        truth.triangles
+    );
+    for m in methods {
+        if let Some(order) = m.order {
+            anyhow::ensure!(
+                order.len() == n && order.iter().all(|&t| (t as usize) < n),
+                "method {}: its triangle order does not map onto the mesh's {n} triangles",
+                m.name
+            );
+        }
+    }
+    let opts = &truth.options;
     let all_around = opts.fov_deg >= 360.0;
     let mut list = DrawList::default();
-    let mut results = Vec::new();
-    let total = opts.viewpoints * opts.classes.len();
-    let mut truth_seconds = 0.0;
-    for (ci, &class) in opts.classes.iter().enumerate() {
-        let seed = opts
-            .rng_seed
-            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            .wrapping_add(ci as u64);
-        let eyes = truth::viewpoints(tin, class, opts.viewpoints, seed);
-        let mut yaw_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
-        for eye in eyes {
-            let yaw = if all_around {
-                0.0
-            } else {
-                yaw_rng.random_range(0.0..TAU)
+    let mut results = Vec::with_capacity(truth.views.len());
+    let ordered = methods_in_order(methods);
+    for view in &truth.views {
+        let camera = Camera {
+            position: view.eye.to_array(),
+            yaw: view.yaw,
+            hfov: if all_around { TAU } else { opts.fov_deg.to_radians() },
+        };
+        let mut methods = Vec::new();
+        for m in &ordered {
+            let (drawn, ns) = match &m.culler {
+                Some(c) => {
+                    let ns = timed_cull(c, &camera, &mut list);
+                    let mask = list.mask(n);
+                    let drawn = match m.order {
+                        Some(order) => {
+                            let mut d = vec![false; n];
+                            for (i, &t) in order.iter().enumerate() {
+                                d[t as usize] = mask[i];
+                            }
+                            d
+                        }
+                        None => mask,
+                    };
+                    (drawn, ns)
+                }
+                None if m.name == "none" => (vec![true; n], 0),
+                None => continue,
             };
-            let t0 = Instant::now();
-            let mut visible = truth.visible_triangles(eye);
-            truth_seconds += t0.elapsed().as_secs_f64();
-            if !all_around {
-                let view = in_view(tin, eye, yaw, opts.fov_deg.to_radians() * 0.5);
-                visible.iter_mut().zip(view).for_each(|(v, inside)| *v &= inside);
-            }
-            let camera = Camera {
-                position: eye.to_array(),
-                yaw,
-                hfov: if all_around { TAU } else { opts.fov_deg.to_radians() },
-            };
-            let mut methods = Vec::new();
-            for (name, culler) in &cullers {
-                let (drawn, ns) = match culler {
-                    Some(c) => {
-                        let ns = timed_cull(c, &camera, &mut list);
-                        (list.mask(tin.num_triangles()), ns)
-                    }
-                    None if *name == "none" => (vec![true; tin.num_triangles()], 0),
-                    None => continue,
-                };
-                methods.push((name.to_string(), view_metrics(tin, &visible, &drawn)?, ns));
-            }
-            results.push(ViewpointResult {
-                class: class.name().to_string(),
-                eye: eye.to_array(),
-                yaw_deg: (!all_around).then(|| yaw.to_degrees()),
-                methods,
-            });
-            progress(results.len(), total);
+            methods.push((m.name.to_string(), view_metrics(tin, &view.visible, &drawn)?, ns));
         }
+        results.push(ViewpointResult {
+            class: view.class.name().to_string(),
+            eye: view.eye.to_array(),
+            yaw_deg: (!all_around).then(|| view.yaw.to_degrees()),
+            methods,
+        });
     }
     let mut rows = Vec::new();
     let classes: Vec<String> = opts
@@ -263,12 +380,41 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     }
     Ok(Evaluation {
         options: opts.clone(),
-        triangles: tin.num_triangles(),
+        triangles: n,
         rows,
-        ground_truth_seconds_per_viewpoint: truth_seconds / results.len().max(1) as f64,
+        ground_truth_seconds_per_viewpoint: truth.seconds_per_viewpoint,
         viewpoints: results,
-        per_triangle_setup_seconds,
+        per_triangle_setup_seconds: 0.0,
     })
+}
+
+/// `methods` in [`METHODS`] order (unknown names last, in their given order).
+fn methods_in_order<'m, 'a>(methods: &'m [Method<'a>]) -> Vec<&'m Method<'a>> {
+    let mut v: Vec<&Method> = methods.iter().collect();
+    v.sort_by_key(|m| METHODS.iter().position(|&n| n == m.name).unwrap_or(METHODS.len()));
+    v
+}
+
+/// Evaluates `h` (whose mesh is `tin`) from the viewpoints of `opts`. `progress` is called after each viewpoint's
+/// ground truth.
+pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(usize, usize)) -> Result<Evaluation> {
+    anyhow::ensure!(
+        opts.fov_deg > 0.0 && opts.fov_deg <= 360.0,
+        "the field of view must be in (0, 360] degrees"
+    );
+    anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
+    let start = Instant::now();
+    let per_triangle = if opts.per_triangle {
+        Some(per_triangle_of(h, tin)?)
+    } else {
+        None
+    };
+    let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
+    let truth = GroundTruthSet::compute(tin, opts, progress)?;
+    let methods = standard_methods(h, per_triangle.as_ref(), None);
+    let mut e = score(tin, &truth, &methods)?;
+    e.per_triangle_setup_seconds = per_triangle_setup_seconds;
+    Ok(e)
 }
 
 impl Evaluation {

@@ -10,6 +10,7 @@ mod horizon_cmd;
 mod info;
 mod mesh_input;
 pub mod output;
+mod sweep_cmd;
 mod synth;
 mod tin_cmd;
 
@@ -48,6 +49,9 @@ pub enum Command {
     Eval(eval_cmd::EvalArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
     Export(export_cmd::ExportArgs),
+    /// Build and evaluate every combination of sectors, subsectors and seeds: one CSV line per combination, method
+    /// and class (resumable).
+    Sweep(sweep_cmd::SweepArgs),
 }
 
 /// Runs a parsed command line.
@@ -62,6 +66,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
         Command::Eval(args) => eval_cmd::run(&args),
+        Command::Sweep(args) => sweep_cmd::run(&args, args.output.into()),
         Command::Export(args) => export_cmd::run(
             &args,
             Output {
