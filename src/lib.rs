@@ -20,3 +20,4 @@ pub mod cli;
 pub mod evaluate;
 pub mod export;
 pub mod pipeline;
+pub mod stress;

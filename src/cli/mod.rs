@@ -5,11 +5,13 @@ pub mod cull_cmd;
 mod demo_cmd;
 mod eval_cmd;
 mod export_cmd;
+mod failmap_cmd;
 mod horizon_cmd;
 
 mod info;
 mod mesh_input;
 pub mod output;
+mod stress_cmd;
 mod synth;
 mod tin_cmd;
 
@@ -48,6 +50,10 @@ pub enum Command {
     Eval(eval_cmd::EvalArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
     Export(export_cmd::ExportArgs),
+    /// Stability suite: the pipeline over degenerate cases (sectors, slivers, flat, offsets, odd viewpoints, seeds).
+    Stress(stress_cmd::StressArgs),
+    /// Failure map: a raster of viewpoints over the footprint, false culls and occlusion captured per cell (PNG, CSV).
+    Failmap(failmap_cmd::FailmapArgs),
 }
 
 /// Runs a parsed command line.
@@ -69,5 +75,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 quiet: args.quiet,
             },
         ),
+        Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
+        Command::Failmap(args) => failmap_cmd::run(&args),
     }
 }
