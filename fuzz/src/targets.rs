@@ -78,7 +78,7 @@ pub fn reseal(data: &[u8]) -> Option<Vec<u8>> {
 
 /// Culls `h` from degenerate and ordinary cameras, checking the draw list's ranges.
 fn cull_some(h: &Hierarchy) {
-    let culler = Culler::new(&h);
+    let culler = Culler::new(h);
     let mut cameras = vec![
         Camera::all_around(h.origin),
         Camera::all_around([h.origin[0] + 1e7, h.origin[1] - 1e7, h.origin[2] + 5.0]),
