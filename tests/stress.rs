@@ -265,3 +265,48 @@ fn failmap_end_to_end() {
         "{n} scored cells of {cols} x {rows}"
     );
 }
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+    use tincull::pipeline::{BuildParams, build};
+
+    fn culled(h: &Hierarchy, eyes: &[DVec3]) -> Vec<u32> {
+        let c = Culler::new(h);
+        eyes.iter()
+            .map(|e| c.cull(&Camera::all_around(e.to_array())).stats.triangles_culled)
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+        /// Translating a terrain (UTM-like offsets) changes neither the grouping nor what is culled.
+        #[test]
+        fn translation_keeps_groups_and_culling(seed in 0u64..1000, dx in 0.0..1e6f64, dy in 0.0..5e6f64) {
+            let t = tin::synth_tin(&tin::SynthOptions::new(150, seed)).expect("terrain");
+            let off = DVec3::new(dx.round(), dy.round(), 0.0);
+            let moved = stress::map_tin(&t, |p| p + off).expect("moved");
+            let p = BuildParams::default();
+            let a = build(&t, &p, None).expect("build");
+            let b = build(&moved, &p, None).expect("build");
+            b.hierarchy.check_invariants().expect("invariants");
+            prop_assert_eq!(a.report.groups, b.report.groups);
+            let eyes = truth::viewpoints(&t, truth::ViewpointClass::Ground, 4, seed);
+            let moved_eyes: Vec<DVec3> = eyes.iter().map(|e| *e + off).collect();
+            prop_assert_eq!(culled(&a.hierarchy, &eyes), culled(&b.hierarchy, &moved_eyes));
+        }
+
+        /// A flat terrain of any size and height culls nothing from any eye above it.
+        #[test]
+        fn flat_terrain_never_culls(n in 3usize..12, z in -1e4..1e4f64, h in 0.0..500.0f64) {
+            let t = stress::map_tin(&stress::flat_tin(n).expect("flat"), |p| DVec3::new(p.x, p.y, z)).expect("moved");
+            let b = build(&t, &BuildParams::default(), None).expect("build");
+            let eyes: Vec<DVec3> = truth::viewpoints(&t, truth::ViewpointClass::Ground, 5, 3)
+                .into_iter()
+                .map(|e| DVec3::new(e.x, e.y, z + h))
+                .collect();
+            prop_assert!(culled(&b.hierarchy, &eyes).iter().all(|&c| c == 0));
+        }
+    }
+}
