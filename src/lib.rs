@@ -21,3 +21,4 @@ pub mod evaluate;
 pub mod export;
 pub mod pipeline;
 pub mod sweep;
+pub mod stress;

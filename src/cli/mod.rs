@@ -5,12 +5,14 @@ pub mod cull_cmd;
 mod demo_cmd;
 mod eval_cmd;
 mod export_cmd;
+mod failmap_cmd;
 mod horizon_cmd;
 
 mod info;
 mod mesh_input;
 pub mod output;
 mod sweep_cmd;
+mod stress_cmd;
 mod synth;
 mod tin_cmd;
 
@@ -52,6 +54,10 @@ pub enum Command {
     /// Build and evaluate every combination of sectors, subsectors and seeds: one CSV line per combination, method
     /// and class (resumable).
     Sweep(sweep_cmd::SweepArgs),
+    /// Stability suite: the pipeline over degenerate cases (sectors, slivers, flat, offsets, odd viewpoints, seeds).
+    Stress(stress_cmd::StressArgs),
+    /// Failure map: a raster of viewpoints over the footprint, false culls and occlusion captured per cell (PNG, CSV).
+    Failmap(failmap_cmd::FailmapArgs),
 }
 
 /// Runs a parsed command line.
@@ -74,5 +80,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 quiet: args.quiet,
             },
         ),
+        Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
+        Command::Failmap(args) => failmap_cmd::run(&args),
     }
 }
