@@ -20,5 +20,5 @@ pub mod cli;
 pub mod evaluate;
 pub mod export;
 pub mod pipeline;
-pub mod sweep;
 pub mod stress;
+pub mod sweep;

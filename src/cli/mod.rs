@@ -11,8 +11,8 @@ mod horizon_cmd;
 mod info;
 mod mesh_input;
 pub mod output;
-mod sweep_cmd;
 mod stress_cmd;
+mod sweep_cmd;
 mod synth;
 mod tin_cmd;
 
