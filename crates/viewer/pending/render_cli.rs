@@ -1,0 +1,156 @@
+//! End-to-end tests of `tincull render` (headless PNG renders) on a small synthetic terrain and its hierarchy.
+//!
+//! Without a GPU adapter the GPU parts print a SKIP notice and pass, unless `TINCULL_REQUIRE_GPU` is set.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn tincull(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(args)
+        .output()
+        .expect("run tincull")
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "tincull failed:\nstdout: {}\nstderr: {}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn gpu_missing(out: &Output) -> bool {
+    let err = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() || !err.contains("no GPU adapter") {
+        return false;
+    }
+    if viewer::gpu_required() {
+        panic!("TINCULL_REQUIRE_GPU is set but no GPU is usable: {err}");
+    }
+    eprintln!("SKIP: no GPU adapter, render test not run; set TINCULL_REQUIRE_GPU=1 to make this an error");
+    true
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().expect("utf-8 temp path")
+}
+
+#[test]
+fn render_map_orbit_and_eye_compare() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    let tch = dir.path().join("t.tch");
+    ok(&tincull(&["synth", "-o", p(&obj), "--vertices", "1200", "-q"]));
+    ok(&tincull(&["build", p(&obj), "-o", p(&tch), "-q"]));
+
+    // The map of the hierarchy, coloured by group.
+    let map = dir.path().join("map.png");
+    let out = tincull(&["render", p(&tch), "--out", p(&map), "--size", "200x150", "--json"]);
+    if gpu_missing(&out) {
+        return;
+    }
+    let j: serde_json::Value = serde_json::from_str(ok(&out).trim()).unwrap();
+    assert_eq!(j["draws"], 1);
+    let img = viewer::read_png(&map).unwrap();
+    assert_eq!((img.width, img.height), (200, 150));
+    let grey = img.count(viewer::palette::to_rgba8([0.0; 3]));
+    assert!(grey < 200 * 150, "not black");
+
+    // A plain mesh renders by height.
+    let height = dir.path().join("height.png");
+    ok(&tincull(&["render", p(&obj), "--out", p(&height), "--size", "64x64"]));
+    assert!(viewer::read_png(&height).is_ok());
+
+    // Orbit with a viewpoint: the culler runs and its counts are reported.
+    let h = cull::Hierarchy::load(&tch).unwrap();
+    let (lo, hi) = h
+        .mesh
+        .positions
+        .iter()
+        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(mut lo, mut hi), q| {
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+            (lo, hi)
+        });
+    let eye = format!("{},{},{}", (lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, lo[2] + 5.0);
+    let orbit = dir.path().join("orbit.png");
+    let out = ok(&tincull(&[
+        "render",
+        p(&tch),
+        "--out",
+        p(&orbit),
+        "--view",
+        "orbit",
+        "--eye",
+        &eye,
+        "--size",
+        "160x120",
+        "--json",
+    ]));
+    let j: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let drawn = j["cull"]["triangles_drawn"].as_u64().unwrap();
+    let culled = j["cull"]["triangles_culled"].as_u64().unwrap();
+    assert_eq!(drawn + culled, h.num_triangles() as u64);
+
+    // Eye view with comparison: JSON fields, the difference image, and the triangle counts.
+    let eyeimg = dir.path().join("eye.png");
+    let out = ok(&tincull(&[
+        "render",
+        p(&tch),
+        "--out",
+        p(&eyeimg),
+        "--view",
+        "eye",
+        "--eye",
+        &eye,
+        "--yaw",
+        "30",
+        "--pitch",
+        "-5",
+        "--size",
+        "128x96",
+        "--compare",
+        "--json",
+    ]));
+    let j: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let differing = j["differing_pixels"].as_u64().unwrap();
+    assert_eq!(j["triangles_unculled"].as_u64().unwrap(), h.num_triangles() as u64);
+    assert_eq!(
+        j["triangles_submitted"].as_u64().unwrap(),
+        j["cull"]["triangles_drawn"].as_u64().unwrap()
+    );
+    let diff = viewer::read_png(&dir.path().join("eye-diff.png")).unwrap();
+    assert_eq!(diff.count([255, 0, 0, 255]), differing);
+    assert!(j["frame_ms_culled"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn render_rejects_bad_options_with_clear_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    ok(&tincull(&["synth", "-o", p(&obj), "--vertices", "300", "-q"]));
+    let png = dir.path().join("x.png");
+    let cases: [(&[&str], &str); 4] = [
+        (&["--view", "eye"], "--eye"),
+        (&["--size", "0x10"], "size"),
+        (&["--view", "map", "--compare"], "--compare"),
+        (&["--colour", "groups"], "hierarchy"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", p(&obj), "--out", p(&png)];
+        args.extend_from_slice(extra);
+        let out = tincull(&args);
+        if gpu_missing(&out) {
+            continue;
+        }
+        assert!(!out.status.success(), "{extra:?} should fail");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{extra:?}: {err}");
+    }
+    assert!(!png.exists(), "no image is written on error");
+}

@@ -1,0 +1,183 @@
+//! `tincull render`: headless renders of a hierarchy or a mesh to PNG (map, orbit overview with a viewpoint's
+//! culling, or the eye view with a culled-versus-unculled comparison).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use serde_json::json;
+use viewer::{ColourMode, Gpu, RenderOptions, Terrain, ViewKind};
+
+use super::cull_cmd::parse_point;
+use super::mesh_input::MeshArgs;
+use super::{Output, OutputArgs};
+
+/// Arguments of `tincull render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// A hierarchy (.tch) or a terrain mesh (.obj; coloured by height, no culling).
+    pub input: PathBuf,
+    /// The PNG to write.
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// The view: map (top-down), orbit (oblique overview) or eye (what a camera at --eye sees).
+    #[arg(long, default_value = "map", value_parser = ["map", "orbit", "eye"])]
+    pub view: String,
+    /// Viewpoint `x,y,z` in world coordinates (m): the camera of the eye view, the culled viewpoint of the orbit.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    pub eye: Option<[f64; 3]>,
+    /// View direction in degrees, counter-clockwise from east [eye: 0, orbit: 45].
+    #[arg(long, allow_hyphen_values = true)]
+    pub yaw: Option<f64>,
+    /// Pitch in degrees up from the horizontal [eye: 0, orbit: -35].
+    #[arg(long, allow_hyphen_values = true)]
+    pub pitch: Option<f64>,
+    /// Horizontal field of view of the eye view in degrees (drawn at most 150).
+    #[arg(long, default_value_t = 90.0)]
+    pub fov: f64,
+    /// Horizontal field of view the culler uses, in degrees (360 = occlusion only).
+    #[arg(long, default_value_t = 360.0)]
+    pub cull_fov: f64,
+    /// Image size `WIDTHxHEIGHT` in pixels.
+    #[arg(long, default_value = "1024x768", value_parser = parse_size)]
+    pub size: [u32; 2],
+    /// Colouring: groups, level, visibility (drawn / culled for --eye) or height [default: groups for a hierarchy,
+    /// height for a mesh].
+    #[arg(long, value_parser = ["groups", "level", "visibility", "height"])]
+    pub colour: Option<String>,
+    /// Hierarchy level for `--colour level` [default: the top].
+    #[arg(long)]
+    pub level: Option<u32>,
+    /// Eye view: also render without culling, write the difference image (IMG-diff.png) and count differing
+    /// pixels (false culls on screen) and frame times.
+    #[arg(long)]
+    pub compare: bool,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
+    let parse = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&v| (1..=8192).contains(&v))
+            .ok_or_else(|| format!("{t:?} is not a size in 1..=8192"))
+    };
+    Ok([parse(w)?, parse(h)?])
+}
+
+/// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`].
+pub fn load_terrain(path: &Path, out: Output) -> Result<Terrain> {
+    let is_tch = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tch"));
+    if is_tch {
+        let h = cull::Hierarchy::load(path).with_context(|| format!("cannot load {}", path.display()))?;
+        Ok(Terrain::from_hierarchy(h)?)
+    } else {
+        let (tin, _) = mesh_args(path).load(out)?;
+        Ok(Terrain::from_tin(&tin)?)
+    }
+}
+
+/// Default import options for a mesh given by path.
+pub fn mesh_args(path: &Path) -> MeshArgs {
+    MeshArgs {
+        mesh: path.to_path_buf(),
+        keep_faces: false,
+        dedupe: Default::default(),
+    }
+}
+
+/// The difference image's path: `IMG-diff.png` beside `IMG.png`.
+pub fn diff_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    out.with_file_name(format!("{stem}-diff.png"))
+}
+
+/// Runs `tincull render`.
+pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
+    let view: ViewKind = args.view.parse()?;
+    let colour: Option<ColourMode> = args.colour.as_deref().map(str::parse).transpose()?;
+    if args.compare && view != ViewKind::Eye {
+        bail!("--compare works with --view eye");
+    }
+    let terrain = load_terrain(&args.input, out)?;
+    let gpu = Gpu::headless()?;
+    let options = RenderOptions {
+        view,
+        eye: args.eye,
+        yaw_deg: args.yaw,
+        pitch_deg: args.pitch,
+        fov_deg: args.fov,
+        cull_fov_deg: args.cull_fov,
+        size: args.size,
+        colour,
+        level: args.level,
+        compare: args.compare,
+        ..Default::default()
+    };
+    let result = viewer::render(&gpu, &terrain, &options)?;
+    viewer::write_png(&args.out, &result.image)?;
+    out.say(format!(
+        "wrote {} ({}x{}, {} draws of {} triangles, on {})",
+        args.out.display(),
+        result.image.width,
+        result.image.height,
+        result.frame.draws,
+        result.frame.triangles,
+        gpu.describe()
+    ));
+    if let Some(s) = &result.cull {
+        out.say(format!(
+            "culled for eye {:?}: draw {} of {} triangles; {} nodes tested, {} culled by occlusion, {} by frustum",
+            args.eye.unwrap_or_default(),
+            s.triangles_drawn,
+            s.triangles_drawn + s.triangles_culled,
+            s.nodes_tested,
+            s.culled_by_occlusion,
+            s.culled_by_frustum
+        ));
+    }
+    let mut j = json!({
+        "output": args.out,
+        "width": result.image.width,
+        "height": result.image.height,
+        "view": args.view,
+        "adapter": gpu.describe(),
+        "draws": result.frame.draws,
+        "triangles_submitted": result.frame.triangles,
+        "gpu_primitives": result.frame.gpu_primitives,
+        "cull": result.cull,
+    });
+    if let Some(c) = &result.compare {
+        let diff = diff_path(&args.out);
+        viewer::write_png(&diff, &c.difference)?;
+        out.say(format!(
+            "{} differing pixels (false culls on screen); wrote {}",
+            c.differing_pixels,
+            diff.display()
+        ));
+        out.say(format!(
+            "frame {:.2} ms culled (cull {:.1} µs) vs {:.2} ms everything ({} vs {} triangles)",
+            c.ms_culled, c.cull_us, c.ms_unculled, c.culled_frame.triangles, c.unculled_frame.triangles
+        ));
+        j["differing_pixels"] = json!(c.differing_pixels);
+        j["difference_image"] = json!(diff);
+        j["frame_ms_culled"] = json!(c.ms_culled);
+        j["frame_ms_unculled"] = json!(c.ms_unculled);
+        j["cull_us"] = json!(c.cull_us);
+        j["triangles_unculled"] = json!(c.unculled_frame.triangles);
+    }
+    out.json(&j)
+}

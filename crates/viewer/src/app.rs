@@ -1,0 +1,1186 @@
+//! The interactive viewer (eframe + egui on wgpu): the terrain drawn with the culler's ranges from a viewpoint, in a
+//! first-person (eye) or orbit view, with the groups, orphans and culled groups on screen, live culling statistics,
+//! ground truth on demand, exports, and a rebuild with new parameters in a background thread.
+//!
+//! The 3-D view is rendered by [`crate::render::Renderer`] into its own texture (depth-tested, reversed Z) on the
+//! window's wgpu device and shown with egui's `register_native_texture`. This crate does not depend on the
+//! preprocessing pipeline: the caller injects the rebuild ([`RebuildFn`]) and the grouped OBJ writer
+//! ([`ExportObjFn`]). The `.tch` and JSON exports use the `cull` crate directly.
+//!
+//! Controls: drag in the view to look around (eye) or rotate (orbit); W/S/A/D move the viewpoint, R/F raise and
+//! lower it; the scroll wheel zooms the orbit or moves the eye forward; click on the map to place the viewpoint.
+//! The field of view (up to 360°) is the culler's; the eye view draws at most 150° of it.
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use cull::{Camera, CullStats, Culler, DrawList, Hierarchy};
+use eframe::egui;
+use eframe::egui_wgpu;
+use glam::{DVec3, Vec2, Vec3};
+use tin::Tin;
+
+use crate::camera::{EyeCamera, MAX_RENDER_HFOV_DEG, MapView, Orbit};
+use crate::error::{Result, ViewerError};
+use crate::gpu::Gpu;
+use crate::headless::split_items;
+use crate::render::{DrawItem, DrawStyle, Frame, Marker, Renderer, RgbaImage};
+use crate::scene::{ColourMode, GpuScene, Terrain, paint_false_culls};
+
+/// Errors of injected callbacks.
+pub type DynError = Box<dyn std::error::Error + Send + Sync>;
+/// Progress of a rebuild: `(stage, done, total)`.
+pub type Progress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
+/// Builds a hierarchy for a terrain with the given parameters (the caller's pipeline), reporting progress.
+pub type RebuildFn =
+    Arc<dyn Fn(&Tin, &ViewerParams, Progress) -> std::result::Result<Hierarchy, DynError> + Send + Sync>;
+/// Writes a hierarchy as a grouped OBJ (and its `.mtl`).
+pub type ExportObjFn = Arc<dyn Fn(&Hierarchy, &Path) -> std::result::Result<(), DynError> + Send + Sync>;
+
+/// The build parameters the side panel edits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewerParams {
+    /// Sectors.
+    pub sectors: u32,
+    /// Subsectors per sector.
+    pub subsectors: u32,
+    /// Seeds of the first crystal pass; `None` is the pipeline's default (one per 200 triangles).
+    pub seeds: Option<usize>,
+    /// Orphan passes.
+    pub orphan_passes: u32,
+    /// Minimum group size (triangles).
+    pub min_group: usize,
+    /// Expanse limit as a fraction of the terrain's area.
+    pub max_expanse: f64,
+    /// Seed of the random generator.
+    pub rng_seed: u64,
+}
+
+impl Default for ViewerParams {
+    fn default() -> Self {
+        ViewerParams {
+            sectors: 16,
+            subsectors: 4,
+            seeds: None,
+            orphan_passes: 10,
+            min_group: 30,
+            max_expanse: 0.25,
+            rng_seed: 1,
+        }
+    }
+}
+
+/// What the viewer shows first.
+#[derive(Clone, Debug)]
+pub enum Source {
+    /// A plain mesh: coloured by height until rebuilt.
+    Mesh(Tin),
+    /// A hierarchy and its mesh.
+    Hierarchy(Hierarchy),
+}
+
+/// Take a screenshot of the window after some frames, write it as PNG and close.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScreenshotRequest {
+    /// The PNG to write.
+    pub path: PathBuf,
+    /// Frames to draw first.
+    pub after_frames: u32,
+}
+
+/// Actions the viewer takes by itself once the window is up, for tests and demonstrations: first the rebuild
+/// (with the panel's parameters), then the ground truth for the viewpoint. A screenshot waits for both.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Startup {
+    /// Press Rebuild at the first frame (needs a [`RebuildFn`]).
+    pub rebuild: bool,
+    /// Press "Ground truth here" once the hierarchy is ready.
+    pub ground_truth: bool,
+}
+
+/// What happened during a [`run`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunSummary {
+    /// Frames drawn.
+    pub frames: u64,
+    /// Frames drawn while a rebuild was running (the window stayed responsive).
+    pub frames_during_rebuild: u64,
+    /// Rebuilds completed and shown.
+    pub rebuilds: u32,
+    /// Triangles of the hierarchy shown last.
+    pub triangles: usize,
+    /// Leaf groups of the hierarchy shown last.
+    pub groups: usize,
+    /// The last ground truth: `(visible triangles, false culls)`.
+    pub truth: Option<(usize, usize)>,
+}
+
+/// Everything [`run`] needs.
+pub struct ViewerOptions {
+    /// Window title.
+    pub title: String,
+    /// The terrain.
+    pub source: Source,
+    /// Initial build parameters (shown in the side panel).
+    pub params: ViewerParams,
+    /// The rebuild, if the caller offers one.
+    pub rebuild: Option<RebuildFn>,
+    /// The grouped OBJ writer, if the caller offers one.
+    pub export_obj: Option<ExportObjFn>,
+    /// Path stem of exports (`STEM.tch`, `STEM.json`, `STEM.obj`).
+    pub export_stem: PathBuf,
+    /// Initial viewpoint (world); default: the terrain's centre, 20 m above the ground.
+    pub eye: Option<[f64; 3]>,
+    /// Screenshot-and-exit, for tests and documentation.
+    pub screenshot: Option<ScreenshotRequest>,
+    /// Window size in points.
+    pub window_size: [f32; 2],
+    /// Actions to take by itself.
+    pub startup: Startup,
+}
+
+impl std::fmt::Debug for ViewerOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ViewerOptions")
+            .field("title", &self.title)
+            .field("params", &self.params)
+            .field("rebuild", &self.rebuild.is_some())
+            .field("export_obj", &self.export_obj.is_some())
+            .field("export_stem", &self.export_stem)
+            .field("eye", &self.eye)
+            .field("screenshot", &self.screenshot)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The terrain, its TIN (same triangle order, for ground truth and rebuilds) and the culler.
+struct Model {
+    tin: Arc<Tin>,
+    terrain: Terrain,
+    culler: Option<Culler>,
+}
+
+impl Model {
+    fn new(source: Source) -> Result<Model> {
+        match source {
+            Source::Mesh(tin) => Ok(Model {
+                terrain: Terrain::from_tin(&tin)?,
+                tin: Arc::new(tin),
+                culler: None,
+            }),
+            Source::Hierarchy(h) => Model::from_hierarchy(h),
+        }
+    }
+
+    fn from_hierarchy(h: Hierarchy) -> Result<Model> {
+        let positions = h.mesh.positions.iter().map(|p| DVec3::from_array(*p)).collect();
+        let tin = Tin::from_parts(positions, h.mesh.triangles.clone())?;
+        let culler = Culler::new(&h);
+        Ok(Model {
+            tin: Arc::new(tin),
+            terrain: Terrain::from_hierarchy(h)?,
+            culler: Some(culler),
+        })
+    }
+}
+
+/// Opens the viewer window and runs until it is closed.
+pub fn run(options: ViewerOptions) -> Result<RunSummary> {
+    let ViewerOptions {
+        title,
+        source,
+        params,
+        rebuild,
+        export_obj,
+        export_stem,
+        eye,
+        screenshot,
+        window_size,
+        startup,
+    } = options;
+    let summary = Arc::new(Mutex::new(RunSummary::default()));
+    let model = Model::new(source)?;
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title(title.clone())
+            .with_inner_size(window_size),
+        ..Default::default()
+    };
+    let setup = Setup {
+        model,
+        params,
+        rebuild,
+        export_obj,
+        export_stem,
+        eye,
+        screenshot,
+        startup,
+        summary: Arc::clone(&summary),
+    };
+    eframe::run_native(
+        &title,
+        native,
+        Box::new(move |cc| {
+            let app = ViewerApp::new(cc, setup).map_err(|e| Box::new(e) as DynError)?;
+            Ok(Box::new(app) as Box<dyn eframe::App>)
+        }),
+    )
+    .map_err(|e| ViewerError::Window(e.to_string()))?;
+    let result = summary.lock().map(|s| *s).unwrap_or_default();
+    Ok(result)
+}
+
+struct Setup {
+    model: Model,
+    params: ViewerParams,
+    rebuild: Option<RebuildFn>,
+    export_obj: Option<ExportObjFn>,
+    export_stem: PathBuf,
+    eye: Option<[f64; 3]>,
+    screenshot: Option<ScreenshotRequest>,
+    startup: Startup,
+    summary: Arc<Mutex<RunSummary>>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ViewMode {
+    Eye,
+    Orbit,
+}
+
+/// A texture rendered by our renderer and shown by egui.
+struct View {
+    renderer: Renderer,
+    texture: egui::TextureId,
+}
+
+impl View {
+    fn new(gpu: &Gpu, egui_renderer: &Arc<egui::mutex::RwLock<egui_wgpu::Renderer>>, size: [u32; 2]) -> Result<View> {
+        let renderer = Renderer::new(gpu, size[0], size[1])?;
+        let texture = egui_renderer.write().register_native_texture(
+            &gpu.device,
+            renderer.texture_view(),
+            wgpu::FilterMode::Linear,
+        );
+        Ok(View { renderer, texture })
+    }
+
+    fn resize(
+        &mut self,
+        gpu: &Gpu,
+        egui_renderer: &Arc<egui::mutex::RwLock<egui_wgpu::Renderer>>,
+        size: [u32; 2],
+    ) -> Result<()> {
+        if self.renderer.size() != size {
+            self.renderer.resize(gpu, size[0], size[1])?;
+            egui_renderer.write().update_egui_texture_from_wgpu_texture(
+                &gpu.device,
+                self.renderer.texture_view(),
+                wgpu::FilterMode::Linear,
+                self.texture,
+            );
+        }
+        Ok(())
+    }
+}
+
+struct RebuildJob {
+    progress: Arc<Mutex<(String, u64, u64)>>,
+    result: Receiver<std::result::Result<Model, String>>,
+    started: Instant,
+}
+
+struct TruthJob {
+    eye: [f64; 3],
+    drawn: Vec<bool>,
+    result: Receiver<Vec<bool>>,
+}
+
+struct Truth {
+    eye: [f64; 3],
+    visible: usize,
+    false_culls: Vec<bool>,
+    count: usize,
+}
+
+/// Exponential moving average for live figures.
+#[derive(Clone, Copy, Debug, Default)]
+struct Smoothed(Option<f64>);
+
+impl Smoothed {
+    fn add(&mut self, v: f64) {
+        self.0 = Some(self.0.map_or(v, |old| old * 0.8 + v * 0.2));
+    }
+}
+
+struct ViewerApp {
+    gpu: Gpu,
+    egui_renderer: Arc<egui::mutex::RwLock<egui_wgpu::Renderer>>,
+    model: Model,
+    scene: GpuScene,
+    main: View,
+    map: View,
+    map_view: MapView,
+    params: ViewerParams,
+    rebuild: Option<RebuildFn>,
+    export_obj: Option<ExportObjFn>,
+    export_stem: String,
+    // Camera.
+    mode: ViewMode,
+    eye: [f64; 3],
+    eye_height: f64,
+    yaw_deg: f64,
+    pitch_deg: f64,
+    fov_deg: f64,
+    orbit: Orbit,
+    // Toggles.
+    colour: ColourMode,
+    level: u32,
+    culling: bool,
+    show_orphans: bool,
+    culled_wire: bool,
+    // State.
+    list: DrawList,
+    colours_key: Option<(ColourMode, u32, u64)>,
+    map_dirty: bool,
+    cull_us: Smoothed,
+    ms_culled: Smoothed,
+    ms_all: Smoothed,
+    frame_count: u64,
+    rebuild_job: Option<RebuildJob>,
+    truth_job: Option<TruthJob>,
+    truth: Option<Truth>,
+    status: String,
+    screenshot: Option<ScreenshotRequest>,
+    screenshot_rx: Option<Receiver<Arc<egui::ColorImage>>>,
+    startup: Startup,
+    summary: Arc<Mutex<RunSummary>>,
+}
+
+const MAP_SIDE: u32 = 280;
+
+impl ViewerApp {
+    fn new(cc: &eframe::CreationContext<'_>, setup: Setup) -> Result<ViewerApp> {
+        let rs = cc
+            .wgpu_render_state
+            .as_ref()
+            .ok_or_else(|| ViewerError::Window("eframe did not start its wgpu renderer".into()))?;
+        let gpu = Gpu::from_parts(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info());
+        let egui_renderer = rs.renderer.clone();
+        let Setup {
+            model,
+            params,
+            rebuild,
+            export_obj,
+            export_stem,
+            eye,
+            screenshot,
+            startup,
+            summary,
+        } = setup;
+        let t = &model.terrain;
+        let colour = if t.hierarchy.is_some() {
+            ColourMode::Groups
+        } else {
+            ColourMode::Height
+        };
+        let colours = t.colours(colour, None, None)?;
+        let scene = GpuScene::new(&gpu, t, &colours)?;
+        let aspect = (t.max[0] - t.min[0]).max(1e-3) / (t.max[1] - t.min[1]).max(1e-3);
+        let map_size = map_size(aspect);
+        let main = View::new(&gpu, &egui_renderer, [640, 480])?;
+        let map = View::new(&gpu, &egui_renderer, map_size)?;
+        let eye = eye.unwrap_or_else(|| {
+            let c = t.to_world([(t.min[0] + t.max[0]) * 0.5, (t.min[1] + t.max[1]) * 0.5, 0.0]);
+            let ground = t.height_at(c[0], c[1]).unwrap_or(c[2]);
+            [c[0], c[1], ground + 20.0]
+        });
+        let eye_height = t.height_at(eye[0], eye[1]).map_or(20.0, |g| (eye[2] - g).max(0.5));
+        Ok(ViewerApp {
+            map_view: MapView::fit(t.min, t.max, map_size[0] as f32 / map_size[1] as f32),
+            orbit: Orbit::overview(t.min, t.max, 1.4, None, None),
+            level: t.max_level(),
+            gpu,
+            egui_renderer,
+            scene,
+            main,
+            map,
+            params,
+            rebuild,
+            export_obj,
+            export_stem: export_stem.display().to_string(),
+            mode: ViewMode::Eye,
+            eye,
+            eye_height,
+            yaw_deg: 0.0,
+            pitch_deg: -5.0,
+            fov_deg: 90.0,
+            colour,
+            culling: true,
+            show_orphans: true,
+            culled_wire: true,
+            list: DrawList::default(),
+            colours_key: Some((colour, 0, 0)),
+            map_dirty: true,
+            cull_us: Smoothed::default(),
+            ms_culled: Smoothed::default(),
+            ms_all: Smoothed::default(),
+            frame_count: 0,
+            rebuild_job: None,
+            truth_job: None,
+            truth: None,
+            status: String::new(),
+            screenshot,
+            screenshot_rx: None,
+            startup,
+            summary,
+            model,
+        })
+    }
+
+    fn camera(&self) -> Camera {
+        Camera {
+            position: self.eye,
+            yaw: self.yaw_deg.to_radians(),
+            hfov: if self.fov_deg >= 360.0 {
+                std::f64::consts::TAU
+            } else {
+                self.fov_deg.to_radians()
+            },
+        }
+    }
+
+    fn terrain(&self) -> &Terrain {
+        &self.model.terrain
+    }
+
+    /// Runs the culler for the current viewpoint (timed) and returns the drawn mask's fingerprint.
+    fn cull(&mut self) -> u64 {
+        let camera = self.camera();
+        let Some(culler) = &self.model.culler else {
+            self.list.ranges.clear();
+            self.list.ranges.push([0, self.terrain().num_triangles() as u32]);
+            self.list.stats = CullStats::default();
+            return 0;
+        };
+        let start = Instant::now();
+        culler.cull_into(&camera, &mut self.list);
+        self.cull_us.add(start.elapsed().as_secs_f64() * 1e6);
+        // A cheap fingerprint of the ranges, to know when visibility colours must change.
+        self.list.ranges.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, r| {
+            (h ^ (u64::from(r[0]) << 32 | u64::from(r[1]))).wrapping_mul(0x0100_0000_01b3)
+        })
+    }
+
+    fn update_colours(&mut self, fingerprint: u64) {
+        let visibility_key = if self.colour == ColourMode::Visibility {
+            fingerprint
+        } else {
+            0
+        };
+        let truth_key = self.truth.as_ref().map_or(0, |t| t.count as u64 + 1);
+        let key = (self.colour, self.level, visibility_key ^ truth_key.rotate_left(17));
+        if self.colours_key == Some(key) {
+            return;
+        }
+        let n = self.terrain().num_triangles();
+        let mask = self.list.mask(n);
+        let colours = self.terrain().colours(self.colour, Some(self.level), Some(&mask));
+        match colours {
+            Ok(mut colours) => {
+                if let Some(t) = &self.truth {
+                    paint_false_culls(&mut colours, &t.false_culls);
+                }
+                if let Err(e) = self.scene.set_colours(&self.gpu, &colours) {
+                    self.status = e.to_string();
+                }
+                self.colours_key = Some(key);
+                self.map_dirty = true;
+            }
+            Err(e) => {
+                self.status = e.to_string();
+                self.colour = ColourMode::Height;
+            }
+        }
+    }
+
+    /// The draw items for the main view.
+    fn items(&self) -> Vec<DrawItem> {
+        let n = self.terrain().num_triangles() as u32;
+        let limit = match (&self.terrain().hierarchy, self.show_orphans) {
+            (Some(h), false) => h.always_visible[0],
+            _ => n,
+        };
+        let clip = |items: Vec<DrawItem>| -> Vec<DrawItem> {
+            items
+                .into_iter()
+                .filter_map(|mut i| {
+                    i.range[1] = i.range[1].min(limit);
+                    (i.range[0] < i.range[1]).then_some(i)
+                })
+                .collect()
+        };
+        if !self.culling || self.model.culler.is_none() {
+            return clip(vec![DrawItem {
+                range: [0, n],
+                style: DrawStyle::Solid,
+            }]);
+        }
+        // With a ground truth, culled triangles are drawn solid so that the false culls (painted red) show.
+        let truth = self.truth.is_some();
+        let items = split_items(&self.list.ranges, n);
+        clip(
+            items
+                .into_iter()
+                .filter(|i| i.style == DrawStyle::Solid || self.culled_wire || truth)
+                .map(|mut i| {
+                    if truth {
+                        i.style = DrawStyle::Solid;
+                    }
+                    i
+                })
+                .collect(),
+        )
+    }
+
+    fn marker(&self) -> Marker {
+        let t = self.terrain();
+        let extent = Vec3::from(t.max) - Vec3::from(t.min);
+        let p = Vec3::from(t.to_local(self.eye));
+        let diagonal = extent.truncate().length();
+        Marker {
+            position: p,
+            size: diagonal * 0.008,
+            height: diagonal * 0.05,
+        }
+    }
+
+    fn place_eye(&mut self, x: f64, y: f64) {
+        if let Some(z) = self.terrain().height_at(x, y) {
+            self.eye = [x, y, z + self.eye_height];
+            self.map_dirty = true;
+        }
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("tincull");
+        let t = &self.model.terrain;
+        ui.label(format!(
+            "{} vertices, {} triangles, {} groups, {} levels",
+            t.positions.len(),
+            t.num_triangles(),
+            t.groups,
+            t.hierarchy.as_ref().map_or(0, |_| t.max_level() + 1)
+        ));
+        ui.label(format!("GPU: {}", self.gpu.describe()));
+        ui.separator();
+        self.map_ui(ui);
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.mode, ViewMode::Eye, "Eye");
+            ui.selectable_value(&mut self.mode, ViewMode::Orbit, "Orbit");
+        });
+        let mut eye_changed = false;
+        eye_changed |= ui
+            .add(egui::Slider::new(&mut self.fov_deg, 10.0..=360.0).text("field of view °"))
+            .changed();
+        eye_changed |= ui
+            .add(egui::Slider::new(&mut self.yaw_deg, -180.0..=180.0).text("yaw °"))
+            .changed();
+        ui.add(egui::Slider::new(&mut self.pitch_deg, -89.0..=89.0).text("pitch °"));
+        if ui
+            .add(
+                egui::Slider::new(&mut self.eye_height, 0.5..=500.0)
+                    .logarithmic(true)
+                    .text("height above ground m"),
+            )
+            .changed()
+            && let Some(z) = self.terrain().height_at(self.eye[0], self.eye[1])
+        {
+            self.eye[2] = z + self.eye_height;
+            eye_changed = true;
+        }
+        if eye_changed {
+            self.map_dirty = true;
+        }
+        ui.label(format!(
+            "eye {:.1}, {:.1}, {:.1}",
+            self.eye[0], self.eye[1], self.eye[2]
+        ));
+        ui.separator();
+        ui.label("Colour");
+        ui.horizontal_wrapped(|ui| {
+            let has_h = self.model.terrain.hierarchy.is_some();
+            ui.add_enabled_ui(has_h, |ui| {
+                ui.selectable_value(&mut self.colour, ColourMode::Groups, "groups");
+                ui.selectable_value(&mut self.colour, ColourMode::Level, "level");
+                ui.selectable_value(&mut self.colour, ColourMode::Visibility, "visibility");
+            });
+            ui.selectable_value(&mut self.colour, ColourMode::Height, "height");
+        });
+        if self.colour == ColourMode::Level {
+            let max = self.model.terrain.max_level();
+            ui.add(egui::Slider::new(&mut self.level, 0..=max).text("hierarchy level"));
+        }
+        ui.checkbox(&mut self.culling, "cull");
+        ui.checkbox(&mut self.show_orphans, "orphans (always visible)");
+        ui.checkbox(&mut self.culled_wire, "culled groups as wireframe");
+        ui.separator();
+        self.stats_ui(ui);
+        ui.separator();
+        self.truth_ui(ui);
+        ui.separator();
+        self.rebuild_ui(ui);
+        ui.separator();
+        self.export_ui(ui);
+        if !self.status.is_empty() {
+            ui.separator();
+            ui.label(&self.status);
+        }
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        let [w, h] = self.map.renderer.size();
+        let ppp = ui.ctx().pixels_per_point();
+        let size = egui::vec2(w as f32 / ppp, h as f32 / ppp);
+        let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click());
+        ui.painter().image(
+            self.map.texture,
+            rect,
+            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+            egui::Color32::WHITE,
+        );
+        let to_px = |p: Vec2| {
+            let q = self.map_view.local_to_pixel(p, rect.width(), rect.height());
+            rect.min + egui::vec2(q.x, q.y)
+        };
+        let eye = Vec3::from(self.terrain().to_local(self.eye)).truncate();
+        let centre = to_px(eye);
+        if self.fov_deg < 360.0 {
+            let reach = self.map_view.half.length() * 0.25;
+            for side in [-0.5, 0.5] {
+                let a = (self.yaw_deg + side * self.fov_deg).to_radians() as f32;
+                let tip = to_px(eye + Vec2::new(a.cos(), a.sin()) * reach);
+                ui.painter()
+                    .line_segment([centre, tip], egui::Stroke::new(1.5, egui::Color32::BLACK));
+            }
+        }
+        let m = crate::palette::to_rgba8(crate::palette::MARKER_COLOUR);
+        ui.painter().circle(
+            centre,
+            4.0,
+            egui::Color32::from_rgb(m[0], m[1], m[2]),
+            egui::Stroke::new(1.0, egui::Color32::BLACK),
+        );
+        if let Some(pos) = response.interact_pointer_pos()
+            && response.clicked()
+        {
+            let q = pos - rect.min;
+            let p = self.map_view.pixel_to_local(q.x, q.y, rect.width(), rect.height());
+            let world = self.terrain().to_world([p.x, p.y, 0.0]);
+            self.place_eye(world[0], world[1]);
+        }
+        ui.label("click the map to place the viewpoint");
+    }
+
+    fn stats_ui(&mut self, ui: &mut egui::Ui) {
+        let s = self.list.stats;
+        let n = self.terrain().num_triangles();
+        if self.model.culler.is_some() {
+            ui.label(format!(
+                "nodes tested {}, culled {} (occlusion {}, frustum {}), skipped {}",
+                s.nodes_tested,
+                s.culled_by_occlusion + s.culled_by_frustum,
+                s.culled_by_occlusion,
+                s.culled_by_frustum,
+                s.nodes_skipped
+            ));
+            ui.label(format!(
+                "triangles drawn {} of {} ({:.1}%), {} ranges",
+                s.triangles_drawn,
+                n,
+                100.0 * f64::from(s.triangles_drawn) / n.max(1) as f64,
+                self.list.ranges.len()
+            ));
+            ui.label(format!("cull {:.1} µs", self.cull_us.0.unwrap_or(0.0)));
+        } else {
+            ui.label("no hierarchy: Rebuild to cull");
+        }
+        ui.label(format!(
+            "frame {:.2} ms culled, {:.2} ms everything",
+            self.ms_culled.0.unwrap_or(f64::NAN),
+            self.ms_all.0.unwrap_or(f64::NAN)
+        ));
+    }
+
+    fn truth_ui(&mut self, ui: &mut egui::Ui) {
+        let busy = self.truth_job.is_some();
+        let can = self.model.culler.is_some() && !busy;
+        if ui
+            .add_enabled(can, egui::Button::new("Ground truth here (false culls in red)"))
+            .clicked()
+        {
+            self.start_truth(ui.ctx());
+        }
+        if busy {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label("computing ground truth…");
+            });
+        }
+        if let Some(t) = &self.truth {
+            ui.label(format!(
+                "{} visible triangles, {} false culls at {:.0}, {:.0}, {:.0}",
+                t.visible, t.count, t.eye[0], t.eye[1], t.eye[2]
+            ));
+        }
+    }
+
+    fn rebuild_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label("Build parameters");
+        let p = &mut self.params;
+        egui::Grid::new("params").num_columns(2).show(ui, |ui| {
+            ui.label("sectors");
+            ui.add(egui::DragValue::new(&mut p.sectors).range(1..=1024));
+            ui.end_row();
+            ui.label("subsectors");
+            ui.add(egui::DragValue::new(&mut p.subsectors).range(1..=64));
+            ui.end_row();
+            ui.label("seeds (0 = default)");
+            let mut seeds = p.seeds.unwrap_or(0);
+            if ui.add(egui::DragValue::new(&mut seeds).range(0..=1_000_000)).changed() {
+                p.seeds = (seeds > 0).then_some(seeds);
+            }
+            ui.end_row();
+            ui.label("orphan passes");
+            ui.add(egui::DragValue::new(&mut p.orphan_passes).range(0..=100));
+            ui.end_row();
+            ui.label("min group");
+            ui.add(egui::DragValue::new(&mut p.min_group).range(1..=100_000));
+            ui.end_row();
+            ui.label("max expanse");
+            ui.add(egui::DragValue::new(&mut p.max_expanse).range(0.001..=1.0).speed(0.005));
+            ui.end_row();
+            ui.label("rng seed");
+            ui.add(egui::DragValue::new(&mut p.rng_seed));
+            ui.end_row();
+        });
+        match (&self.rebuild, &self.rebuild_job) {
+            (None, _) => {
+                ui.label("(rebuild not available)");
+            }
+            (Some(_), Some(job)) => {
+                let (stage, done, total) = job.progress.lock().map(|g| g.clone()).unwrap_or_default();
+                let f = if total > 0 { done as f32 / total as f32 } else { 0.0 };
+                ui.add(egui::ProgressBar::new(f).text(format!(
+                    "{stage} {done}/{total} ({:.0} s)",
+                    job.started.elapsed().as_secs_f64()
+                )));
+            }
+            (Some(rebuild), None) => {
+                if ui.button("Rebuild").clicked() {
+                    let rebuild = Arc::clone(rebuild);
+                    self.start_rebuild(ui.ctx(), rebuild);
+                }
+            }
+        }
+    }
+
+    /// Computes the ground truth for the current viewpoint in a background thread.
+    fn start_truth(&mut self, ctx: &egui::Context) {
+        if self.truth_job.is_some() || self.model.culler.is_none() {
+            return;
+        }
+        let (tx, rx) = channel();
+        let tin = Arc::clone(&self.model.tin);
+        let eye = self.eye;
+        let ctx = ctx.clone();
+        std::thread::spawn(move || {
+            let visible = truth::visible_triangles(&tin, DVec3::from_array(eye));
+            let _ = tx.send(visible);
+            ctx.request_repaint();
+        });
+        let n = self.terrain().num_triangles();
+        self.truth_job = Some(TruthJob {
+            eye,
+            drawn: self.list.mask(n),
+            result: rx,
+        });
+    }
+
+    /// Rebuilds the hierarchy with the panel's parameters in a background thread, with progress.
+    fn start_rebuild(&mut self, ctx: &egui::Context, rebuild: RebuildFn) {
+        if self.rebuild_job.is_some() {
+            return;
+        }
+        let progress = Arc::new(Mutex::new(("starting".to_string(), 0u64, 0u64)));
+        let (tx, rx) = channel();
+        let tin = Arc::clone(&self.model.tin);
+        let params = self.params.clone();
+        let ctx = ctx.clone();
+        let shared = Arc::clone(&progress);
+        let repaint = ctx.clone();
+        let report: Progress = Arc::new(move |stage: &str, done: u64, total: u64| {
+            if let Ok(mut g) = shared.lock() {
+                *g = (stage.to_string(), done, total);
+            }
+            repaint.request_repaint();
+        });
+        std::thread::spawn(move || {
+            let result = rebuild(&tin, &params, report)
+                .map_err(|e| e.to_string())
+                .and_then(|h| Model::from_hierarchy(h).map_err(|e| e.to_string()));
+            let _ = tx.send(result);
+            ctx.request_repaint();
+        });
+        self.rebuild_job = Some(RebuildJob {
+            progress,
+            result: rx,
+            started: Instant::now(),
+        });
+    }
+
+    fn export_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label("Export (path without extension)");
+        ui.text_edit_singleline(&mut self.export_stem);
+        let Some(h) = self.model.terrain.hierarchy.as_ref() else {
+            ui.label("(no hierarchy to export)");
+            return;
+        };
+        let stem = PathBuf::from(&self.export_stem);
+        let mut result: Option<std::result::Result<PathBuf, String>> = None;
+        ui.horizontal(|ui| {
+            if ui.button(".tch").clicked() {
+                let path = stem.with_extension("tch");
+                result = Some(h.save(&path).map(|_| path).map_err(|e| e.to_string()));
+            }
+            if ui.button("JSON").clicked() {
+                let path = stem.with_extension("json");
+                result = Some(
+                    h.to_json()
+                        .map_err(|e| e.to_string())
+                        .and_then(|text| cull::write_atomically(&path, text.as_bytes()).map_err(|e| e.to_string()))
+                        .map(|_| path),
+                );
+            }
+            if let Some(export) = &self.export_obj
+                && ui.button("grouped OBJ").clicked()
+            {
+                let path = stem.with_extension("obj");
+                result = Some(export(h, &path).map(|_| path).map_err(|e| e.to_string()));
+            }
+        });
+        match result {
+            Some(Ok(path)) => self.status = format!("wrote {}", path.display()),
+            Some(Err(e)) => self.status = format!("export failed: {e}"),
+            None => {}
+        }
+    }
+
+    fn poll_jobs(&mut self) {
+        if let Some(job) = &self.rebuild_job {
+            match job.result.try_recv() {
+                Ok(Ok(model)) => {
+                    let secs = job.started.elapsed().as_secs_f64();
+                    self.rebuild_job = None;
+                    self.install(model);
+                    self.status = format!("rebuilt in {secs:.1} s");
+                    if let Ok(mut s) = self.summary.lock() {
+                        s.rebuilds += 1;
+                    }
+                }
+                Ok(Err(e)) => {
+                    self.rebuild_job = None;
+                    self.status = format!("rebuild failed: {e}");
+                }
+                Err(TryRecvError::Disconnected) => {
+                    self.rebuild_job = None;
+                    self.status = "rebuild failed: the build thread stopped".into();
+                }
+                Err(TryRecvError::Empty) => {}
+            }
+        }
+        if let Some(job) = &self.truth_job {
+            match job.result.try_recv() {
+                Ok(visible) => {
+                    let false_culls: Vec<bool> = visible.iter().zip(&job.drawn).map(|(&v, &d)| v && !d).collect();
+                    let truth = Truth {
+                        eye: job.eye,
+                        visible: visible.iter().filter(|&&v| v).count(),
+                        count: false_culls.iter().filter(|&&f| f).count(),
+                        false_culls,
+                    };
+                    if let Ok(mut s) = self.summary.lock() {
+                        s.truth = Some((truth.visible, truth.count));
+                    }
+                    self.truth = Some(truth);
+                    self.truth_job = None;
+                }
+                Err(TryRecvError::Disconnected) => {
+                    self.truth_job = None;
+                    self.status = "ground truth failed".into();
+                }
+                Err(TryRecvError::Empty) => {}
+            }
+        }
+    }
+
+    fn install(&mut self, model: Model) {
+        let colour = if model.terrain.hierarchy.is_some() {
+            ColourMode::Groups
+        } else {
+            ColourMode::Height
+        };
+        let scene = model
+            .terrain
+            .colours(colour, None, None)
+            .and_then(|c| GpuScene::new(&self.gpu, &model.terrain, &c));
+        match scene {
+            Ok(scene) => {
+                self.scene = scene;
+                self.colour = colour;
+                self.colours_key = Some((colour, 0, 0));
+                self.level = model.terrain.max_level();
+                self.truth = None;
+                self.model = model;
+                self.map_dirty = true;
+            }
+            Err(e) => self.status = format!("cannot show the new hierarchy: {e}"),
+        }
+    }
+
+    fn handle_input(&mut self, ui: &egui::Ui, response: &egui::Response) {
+        let ctx = ui.ctx();
+        let drag = response.drag_delta();
+        let t = &self.model.terrain;
+        let extent = (Vec3::from(t.max) - Vec3::from(t.min)).truncate().length().max(1.0);
+        match self.mode {
+            ViewMode::Eye => {
+                if response.dragged() {
+                    self.yaw_deg = wrap_degrees(self.yaw_deg - f64::from(drag.x) * 0.25);
+                    self.pitch_deg = (self.pitch_deg + f64::from(drag.y) * 0.25).clamp(-89.0, 89.0);
+                    self.map_dirty = true;
+                }
+            }
+            ViewMode::Orbit => {
+                if response.dragged() {
+                    self.orbit.yaw -= drag.x * 0.005;
+                    self.orbit.pitch = (self.orbit.pitch + drag.y * 0.005).clamp(-1.5, 0.3);
+                }
+            }
+        }
+        let (scroll, dt, keys) = ctx.input(|i| {
+            let k = |key| i.key_down(key);
+            (
+                i.smooth_scroll_delta.y,
+                i.stable_dt.min(0.1),
+                [
+                    k(egui::Key::W),
+                    k(egui::Key::S),
+                    k(egui::Key::A),
+                    k(egui::Key::D),
+                    k(egui::Key::R),
+                    k(egui::Key::F),
+                ],
+            )
+        });
+        if response.hovered() && scroll != 0.0 {
+            match self.mode {
+                ViewMode::Orbit => self.orbit.distance = (self.orbit.distance * (-scroll * 0.002).exp()).max(1.0),
+                ViewMode::Eye => self.move_eye(f64::from(scroll) * f64::from(extent) * 2e-4, 0.0, 0.0),
+            }
+        }
+        if !ctx.egui_wants_keyboard_input() {
+            let speed = f64::from(extent) * 0.1 * f64::from(dt);
+            let axis = |plus: bool, minus: bool| f64::from(i8::from(plus) - i8::from(minus));
+            let forward = axis(keys[0], keys[1]);
+            let right = axis(keys[3], keys[2]);
+            let up = axis(keys[4], keys[5]);
+            if forward != 0.0 || right != 0.0 || up != 0.0 {
+                self.move_eye(forward * speed, right * speed, up * speed * 0.25);
+                ctx.request_repaint();
+            }
+        }
+    }
+
+    fn move_eye(&mut self, forward: f64, right: f64, up: f64) {
+        let a = self.yaw_deg.to_radians();
+        let (f, r) = ([a.cos(), a.sin()], [a.sin(), -a.cos()]);
+        let x = self.eye[0] + f[0] * forward + r[0] * right;
+        let y = self.eye[1] + f[1] * forward + r[1] * right;
+        if let Some(ground) = self.terrain().height_at(x, y) {
+            self.eye_height = (self.eye[2] + up - ground).max(0.5);
+            self.eye = [x, y, ground + self.eye_height];
+            self.map_dirty = true;
+        }
+    }
+
+    fn render_views(&mut self, size: [u32; 2]) -> Result<()> {
+        self.main.resize(&self.gpu, &self.egui_renderer, size)?;
+        let aspect = size[0] as f32 / size[1].max(1) as f32;
+        let t = &self.model.terrain;
+        let (view_proj, marker) = match self.mode {
+            ViewMode::Eye => {
+                let cam = EyeCamera {
+                    position: Vec3::from(t.to_local(self.eye)),
+                    yaw: (self.yaw_deg as f32).to_radians(),
+                    pitch: (self.pitch_deg as f32).to_radians(),
+                    hfov: (self.fov_deg.min(f64::from(MAX_RENDER_HFOV_DEG)) as f32).to_radians(),
+                };
+                (cam.view_proj(aspect), None)
+            }
+            ViewMode::Orbit => (self.orbit.view_proj(aspect), Some(self.marker())),
+        };
+        let n = t.num_triangles() as u32;
+        let all = [DrawItem {
+            range: [0, n],
+            style: DrawStyle::Solid,
+        }];
+        let items = self.items();
+        // Every 20th frame, time a frame that draws everything for comparison.
+        if self.frame_count.is_multiple_of(20) {
+            let frame = Frame {
+                scene: &self.scene,
+                view_proj,
+                items: &all,
+                marker,
+                count_primitives: false,
+            };
+            let stats = self.main.renderer.render(&self.gpu, &frame)?;
+            self.ms_all.add(stats.ms);
+        }
+        let frame = Frame {
+            scene: &self.scene,
+            view_proj,
+            items: &items,
+            marker,
+            count_primitives: false,
+        };
+        let stats = self.main.renderer.render(&self.gpu, &frame)?;
+        self.ms_culled.add(stats.ms + self.cull_us.0.unwrap_or(0.0) * 1e-3);
+        if self.map_dirty {
+            let frame = Frame {
+                scene: &self.scene,
+                view_proj: self.map_view.view_proj(),
+                items: &all,
+                marker: None,
+                count_primitives: false,
+            };
+            self.map.renderer.render(&self.gpu, &frame)?;
+            self.map_dirty = false;
+        }
+        Ok(())
+    }
+
+    /// Starts the startup actions in order; true once they are all done.
+    fn startup_step(&mut self, ctx: &egui::Context) -> bool {
+        if self.startup.rebuild {
+            match &self.rebuild {
+                Some(rebuild) => {
+                    let rebuild = Arc::clone(rebuild);
+                    self.start_rebuild(ctx, rebuild);
+                }
+                None => self.status = "no rebuild available".into(),
+            }
+            self.startup.rebuild = false;
+        }
+        if self.rebuild_job.is_some() {
+            return false;
+        }
+        if self.startup.ground_truth && self.model.culler.is_some() {
+            self.start_truth(ctx);
+            self.startup.ground_truth = false;
+        }
+        self.truth_job.is_none()
+    }
+
+    fn screenshot_step(&mut self, ctx: &egui::Context, ready: bool) {
+        let Some(req) = &self.screenshot else { return };
+        ctx.request_repaint();
+        if !ready {
+            return;
+        }
+        if let Some(rx) = &self.screenshot_rx {
+            if let Ok(image) = rx.try_recv() {
+                let [w, h] = image.size;
+                let pixels = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+                let img = RgbaImage {
+                    width: w as u32,
+                    height: h as u32,
+                    pixels,
+                };
+                if let Err(e) = crate::png_out::write_png(&req.path, &img) {
+                    eprintln!("error: cannot write the screenshot: {e}");
+                }
+                self.screenshot = None;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        } else if self.frame_count >= u64::from(req.after_frames) {
+            let (tx, rx) = channel();
+            ctx.request_screenshot(move |image| {
+                let _ = tx.send(image);
+            });
+            self.screenshot_rx = Some(rx);
+        }
+    }
+}
+
+impl eframe::App for ViewerApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.poll_jobs();
+        if self.truth.as_ref().is_some_and(|t| t.eye != self.eye) {
+            self.truth = None;
+        }
+        let fingerprint = self.cull();
+        self.update_colours(fingerprint);
+        egui::Panel::left("controls").default_size(330.0).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
+        });
+        egui::CentralPanel::default().show(ui, |ui| {
+            let avail = ui.available_size();
+            let (rect, response) = ui.allocate_exact_size(avail, egui::Sense::click_and_drag());
+            self.handle_input(ui, &response);
+            let ppp = ctx.pixels_per_point();
+            let size = [
+                ((rect.width() * ppp).round() as u32).clamp(1, crate::render::MAX_SIDE),
+                ((rect.height() * ppp).round() as u32).clamp(1, crate::render::MAX_SIDE),
+            ];
+            if let Err(e) = self.render_views(size) {
+                self.status = format!("render failed: {e}");
+            }
+            ui.painter().image(
+                self.main.texture,
+                rect,
+                egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                egui::Color32::WHITE,
+            );
+        });
+        if self.rebuild_job.is_some() || self.truth_job.is_some() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(100));
+        }
+        self.frame_count += 1;
+        if let Ok(mut s) = self.summary.lock() {
+            s.frames += 1;
+            s.frames_during_rebuild += u64::from(self.rebuild_job.is_some());
+            s.triangles = self.model.terrain.num_triangles();
+            s.groups = self.model.terrain.groups;
+        }
+        let ready = self.startup_step(&ctx);
+        self.screenshot_step(&ctx, ready);
+    }
+}
+
+fn map_size(aspect: f32) -> [u32; 2] {
+    if aspect >= 1.0 {
+        [MAP_SIDE, ((MAP_SIDE as f32 / aspect).round() as u32).max(16)]
+    } else {
+        [((MAP_SIDE as f32 * aspect).round() as u32).max(16), MAP_SIDE]
+    }
+}
+
+fn wrap_degrees(d: f64) -> f64 {
+    (d + 180.0).rem_euclid(360.0) - 180.0
+}

@@ -1,0 +1,361 @@
+//! Headless renders of a terrain or hierarchy, without a window: the map, the orbit overview with the culling of a
+//! viewpoint, and the eye view with its culled-versus-unculled comparison.
+//!
+//! The comparison renders the same view twice, once with the culler's ranges and once with every triangle, and
+//! compares the images pixel by pixel. A triangle that the culler skipped but that covers a pixel in the full
+//! render makes the images differ there, so every differing pixel is a false cull seen on screen. The culler runs
+//! all around (360°) by default, so that only occlusion culling is judged; a narrower culling field of view also
+//! culls by the frustum, whose horizontal test ignores pitch, and may then show frustum misses as well.
+
+use glam::Vec3;
+
+use cull::{Camera, CullStats, Culler};
+
+use crate::camera::{EyeCamera, MapView, Orbit};
+use crate::error::{Result, ViewerError};
+use crate::gpu::Gpu;
+use crate::render::{DrawItem, DrawStyle, Frame, FrameStats, Marker, Renderer, RgbaImage};
+use crate::scene::{ColourMode, GpuScene, Terrain};
+
+/// Which view to render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewKind {
+    /// Top-down orthographic map of the whole terrain.
+    Map,
+    /// Oblique perspective overview; with an eye, its marker, drawn groups solid and culled ones as wireframe.
+    Orbit,
+    /// What a camera at the eye sees.
+    Eye,
+}
+
+impl std::str::FromStr for ViewKind {
+    type Err = ViewerError;
+
+    fn from_str(s: &str) -> Result<ViewKind> {
+        match s {
+            "map" => Ok(ViewKind::Map),
+            "orbit" => Ok(ViewKind::Orbit),
+            "eye" => Ok(ViewKind::Eye),
+            _ => Err(ViewerError::Invalid(format!(
+                "unknown view {s:?}: expected map, orbit or eye"
+            ))),
+        }
+    }
+}
+
+/// Everything a headless render needs besides the terrain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// The view.
+    pub view: ViewKind,
+    /// Viewpoint in world coordinates (required for `eye`, optional for `orbit`).
+    pub eye: Option<[f64; 3]>,
+    /// View azimuth in degrees, counter-clockwise from east (eye: default 0; orbit: default 45).
+    pub yaw_deg: Option<f64>,
+    /// View pitch in degrees up from the horizontal (eye: default 0; orbit: default −35).
+    pub pitch_deg: Option<f64>,
+    /// Horizontal field of view of the eye view, degrees (drawn at most 150°).
+    pub fov_deg: f64,
+    /// Horizontal field of view the culler uses, degrees; 360 culls by occlusion only.
+    pub cull_fov_deg: f64,
+    /// Image size in pixels.
+    pub size: [u32; 2],
+    /// Colouring; `None` picks groups for a hierarchy and height for a plain mesh.
+    pub colour: Option<ColourMode>,
+    /// Level of [`ColourMode::Level`]; `None` is the top level.
+    pub level: Option<u32>,
+    /// Eye view only: also render without culling and compare.
+    pub compare: bool,
+    /// Repetitions of each timed render when comparing (the median is reported).
+    pub timing_runs: u32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            view: ViewKind::Map,
+            eye: None,
+            yaw_deg: None,
+            pitch_deg: None,
+            fov_deg: 90.0,
+            cull_fov_deg: 360.0,
+            size: [1024, 768],
+            colour: None,
+            level: None,
+            compare: false,
+            timing_runs: 5,
+        }
+    }
+}
+
+/// The culled-versus-unculled comparison of an eye view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Comparison {
+    /// The view drawn with every triangle.
+    pub unculled: RgbaImage,
+    /// Differing pixels red, the rest a dimmed grey copy of the culled view.
+    pub difference: RgbaImage,
+    /// Pixels that differ: false culls on screen.
+    pub differing_pixels: u64,
+    /// Median frame time with culling (ms), including the cull itself.
+    pub ms_culled: f64,
+    /// Median frame time drawing everything (ms).
+    pub ms_unculled: f64,
+    /// Median time of the cull alone (µs).
+    pub cull_us: f64,
+    /// Stats of one culled frame.
+    pub culled_frame: FrameStats,
+    /// Stats of one unculled frame.
+    pub unculled_frame: FrameStats,
+}
+
+/// The result of [`render`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOutput {
+    /// The rendered view.
+    pub image: RgbaImage,
+    /// Stats of the render.
+    pub frame: FrameStats,
+    /// The culler's counters, when a viewpoint was culled.
+    pub cull: Option<CullStats>,
+    /// The culler's draw ranges, when a viewpoint was culled.
+    pub ranges: Option<Vec<[u32; 2]>>,
+    /// The comparison, when asked for.
+    pub compare: Option<Comparison>,
+}
+
+/// Checks options against the terrain, naming the offending option.
+fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
+    let bad = |m: String| Err(ViewerError::Invalid(m));
+    if !(o.fov_deg > 0.0 && o.fov_deg <= 360.0) {
+        return bad(format!("--fov must be in (0, 360], got {}", o.fov_deg));
+    }
+    if !(o.cull_fov_deg > 0.0 && o.cull_fov_deg <= 360.0) {
+        return bad(format!("--cull-fov must be in (0, 360], got {}", o.cull_fov_deg));
+    }
+    for (name, v) in [("--yaw", o.yaw_deg), ("--pitch", o.pitch_deg)] {
+        if v.is_some_and(|v| !v.is_finite()) {
+            return bad(format!("{name} must be finite"));
+        }
+    }
+    if o.pitch_deg.is_some_and(|p| p.abs() >= 89.0) {
+        return bad(format!("--pitch must be within ±89°, got {:?}", o.pitch_deg));
+    }
+    if o.eye.is_some_and(|e| !e.iter().all(|c| c.is_finite())) {
+        return bad("--eye must be finite".into());
+    }
+    if o.view == ViewKind::Eye && o.eye.is_none() {
+        return bad("--view eye needs --eye x,y,z".into());
+    }
+    if o.compare && o.view != ViewKind::Eye {
+        return bad("--compare works with --view eye".into());
+    }
+    let culls = o.eye.is_some() && o.view != ViewKind::Map || o.colour == Some(ColourMode::Visibility);
+    if culls && terrain.hierarchy.is_none() && (o.compare || o.view == ViewKind::Orbit) {
+        return bad("culling a viewpoint needs a hierarchy (.tch), not a plain mesh".into());
+    }
+    Ok(())
+}
+
+/// Renders `terrain` as `options` say.
+pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<RenderOutput> {
+    validate(terrain, options)?;
+    let [width, height] = options.size;
+    let aspect = width as f32 / height.max(1) as f32;
+    let n = terrain.num_triangles() as u32;
+
+    // Cull for the viewpoint when there is one and a hierarchy to cull with.
+    let culled = match (&terrain.hierarchy, options.eye) {
+        (Some(h), Some(eye)) if options.view != ViewKind::Map || options.colour == Some(ColourMode::Visibility) => {
+            let culler = Culler::new(h);
+            let camera = culling_camera(eye, options);
+            Some((culler.cull(&camera), culler, camera))
+        }
+        _ => None,
+    };
+    let mode = options.colour.unwrap_or(if terrain.hierarchy.is_some() {
+        ColourMode::Groups
+    } else {
+        ColourMode::Height
+    });
+    let mask = culled.as_ref().map(|(list, _, _)| list.mask(n as usize));
+    if mode == ColourMode::Visibility && mask.is_none() {
+        return Err(ViewerError::Invalid(
+            "--colour visibility needs --eye and a hierarchy".into(),
+        ));
+    }
+    let colours = terrain.colours(mode, options.level, mask.as_deref())?;
+    let scene = GpuScene::new(gpu, terrain, &colours)?;
+    let mut renderer = Renderer::new(gpu, width, height)?;
+    let all = [DrawItem {
+        range: [0, n],
+        style: DrawStyle::Solid,
+    }];
+    let marker = options.eye.map(|e| {
+        let p = Vec3::from(terrain.to_local(e));
+        let extent = Vec3::from(terrain.max) - Vec3::from(terrain.min);
+        let diagonal = extent.truncate().length();
+        Marker {
+            position: p,
+            size: diagonal * 0.012,
+            height: diagonal * 0.07,
+        }
+    });
+    let (view_proj, items, marker) = match options.view {
+        ViewKind::Map => (
+            MapView::fit(terrain.min, terrain.max, aspect).view_proj(),
+            all.to_vec(),
+            marker,
+        ),
+        ViewKind::Orbit => {
+            let orbit = Orbit::overview(
+                terrain.min,
+                terrain.max,
+                aspect,
+                options.yaw_deg.map(|d| (d as f32).to_radians()),
+                options.pitch_deg.map(|d| (d as f32).to_radians()),
+            );
+            let items = match (&culled, mode) {
+                (Some((list, _, _)), m) if m != ColourMode::Visibility => split_items(&list.ranges, n),
+                _ => all.to_vec(),
+            };
+            (orbit.view_proj(aspect), items, marker)
+        }
+        ViewKind::Eye => {
+            let eye = eye_camera(terrain, options);
+            let items = match &culled {
+                Some((list, _, _)) => solid(&list.ranges),
+                None => all.to_vec(),
+            };
+            (eye.view_proj(aspect), items, None)
+        }
+    };
+    let frame = Frame {
+        scene: &scene,
+        view_proj,
+        items: &items,
+        marker,
+        count_primitives: true,
+    };
+    let stats = renderer.render(gpu, &frame)?;
+    let image = renderer.read_image(gpu)?;
+    let compare = if options.compare {
+        let (list, culler, camera) = culled
+            .as_ref()
+            .ok_or_else(|| ViewerError::Invalid("--compare needs --eye and a hierarchy".into()))?;
+        let full = Frame { items: &all, ..frame };
+        let unculled_frame = renderer.render(gpu, &full)?;
+        let unculled = renderer.read_image(gpu)?;
+        let (difference, differing_pixels) = image
+            .difference(&unculled)
+            .ok_or_else(|| ViewerError::Gpu("the two renders differ in size".into()))?;
+        let runs = options.timing_runs.max(1);
+        let mut list2 = list.clone();
+        let mut cull_times = Vec::new();
+        let mut culled_times = Vec::new();
+        let mut unculled_times = Vec::new();
+        for _ in 0..runs {
+            let start = std::time::Instant::now();
+            culler.cull_into(camera, &mut list2);
+            let cull_ms = start.elapsed().as_secs_f64() * 1e3;
+            cull_times.push(cull_ms * 1e3);
+            let items = solid(&list2.ranges);
+            let f = Frame {
+                items: &items,
+                count_primitives: false,
+                ..frame
+            };
+            culled_times.push(cull_ms + renderer.render(gpu, &f)?.ms);
+            let f = Frame {
+                items: &all,
+                count_primitives: false,
+                ..frame
+            };
+            unculled_times.push(renderer.render(gpu, &f)?.ms);
+        }
+        Some(Comparison {
+            unculled,
+            difference,
+            differing_pixels,
+            ms_culled: median(&mut culled_times),
+            ms_unculled: median(&mut unculled_times),
+            cull_us: median(&mut cull_times),
+            culled_frame: stats,
+            unculled_frame,
+        })
+    } else {
+        None
+    };
+    Ok(RenderOutput {
+        image,
+        frame: stats,
+        cull: culled.as_ref().map(|(l, _, _)| l.stats),
+        ranges: culled.map(|(l, _, _)| l.ranges),
+        compare,
+    })
+}
+
+/// The culler's camera for the options: at the eye, looking along yaw, with the culling field of view.
+pub fn culling_camera(eye: [f64; 3], options: &RenderOptions) -> Camera {
+    let hfov = if options.cull_fov_deg >= 360.0 {
+        std::f64::consts::TAU
+    } else {
+        options.cull_fov_deg.to_radians()
+    };
+    Camera {
+        position: eye,
+        yaw: options.yaw_deg.unwrap_or(0.0).to_radians(),
+        hfov,
+    }
+}
+
+fn eye_camera(terrain: &Terrain, options: &RenderOptions) -> EyeCamera {
+    let eye = options.eye.unwrap_or([0.0; 3]);
+    EyeCamera {
+        position: Vec3::from(terrain.to_local(eye)),
+        yaw: (options.yaw_deg.unwrap_or(0.0) as f32).to_radians(),
+        pitch: (options.pitch_deg.unwrap_or(0.0) as f32).to_radians(),
+        hfov: (options.fov_deg as f32).to_radians(),
+    }
+}
+
+/// Solid draws of `ranges`.
+pub fn solid(ranges: &[[u32; 2]]) -> Vec<DrawItem> {
+    ranges
+        .iter()
+        .map(|&range| DrawItem {
+            range,
+            style: DrawStyle::Solid,
+        })
+        .collect()
+}
+
+/// `ranges` solid and their complement in `[0, n)` as wireframe.
+pub fn split_items(ranges: &[[u32; 2]], n: u32) -> Vec<DrawItem> {
+    let mut items = solid(ranges);
+    let mut at = 0;
+    for &[s, e] in ranges {
+        if s > at {
+            items.push(DrawItem {
+                range: [at, s],
+                style: DrawStyle::Wire,
+            });
+        }
+        at = at.max(e);
+    }
+    if at < n {
+        items.push(DrawItem {
+            range: [at, n],
+            style: DrawStyle::Wire,
+        });
+    }
+    items
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
