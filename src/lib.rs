@@ -14,7 +14,11 @@ pub use cull;
 pub use horizon;
 pub use occlusion;
 pub use tin;
+pub use truth;
 
 pub mod cli;
+pub mod evaluate;
 pub mod export;
 pub mod pipeline;
+pub mod stress;
+pub mod sweep;

@@ -154,3 +154,43 @@ fn render_rejects_bad_options_with_clear_messages() {
     }
     assert!(!png.exists(), "no image is written on error");
 }
+
+#[test]
+fn demo_writes_the_hierarchy_evaluation_and_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/meshes/jacksboro-2k.obj");
+    let out = tincull(&["demo", mesh, "--out-dir", p(dir.path()), "--viewpoints", "1"]);
+    let stdout = ok(&out);
+    for suffix in [".tch", ".json", "-groups.obj", "-groups.mtl", "-eval.csv", "-eval.json"] {
+        let f = dir.path().join(format!("jacksboro-2k{suffix}"));
+        assert!(f.is_file(), "{} missing", f.display());
+    }
+    let (map, culling) = (
+        dir.path().join("jacksboro-2k-map.png"),
+        dir.path().join("jacksboro-2k-culling.png"),
+    );
+    if !map.exists() {
+        assert!(stdout.contains("no renders"), "the demo says why it wrote no images");
+        assert!(
+            !viewer::gpu_required(),
+            "TINCULL_REQUIRE_GPU is set but the demo wrote no renders: {stdout}"
+        );
+        eprintln!("SKIP: no GPU adapter, demo renders not checked");
+        return;
+    }
+    let map = viewer::read_png(&map).unwrap();
+    let culling = viewer::read_png(&culling).unwrap();
+    assert_eq!((map.width, map.height), (1024, 768));
+    assert_eq!((culling.width, culling.height), (1024, 768));
+    // Groups in distinct colours: many different pixel colours across the map.
+    let colours: std::collections::HashSet<[u8; 4]> = (0..768)
+        .step_by(8)
+        .flat_map(|y| (0..1024).step_by(8).map(move |x| (x, y)))
+        .filter_map(|(x, y)| map.pixel(x, y))
+        .collect();
+    assert!(colours.len() > 50, "only {} colours on the groups map", colours.len());
+    assert!(
+        map.difference(&culling).is_some_and(|(_, n)| n > 0),
+        "the culling view is another image"
+    );
+}

@@ -1,7 +1,6 @@
 //! `tincull cull`: the run-time culler on one or many viewpoints.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -9,6 +8,7 @@ use cull::{Camera, Culler, DrawList, Hierarchy};
 use serde_json::json;
 
 use super::{Output, OutputArgs};
+use crate::evaluate::timed_cull;
 
 /// Arguments of `tincull cull`.
 #[derive(Debug, Args)]
@@ -46,20 +46,6 @@ pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
         }
     }
     Ok(p)
-}
-
-/// Times `cull_into` for one camera: the median of several runs after a warm-up, in nanoseconds.
-pub fn timed_cull(culler: &Culler, camera: &Camera, out: &mut DrawList) -> u64 {
-    const RUNS: usize = 15;
-    culler.cull_into(camera, out);
-    let mut times = [0u64; RUNS];
-    for t in &mut times {
-        let start = Instant::now();
-        culler.cull_into(camera, out);
-        *t = start.elapsed().as_nanos() as u64;
-    }
-    times.sort_unstable();
-    times[RUNS / 2]
 }
 
 /// Runs `tincull cull`.

@@ -1,14 +1,19 @@
 //! Command-line interface: argument definitions and dispatch. Each subcommand lives in its own module.
 
 mod build_cmd;
-mod cull_cmd;
+pub mod cull_cmd;
+mod demo_cmd;
+mod eval_cmd;
 mod export_cmd;
+mod failmap_cmd;
 mod horizon_cmd;
 
 mod info;
 mod mesh_input;
 pub mod output;
 mod render_cmd;
+mod stress_cmd;
+mod sweep_cmd;
 mod synth;
 mod tin_cmd;
 mod view_cmd;
@@ -30,6 +35,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// The main job: build and evaluate the bundled default terrain, print a report and write out/.
+    Demo(demo_cmd::DemoArgs),
     /// Describe a terrain mesh: counts, bounding box, relief, height-field check, triangle quality.
     Info(info::InfoArgs),
     /// Turn a DEM grid (.npy, .asc, .hgt, .png) into a simplified TIN by greedy insertion, written as OBJ.
@@ -42,8 +49,17 @@ pub enum Command {
     Build(build_cmd::BuildArgs),
     /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
     Cull(cull_cmd::CullArgs),
+    /// Evaluate every culling method against ground truth from seeded viewpoints: false culls, occlusion captured.
+    Eval(eval_cmd::EvalArgs),
     /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
     Export(export_cmd::ExportArgs),
+    /// Build and evaluate every combination of sectors, subsectors and seeds: one CSV line per combination, method
+    /// and class (resumable).
+    Sweep(sweep_cmd::SweepArgs),
+    /// Stability suite: the pipeline over degenerate cases (sectors, slivers, flat, offsets, odd viewpoints, seeds).
+    Stress(stress_cmd::StressArgs),
+    /// Failure map: a raster of viewpoints over the footprint, false culls and occlusion captured per cell (PNG, CSV).
+    Failmap(failmap_cmd::FailmapArgs),
     /// Render a hierarchy or mesh to PNG without a window: map, orbit overview with culling, or eye view.
     Render(render_cmd::RenderArgs),
     /// Open the interactive viewer: fly/orbit camera, live culling, ground truth, rebuild and export.
@@ -53,6 +69,7 @@ pub enum Command {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Demo(args) => demo_cmd::run(&args, args.output.into()),
         Command::Info(args) => info::run(&args, args.output.into()),
         Command::Tin(args) => tin_cmd::run(&args, args.output.into()),
         Command::Synth(args) => synth::run(&args, args.output.into()),
@@ -60,6 +77,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
         Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
+        Command::Eval(args) => eval_cmd::run(&args),
+        Command::Sweep(args) => sweep_cmd::run(&args, args.output.into()),
         Command::Export(args) => export_cmd::run(
             &args,
             Output {
@@ -67,6 +86,8 @@ pub fn run(cli: Cli) -> Result<()> {
                 quiet: args.quiet,
             },
         ),
+        Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
+        Command::Failmap(args) => failmap_cmd::run(&args),
         Command::Render(args) => render_cmd::run(&args, args.output.into()),
         Command::View(args) => view_cmd::run(
             &args,

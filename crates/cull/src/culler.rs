@@ -198,11 +198,12 @@ impl Culler {
 
     fn test(&self, index: u32, node: &FlatNode, eye: [f64; 3], frustum: Option<(f64, f64)>) -> Verdict {
         let (dx, dy) = (eye[0] - node.centre[0], eye[1] - node.centre[1]);
-        let dist = dx.hypot(dy);
-        if dist <= node.radius {
+        let dist2 = dx * dx + dy * dy;
+        if dist2 <= node.radius * node.radius {
             return Verdict::Visible;
         }
-        let half = (node.radius / dist).asin();
+        // asin(r / d) ≤ π/2; rounding of r / d can only be compensated by the strict tests below, so widen slightly.
+        let half = (node.radius / dist2.sqrt()).min(1.0).asin() * (1.0 + 1e-12);
         let to_eye = azimuth(dx, dy);
         if let Some((yaw, half_fov)) = frustum {
             // Directions from the eye to the node's points lie within the opposite interval.

@@ -35,9 +35,8 @@ pub fn azimuth(dx: f64, dy: f64) -> f64 {
 
 /// The sector of `sectors` that contains azimuth `angle` (any real; wrapped into `[0, 2π)`).
 pub fn sector_of_azimuth(sectors: u32, angle: f64) -> u32 {
-    let a = angle.rem_euclid(TAU);
-    let i = (a / TAU * f64::from(sectors)).floor() as u32;
-    i.min(sectors - 1)
+    let i = (angle * (f64::from(sectors) / TAU)).floor() as i64;
+    i.rem_euclid(i64::from(sectors)) as u32
 }
 
 /// Calls `f` once for every sector of `sectors` that the closed azimuth interval `[centre − half, centre + half]`

@@ -43,8 +43,9 @@ impl Candidate {
     /// Both must lie strictly right of the apex (`t > t_p`).
     #[inline]
     pub fn rank(&self, other: &Candidate, apex: DVec2) -> Ordering {
+        // Numeric comparison of t (−0.0 equals 0.0, as in the hulls), never NaN.
         cmp_slope(apex, self.point, other.point)
-            .then_with(|| other.point.x.total_cmp(&self.point.x))
+            .then_with(|| other.point.x.partial_cmp(&self.point.x).unwrap_or(Ordering::Equal))
             .then_with(|| other.id.cmp(&self.id))
     }
 }

@@ -189,6 +189,48 @@ impl HorizonField {
         empty_vertex - filled_by_edges
     }
 
+    /// Checks the field's invariants: horizon indices in range and never the vertex itself, edge points sorted by
+    /// slot and on valid edges, a summary exactly where every subsector of the sector has a horizon point, with a
+    /// finite slope and distance. Returns a description of the first violation.
+    pub fn check_invariants(&self) -> Result<(), String> {
+        let n = self.num_vertices;
+        let total = self.config.total_subsectors() as usize;
+        if self.horizons.len() != n * total || self.summaries.len() != n * self.config.sectors() as usize {
+            return Err("storage sizes do not match the configuration".into());
+        }
+        for (slot, &h) in self.horizons.iter().enumerate() {
+            if h != NO_HORIZON && (h as usize >= n || h as usize == slot % n.max(1)) {
+                return Err(format!("slot {slot}: horizon {h} out of range or the vertex itself"));
+            }
+        }
+        for w in self.edge_points.windows(2) {
+            if w[0].0 >= w[1].0 {
+                return Err(format!("edge points not sorted at slot {}", w[1].0));
+            }
+        }
+        for (slot, e) in &self.edge_points {
+            if *slot as usize >= self.horizons.len() || e.edge[0] >= e.edge[1] || e.edge[1] as usize >= n {
+                return Err(format!("edge point at slot {slot} is invalid: {e:?}"));
+            }
+        }
+        let k = self.config.subsectors();
+        for v in 0..n as u32 {
+            for i in 0..self.config.sectors() {
+                let complete = (i * k..(i + 1) * k).all(|j| self.horizon_point(v, j).is_some());
+                match self.sector_summary(v, i) {
+                    Some(s) if !complete || !s.slope.is_finite() || !s.distance.is_finite() => {
+                        return Err(format!(
+                            "vertex {v} sector {i}: summary {s:?} without complete horizons"
+                        ));
+                    }
+                    None if complete => return Err(format!("vertex {v} sector {i}: summary missing")),
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn mismatch_slots<'a>(&'a self, other: &'a HorizonField) -> impl Iterator<Item = usize> + 'a {
         let n = self.num_vertices.max(1);
         (0..self.horizons.len()).filter(move |&slot| {
@@ -277,7 +319,7 @@ fn validate(tin: &Tin, opts: &HorizonOptions) -> Result<(), HorizonError> {
     for (vertex, p) in tin.positions().iter().enumerate() {
         for (axis, value) in [("x", p.x), ("y", p.y), ("z", p.z)] {
             let m = value.abs();
-            if !(m == 0.0 || (m >= 1.0 / COORDINATE_LIMIT && m <= COORDINATE_LIMIT)) {
+            if !(m == 0.0 || (1.0 / COORDINATE_LIMIT..=COORDINATE_LIMIT).contains(&m)) {
                 return Err(HorizonError::CoordinateOutOfRange { vertex, axis, value });
             }
         }

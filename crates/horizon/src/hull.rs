@@ -127,7 +127,7 @@ impl HullArena {
         let (mut pred, succ) = self.locate(hull.root, t);
         if pred != NIL && self.nodes[pred as usize].t == t {
             let node = &mut self.nodes[pred as usize];
-            match node.z.total_cmp(&z) {
+            match node.z.partial_cmp(&z).unwrap_or(Ordering::Equal) {
                 Ordering::Greater => return,
                 Ordering::Equal => {
                     node.index = node.index.min(index);
@@ -540,7 +540,8 @@ impl HullSet {
         let (mut keep_left, mut resume_right) = (pos, pos);
         if pos > 0 && pts[pos - 1].t == t {
             let pred = &mut pts[pos - 1];
-            match pred.z.total_cmp(&z) {
+            // Numeric comparison: −0.0 equals 0.0, as in the exact predicates.
+            match pred.z.partial_cmp(&z).unwrap_or(Ordering::Equal) {
                 Ordering::Greater => return,
                 Ordering::Equal => {
                     pred.index = pred.index.min(index);
@@ -665,7 +666,8 @@ mod tests {
     /// Brute force upper hull (strict vertices, smallest index on duplicates).
     fn upper_hull(points: &[(f64, f64, u32)]) -> Vec<(f64, f64, u32)> {
         let mut sorted = points.to_vec();
-        sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
+        let num = |x: f64, y: f64| x.partial_cmp(&y).expect("not NaN"); // −0.0 == 0.0
+        sorted.sort_by(|a, b| num(a.0, b.0).then(num(b.1, a.1)).then(a.2.cmp(&b.2)));
         sorted.dedup_by(|b, a| a.0 == b.0); // keep the highest (then smallest index) per t
         let mut hull: Vec<(f64, f64, u32)> = Vec::new();
         for p in sorted {
@@ -684,9 +686,11 @@ mod tests {
     fn small_points() -> impl Strategy<Value = Vec<(f64, f64, u32)>> {
         // Small integer coordinates: many duplicates, equal t, collinear runs.
         prop::collection::vec((0i32..12, -4i32..6), 1..60).prop_map(|v| {
+            // Zeros alternate in sign: −0.0 and 0.0 must behave as the same coordinate.
+            let signed = |x: i32, i: usize| if x == 0 && i % 2 == 1 { -0.0 } else { x as f64 };
             v.into_iter()
                 .enumerate()
-                .map(|(i, (t, z))| (t as f64, z as f64, (i * 7 % 61) as u32))
+                .map(|(i, (t, z))| (signed(t, i), signed(z, i / 2), (i * 7 % 61) as u32))
                 .collect()
         })
     }

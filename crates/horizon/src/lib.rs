@@ -7,20 +7,20 @@
 //! [`HorizonField`], also holds per-sector summaries (minimum slope, farthest horizon distance) for the occlusion
 //! regions, and, with [`HorizonOptions::undersampling_radius`], the thesis' undersampling fix.
 //!
-//! Modules: [`sector`] (geometry), [`predicates`] (exact comparisons), [`hull`] (covering sets), `sweep`,
-//! `oracle`, `undersampling`, `field`.
+//! Modules: [`sector`] (geometry), [`predicates`] (exact comparisons), [`hull`] (covering sets), [`sweep`],
+//! [`oracle`], [`undersampling`] (their documentation states the exact definitions and choices).
 
 #![warn(missing_docs)]
 
-mod candidate;
+pub mod candidate;
 mod error;
 mod field;
 pub mod hull;
-mod oracle;
+pub mod oracle;
 pub mod predicates;
 pub mod sector;
-mod sweep;
-mod undersampling;
+pub mod sweep;
+pub mod undersampling;
 
 pub use error::HorizonError;
 pub use field::{

@@ -233,19 +233,6 @@ fn side_exact(e: DVec2, q: DVec2, p: DVec2) -> Ordering {
     exact_sign_of_products(&[(e.x, q.y), (-e.y, q.x), (-e.x, p.y), (e.y, p.x)])
 }
 
-/// The exact sign of `dot(e, q − p)`.
-pub fn ahead(e: DVec2, p: DVec2, q: DVec2) -> Ordering {
-    let u = e.x * (q.x - p.x) + e.y * (q.y - p.y);
-    let bound = 4.0 * f64::EPSILON * (e.x.abs() * (q.x.abs() + p.x.abs()) + e.y.abs() * (q.y.abs() + p.y.abs()));
-    if u > bound {
-        Ordering::Greater
-    } else if u < -bound {
-        Ordering::Less
-    } else {
-        exact_sign_of_products(&[(e.x, q.x), (-e.x, p.x), (e.y, q.y), (-e.y, p.y)])
-    }
-}
-
 /// Compares the slopes of `q1` and `q2` seen from `p` in a projection plane (coordinates `(t, z)`), where both lie
 /// strictly to the right of `p` (`t > t_p`): `Greater` when `q1` is strictly steeper.
 ///
@@ -318,8 +305,6 @@ mod tests {
             let expect = (exi * (to_int(qy) - to_int(py)) - eyi * (to_int(qx) - to_int(px))).cmp(&0);
             prop_assert_eq!(side(e, p, q), expect);
             prop_assert_eq!(side_exact(e, q, p), expect);
-            let expect_dot = (exi * (to_int(qx) - to_int(px)) + eyi * (to_int(qy) - to_int(py))).cmp(&0);
-            prop_assert_eq!(ahead(e, p, q), expect_dot);
         }
     }
 

@@ -91,7 +91,7 @@ impl SectorConfig {
 /// The unit vector at azimuth `2π · num / den`, snapped to exact values at multiples of 45°.
 pub fn unit_direction(num: u64, den: u64) -> DVec2 {
     let num = num % den;
-    if (8 * num) % den == 0 {
+    if (8 * num).is_multiple_of(den) {
         let h = std::f64::consts::FRAC_1_SQRT_2;
         return match 8 * num / den {
             0 => DVec2::new(1.0, 0.0),
@@ -140,6 +140,12 @@ impl Wedge {
     pub fn contains(&self, p: DVec2, q: DVec2) -> bool {
         let (ka_p, kb_p) = (LineKey::new(self.a, p), LineKey::new(self.b, p));
         self.contains_keyed(p, ka_p, kb_p, q, LineKey::new(self.a, q), LineKey::new(self.b, q))
+    }
+
+    /// Whether the direction `d` lies in the closed wedge (`d` on a boundary ray counts): [`Wedge::contains`] with
+    /// the apex at the origin.
+    pub fn contains_direction(&self, d: DVec2) -> bool {
+        self.contains(DVec2::ZERO, d)
     }
 
     /// [`Wedge::contains`] with precomputed [`LineKey`]s of `p` and `q` across `a` and `b`.
@@ -340,6 +346,8 @@ mod tests {
             let hits = g.subsectors_containing(p, p + d);
             assert_eq!(hits.as_slice().len(), 2);
         }
+        assert!(g.wedge(1).contains_direction(DVec2::Y) && g.wedge(2).contains_direction(DVec2::Y));
+        assert!(!g.wedge(3).contains_direction(DVec2::Y));
         // Strictly inside one wedge.
         let hits = g.subsectors_containing(p, p + DVec2::new(1.0, 0.2));
         assert_eq!(hits.as_slice(), &[0]);

@@ -1,7 +1,7 @@
 //! The opt-in undersampling fix (thesis 4.5.4): TIN edges that cross a subsector's wedge with neither endpoint
 //! inside it become horizon candidates.
 //!
-//! The thesis proposes, "for each point p, [to] evaluate whether any of the edges of any point within a certain
+//! The thesis proposes, "for each point p, \[to\] evaluate whether any of the edges of any point within a certain
 //! distance cross one of its sectors. If an edge crosses a sector without either vertex being inside the sector,
 //! then the edge is checked to see if it alters the horizon for p." Made precise here (choices marked *):
 //!
@@ -24,9 +24,9 @@
 //! The crossing with the centre ray is where the thesis' linear projection places every member of the wedge, so
 //! an edge that spans the wedge is sampled exactly where the subsector's horizon is meant to be measured.
 //!
-//! Two implementations of the same definition: [`fast`] gathers the edges of the vertices within `R` from a
+//! Two implementations of the same definition: `fast` gathers the edges of the vertices within `R` from a
 //! uniform grid and tests only the subsectors whose centre ray lies inside the edge's angular span (found with
-//! `atan2`, padded by one subsector on each side, every test exact); [`straightforward`] tests every edge near `p`
+//! `atan2`, padded by one subsector on each side, every test exact); `straightforward` tests every edge near `p`
 //! against every subsector. Tests check that they agree; [`crate::compute`] uses the first,
 //! [`crate::brute_force`] the second.
 
@@ -95,6 +95,9 @@ impl Edges {
     }
 }
 
+/// An edge's candidate with its 3-D point.
+type EdgeCandidate = (Candidate, DVec3);
+
 /// Clause 2 of the definition.
 #[inline]
 fn within(p: DVec2, x: DVec2, r2: f64) -> bool {
@@ -111,7 +114,7 @@ fn edge_candidate(
     p: u32,
     edge: [u32; 2],
     r2: f64,
-) -> Option<(Candidate, DVec3)> {
+) -> Option<EdgeCandidate> {
     let [u, w] = edge;
     if u == p || w == p {
         return None;
@@ -158,7 +161,7 @@ fn resolve(
     wedges: &[Wedge],
     horizons: &[u32],
     p: u32,
-    best_edges: &[Option<(Candidate, DVec3)>],
+    best_edges: &[Option<EdgeCandidate>],
     out: &mut Vec<(u64, EdgeHorizon)>,
 ) {
     let n = positions.len();
@@ -207,7 +210,7 @@ pub(crate) fn straightforward(
         .into_par_iter()
         .map(|p| {
             let pxy = positions[p as usize].truncate();
-            let mut best: Vec<Option<(Candidate, DVec3)>> = vec![None; wedges.len()];
+            let mut best: Vec<Option<EdgeCandidate>> = vec![None; wedges.len()];
             for &e in &edges.list {
                 if !within(pxy, positions[e[0] as usize].truncate(), r2)
                     && !within(pxy, positions[e[1] as usize].truncate(), r2)
@@ -228,7 +231,7 @@ pub(crate) fn straightforward(
     finish(per_vertex)
 }
 
-fn keep_best_pair(best: &mut Option<(Candidate, DVec3)>, c: (Candidate, DVec3), tp: f64, zp: f64) {
+fn keep_best_pair(best: &mut Option<EdgeCandidate>, c: (Candidate, DVec3), tp: f64, zp: f64) {
     let apex = DVec2::new(tp, zp);
     let mut b = best.map(|(cand, _)| cand);
     keep_best(&mut b, c.0, apex);
@@ -327,7 +330,7 @@ fn crossed_subsectors(p: DVec2, u: DVec2, w: DVec2, total: usize, out: &mut Vec<
     let (xu, xw) = (pos(u - p), pos(w - p));
     let diff = (xw - xu).rem_euclid(nf);
     let (start, len) = if diff <= nf / 2.0 { (xu, diff) } else { (xw, nf - diff) };
-    if !(len <= nf / 2.0 - 2.0) {
+    if len.is_nan() || len > nf / 2.0 - 2.0 {
         out.extend(0..total);
         return;
     }
@@ -351,7 +354,7 @@ pub(crate) fn fast(tin: &Tin, geometry: &SectorGeometry, origin: DVec2, radius: 
         .into_par_iter()
         .map_init(
             || (vec![None; wedges.len()], Vec::new()),
-            |(best, subsectors): &mut (Vec<Option<(Candidate, DVec3)>>, Vec<usize>), p| {
+            |(best, subsectors): &mut (Vec<Option<EdgeCandidate>>, Vec<usize>), p| {
                 best.iter_mut().for_each(|b| *b = None);
                 let pxy = positions[p as usize].truncate();
                 let zp = positions[p as usize].z;

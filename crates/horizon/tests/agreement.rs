@@ -19,7 +19,7 @@ fn check_all_configs(tin: &Tin, what: &str) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 120, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     #[test]
     fn sweep_equals_oracle(kind in 0usize..KINDS.len(), n in 3usize..130, seed in any::<u64>()) {

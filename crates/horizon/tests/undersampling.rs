@@ -17,7 +17,7 @@ fn with_radius(radius: f64) -> HorizonOptions {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 60, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
 
     #[test]
     fn fast_equals_straightforward(kind in 0usize..KINDS.len(), n in 3usize..90, seed in any::<u64>(),

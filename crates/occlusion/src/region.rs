@@ -15,6 +15,10 @@
 //!   This is the conservative tie rule; the closed definition in design.md differs only on the boundary itself.
 
 use glam::DVec2;
+use smallvec::SmallVec;
+
+/// Chain storage: triangle regions have at most three vertices, so they live inline without allocation.
+pub type Chain = SmallVec<[DVec2; 3]>;
 
 /// A non-empty convex occlusion region in one sector plane.
 ///
@@ -22,7 +26,7 @@ use glam::DVec2;
 /// bound) and continues beyond the last point as a ray of slope `tail_slope`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Region {
-    points: Vec<DVec2>,
+    points: Chain,
     tail_slope: f64,
 }
 
@@ -31,8 +35,10 @@ impl Region {
     /// `distance` ahead along the sector direction: `t ≥ t_p + distance`, `z ≤ z_p + slope·(t − t_p)`.
     pub fn of_vertex(t_p: f64, z_p: f64, slope: f64, distance: f64) -> Region {
         let t0 = t_p + distance;
+        let mut points = Chain::new();
+        points.push(DVec2::new(t0, z_p + slope * distance));
         Region {
-            points: vec![DVec2::new(t0, z_p + slope * distance)],
+            points,
             tail_slope: slope,
         }
     }
@@ -44,7 +50,10 @@ impl Region {
             && tail_slope.is_finite()
             && points.iter().all(|p| p.is_finite())
             && points.windows(2).all(|w| w[0].x < w[1].x);
-        valid.then_some(Region { points, tail_slope })
+        valid.then(|| Region {
+            points: Chain::from_vec(points),
+            tail_slope,
+        })
     }
 
     /// The boundary chain's vertices `(t, z)`; the first one lies on the left bound.
@@ -83,48 +92,48 @@ impl Region {
     }
 
     /// The intersection of two regions: left bound the larger one, upper boundary the lower envelope.
-    /// Runs in time linear in the two chains' lengths.
+    /// A linear merge: both chains are walked once, in increasing `t`.
     pub fn intersect(&self, other: &Region) -> Region {
+        let (a, b) = (&self.points[..], &other.points[..]);
         let t0 = self.t0().max(other.t0());
-        // Event abscissae: the left bound and every vertex of either chain beyond it, merged in order.
-        let mut ts = Vec::with_capacity(self.points.len() + other.points.len() + 2);
-        ts.push(t0);
-        let (mut i, mut j) = (0, 0);
-        let (a, b) = (&self.points, &other.points);
-        while i < a.len() || j < b.len() {
-            let t = if j >= b.len() || (i < a.len() && a[i].x <= b[j].x) {
-                i += 1;
-                a[i - 1].x
-            } else {
-                j += 1;
-                b[j - 1].x
+        let (mut wa, mut wb) = (Walker::new(a, self.tail_slope), Walker::new(b, other.tail_slope));
+        let (mut ia, mut ib) = (a.partition_point(|p| p.x <= t0), b.partition_point(|p| p.x <= t0));
+        let mut points = Chain::new();
+        let (mut tp, mut hap, mut hbp) = (t0, wa.at(t0), wb.at(t0));
+        points.push(DVec2::new(t0, hap.min(hbp)));
+        loop {
+            // The next event: the smaller of the two chains' next vertices.
+            let t = match (a.get(ia), b.get(ib)) {
+                (None, None) => break,
+                (Some(p), None) => p.x,
+                (None, Some(q)) => q.x,
+                (Some(p), Some(q)) => p.x.min(q.x),
             };
-            if t > *ts.last().unwrap_or(&t0) {
-                ts.push(t);
+            while a.get(ia).is_some_and(|p| p.x <= t) {
+                ia += 1;
             }
-        }
-        let diff = |t: f64| self.height_at(t) - other.height_at(t);
-        let mut points = Vec::with_capacity(ts.len() * 2);
-        for (k, &t) in ts.iter().enumerate() {
-            if k > 0 {
-                // A crossing strictly between two events: both boundaries are linear there.
-                let (tp, dp, dc) = (ts[k - 1], diff(ts[k - 1]), diff(t));
-                if (dp < 0.0 && dc > 0.0) || (dp > 0.0 && dc < 0.0) {
-                    let tx = tp + (t - tp) * (dp / (dp - dc));
-                    if tx > tp && tx < t {
-                        points.push(DVec2::new(tx, self.height_at(tx).min(other.height_at(tx))));
-                    }
+            while b.get(ib).is_some_and(|q| q.x <= t) {
+                ib += 1;
+            }
+            let (ha, hb) = (wa.at(t), wb.at(t));
+            // Between two events both boundaries are linear, so they cross at most once.
+            let (dp, dc) = (hap - hbp, ha - hb);
+            if (dp < 0.0 && dc > 0.0) || (dp > 0.0 && dc < 0.0) {
+                let f = dp / (dp - dc);
+                let tx = tp + (t - tp) * f;
+                if tx > tp && tx < t {
+                    points.push(DVec2::new(tx, hap + (ha - hap) * f));
                 }
             }
-            points.push(DVec2::new(t, self.height_at(t).min(other.height_at(t))));
+            points.push(DVec2::new(t, ha.min(hb)));
+            (tp, hap, hbp) = (t, ha, hb);
         }
         // Beyond the last event both boundaries are rays; they may cross once more.
-        let last = *ts.last().unwrap_or(&t0);
-        let (d_last, dm) = (diff(last), self.tail_slope - other.tail_slope);
-        if (d_last < 0.0 && dm > 0.0) || (d_last > 0.0 && dm < 0.0) {
-            let tx = last - d_last / dm;
-            if tx > last && tx.is_finite() {
-                points.push(DVec2::new(tx, self.height_at(tx).min(other.height_at(tx))));
+        let (d, dm) = (hap - hbp, self.tail_slope - other.tail_slope);
+        if (d < 0.0 && dm > 0.0) || (d > 0.0 && dm < 0.0) {
+            let tx = tp - d / dm;
+            if tx > tp && tx.is_finite() {
+                points.push(DVec2::new(tx, hap + self.tail_slope * (tx - tp)));
             }
         }
         let mut region = Region {
@@ -137,7 +146,10 @@ impl Region {
 
     /// Removes chain vertices whose incoming and outgoing slopes agree (within rounding).
     fn drop_collinear(&mut self) {
-        let mut kept: Vec<DVec2> = Vec::with_capacity(self.points.len());
+        if self.points.len() < 2 {
+            return;
+        }
+        let mut kept = Chain::new();
         for (k, &p) in self.points.iter().enumerate() {
             if let Some(&prev) = kept.last() {
                 let slope_in = (p.y - prev.y) / (p.x - prev.x);
@@ -191,6 +203,36 @@ impl Region {
         Region {
             points: pts,
             tail_slope: self.tail_slope,
+        }
+    }
+}
+
+/// Evaluates a chain's boundary at increasing `t`, advancing a cursor instead of searching.
+struct Walker<'a> {
+    points: &'a [DVec2],
+    tail_slope: f64,
+    i: usize,
+}
+
+impl<'a> Walker<'a> {
+    fn new(points: &'a [DVec2], tail_slope: f64) -> Self {
+        Walker {
+            points,
+            tail_slope,
+            i: 0,
+        }
+    }
+
+    /// The boundary's height at `t`, which must not be smaller than at the previous call.
+    fn at(&mut self, t: f64) -> f64 {
+        let pts = self.points;
+        while self.i + 1 < pts.len() && pts[self.i + 1].x <= t {
+            self.i += 1;
+        }
+        let p = pts[self.i];
+        match pts.get(self.i + 1) {
+            Some(q) => p.y + (q.y - p.y) * ((t - p.x) / (q.x - p.x)),
+            None => p.y + self.tail_slope * (t - p.x),
         }
     }
 }

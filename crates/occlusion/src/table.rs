@@ -18,7 +18,19 @@ pub fn plane_t(sectors: u32, sector: u32, xy: DVec2) -> f64 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RegionTable {
     sectors: u32,
+    /// The sectors' centre directions `r_i`.
+    directions: Vec<DVec2>,
     regions: Vec<Option<Region>>,
+}
+
+/// The centre directions of all sectors.
+fn directions(sectors: u32) -> Vec<DVec2> {
+    (0..sectors)
+        .map(|i| {
+            let [x, y] = cull::sector_direction(sectors, i);
+            DVec2::new(x, y)
+        })
+        .collect()
 }
 
 impl RegionTable {
@@ -28,7 +40,11 @@ impl RegionTable {
             sectors > 0 && regions.len().is_multiple_of(sectors as usize),
             "region table rows must be complete"
         );
-        RegionTable { sectors, regions }
+        RegionTable {
+            sectors,
+            directions: directions(sectors),
+            regions,
+        }
     }
 
     /// The regions of every vertex of a mesh: in each sector, the wedge of [`Region::of_vertex`] built from the
@@ -38,18 +54,23 @@ impl RegionTable {
         sectors: u32,
         horizon: impl Fn(u32, u32) -> Option<SectorHorizon> + Sync,
     ) -> RegionTable {
+        let dirs = directions(sectors);
         let regions = (0..positions.len() as u32)
             .into_par_iter()
             .flat_map_iter(|v| {
                 let p = positions[v as usize];
-                let horizon = &horizon;
+                let (horizon, dirs) = (&horizon, &dirs);
                 (0..sectors).map(move |s| {
                     horizon(v, s)
-                        .map(|h| Region::of_vertex(plane_t(sectors, s, p.truncate()), p.z, h.slope, h.distance))
+                        .map(|h| Region::of_vertex(dirs[s as usize].dot(p.truncate()), p.z, h.slope, h.distance))
                 })
             })
             .collect();
-        RegionTable { sectors, regions }
+        RegionTable {
+            sectors,
+            directions: dirs,
+            regions,
+        }
     }
 
     /// The regions of every vertex from a horizon field (see [`RegionTable::of_vertices`]).
@@ -72,7 +93,11 @@ impl RegionTable {
                 (0..s).map(move |sector| intersect_all(ids.clone().map(|m| self.get(m, sector))))
             })
             .collect();
-        RegionTable { sectors: s, regions }
+        RegionTable {
+            sectors: s,
+            directions: self.directions.clone(),
+            regions,
+        }
     }
 
     /// Number of sectors.
@@ -111,7 +136,7 @@ impl RegionTable {
         }
         let sector = cull::sector_of_azimuth(self.sectors, cull::azimuth(d.x, d.y));
         self.get(element, sector)
-            .is_some_and(|r| r.contains(plane_t(self.sectors, sector, camera.truncate()), camera.z))
+            .is_some_and(|r| r.contains(self.directions[sector as usize].dot(camera.truncate()), camera.z))
     }
 
     /// Bytes of chain data held (vertices and tail slopes of non-empty regions), a measure of visibility storage.

@@ -287,32 +287,42 @@ pub(crate) fn local_origin(positions: &[DVec3]) -> DVec3 {
     }
 }
 
-/// Computes per-edge neighbours, failing on non-manifold edges: the directed edges are sorted once, then each edge
-/// finds its twin `(b, a)` by binary search.
+/// Computes per-edge neighbours, failing on non-manifold edges: every edge is keyed by its unordered vertex pair and
+/// the keys are sorted once, so the (at most two) uses of an edge end up side by side.
 fn compute_neighbours(triangles: &[[u32; 3]]) -> Result<Vec<[u32; 3]>> {
-    let key = |a: u32, b: u32| (u64::from(a) << 32) | u64::from(b);
-    // (directed edge key, triangle * 3 + corner)
-    let mut edges: Vec<(u64, u32)> = Vec::with_capacity(triangles.len() * 3);
+    // (unordered edge key, 1 if the edge runs from the larger to the smaller index, triangle * 3 + corner)
+    let mut edges: Vec<(u64, u8, u32)> = Vec::with_capacity(triangles.len() * 3);
     for (t, tri) in triangles.iter().enumerate() {
         for i in 0..3 {
-            edges.push((key(tri[i], tri[(i + 1) % 3]), (t * 3 + i) as u32));
+            let (a, b) = (tri[i], tri[(i + 1) % 3]);
+            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+            edges.push((key, u8::from(a > b), (t * 3 + i) as u32));
         }
     }
     edges.sort_unstable();
-    if let Some(w) = edges.windows(2).find(|w| w[0].0 == w[1].0) {
-        return Err(TinError::NonManifoldEdge {
-            a: (w[0].0 >> 32) as u32,
-            b: w[0].0 as u32,
-            first: (w[0].1 / 3) as usize,
-            second: (w[1].1 / 3) as usize,
-        });
-    }
     let mut neighbours = vec![[NO_NEIGHBOUR; 3]; triangles.len()];
-    for &(k, slot) in &edges {
-        let twin = key(k as u32, (k >> 32) as u32);
-        if let Ok(j) = edges.binary_search_by_key(&twin, |e| e.0) {
-            neighbours[slot as usize / 3][slot as usize % 3] = edges[j].1 / 3;
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && edges[j].0 == edges[i].0 {
+            j += 1;
         }
+        if j - i > 2 || (j - i == 2 && edges[i].1 == edges[i + 1].1) {
+            let (a, b) = ((edges[i].0 >> 32) as u32, edges[i].0 as u32);
+            let (a, b) = if edges[i].1 == 1 { (b, a) } else { (a, b) };
+            return Err(TinError::NonManifoldEdge {
+                a,
+                b,
+                first: (edges[i].2 / 3) as usize,
+                second: (edges[i + 1].2 / 3) as usize,
+            });
+        }
+        if j - i == 2 {
+            let (s, o) = (edges[i].2 as usize, edges[i + 1].2 as usize);
+            neighbours[s / 3][s % 3] = (o / 3) as u32;
+            neighbours[o / 3][o % 3] = (s / 3) as u32;
+        }
+        i = j;
     }
     Ok(neighbours)
 }

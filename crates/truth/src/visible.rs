@@ -109,8 +109,12 @@ impl<'a> GroundTruth<'a> {
         self.test_triangle(eye, t)
     }
 
-    /// Number of barycentric grid levels used for triangle `t` seen from `eye` (1 to [`MAX_LEVELS`]).
+    /// Number of barycentric grid levels used for triangle `t` seen from `eye` (1 to [`MAX_LEVELS`]; 0 for an index
+    /// out of range).
     pub fn levels(&self, eye: DVec3, t: usize) -> usize {
+        if t >= self.tin.num_triangles() {
+            return 0;
+        }
         let c = self.tin.corners(t);
         let centroid = (c[0] + c[1] + c[2]) / 3.0;
         let radius = c.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
@@ -124,9 +128,13 @@ impl<'a> GroundTruth<'a> {
         }
     }
 
-    /// The sample points of triangle `t` seen from `eye`, in the order they are tried.
+    /// The sample points of triangle `t` seen from `eye`, in the order they are tried (none for an index out of
+    /// range).
     pub fn samples(&self, eye: DVec3, t: usize) -> Vec<DVec3> {
         let mut out = Vec::new();
+        if t >= self.tin.num_triangles() {
+            return out;
+        }
         self.any_sample(eye, t, |p| {
             out.push(p);
             false
@@ -134,8 +142,11 @@ impl<'a> GroundTruth<'a> {
         out
     }
 
-    /// Whether triangle `t` faces away from `eye` by more than the tolerance.
+    /// Whether triangle `t` faces away from `eye` by more than the tolerance (false for an index out of range).
     pub fn back_facing(&self, eye: DVec3, t: usize) -> bool {
+        if t >= self.tin.num_triangles() {
+            return false;
+        }
         let c = self.tin.corners(t);
         let centroid = (c[0] + c[1] + c[2]) / 3.0;
         eye.z - plane_height(&c, eye.truncate()) < -tolerance(centroid, eye)
@@ -267,6 +278,18 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn out_of_range_triangles_do_not_panic() {
+        let tin = flat();
+        let gt = GroundTruth::new(&tin);
+        let eye = DVec3::new(5.0, 5.0, 10.0);
+        assert_eq!(gt.levels(eye, 2), 0);
+        assert!(gt.samples(eye, 2).is_empty());
+        assert!(!gt.back_facing(eye, 2));
+        assert!(!gt.triangle_visible(eye, 2));
+        assert!(gt.triangle_visible(eye, 1));
     }
 
     #[test]

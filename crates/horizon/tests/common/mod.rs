@@ -22,7 +22,7 @@ pub enum Kind {
     Uniform,
     /// A few tight clusters.
     Clustered,
-    /// Integer grid with heights in {0, 1, 2} (many exact boundary directions and slope ties).
+    /// Integer grid around the origin with heights in {±0, 1, 2} (many exact boundary directions and slope ties).
     IntegerGrid,
     /// Integer grid at UTM-sized coordinates, small integer heights.
     UtmGrid,
@@ -86,10 +86,18 @@ pub fn points(kind: Kind, n: usize, seed: u64) -> Vec<DVec3> {
                 })
                 .collect()
         }
-        Kind::IntegerGrid => grid(&mut rng, (0.0, 0.0), 3),
+        Kind::IntegerGrid => {
+            // Centred on the origin, with zero heights of both signs: −0.0 must behave like 0.0.
+            let half = (side / 2) as f64;
+            grid(&mut rng, (-half, -half), 3)
+                .into_iter()
+                .enumerate()
+                .map(|(i, p)| DVec3::new(p.x, p.y, if p.z == 0.0 && i % 2 == 1 { -0.0 } else { p.z }))
+                .collect()
+        }
         Kind::UtmGrid => grid(&mut rng, (500_000.0, 5_000_000.0), 4),
         Kind::Flat => {
-            if seed % 2 == 0 {
+            if seed.is_multiple_of(2) {
                 grid(&mut rng, (0.0, 0.0), 1)
                     .into_iter()
                     .map(|p| DVec3::new(p.x, p.y, 7.0))
@@ -130,6 +138,12 @@ pub fn terrain(kind: Kind, n: usize, seed: u64) -> Option<Tin> {
 
 /// Panics with a readable message unless the two fields agree everywhere.
 pub fn assert_same(sweep: &HorizonField, oracle: &HorizonField, what: &str) {
+    sweep
+        .check_invariants()
+        .unwrap_or_else(|e| panic!("{what}: sweep field invalid: {e}"));
+    oracle
+        .check_invariants()
+        .unwrap_or_else(|e| panic!("{what}: oracle field invalid: {e}"));
     let mismatches = sweep.mismatches(oracle);
     assert_eq!(
         mismatches,

@@ -1,0 +1,6 @@
+//! Fuzz target `dem_readers`: see `src/targets.rs`.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| tincull_fuzz::targets::dem_readers(data));

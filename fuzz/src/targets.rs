@@ -1,0 +1,123 @@
+//! The bodies of the fuzz targets: each takes arbitrary bytes and must never panic (errors are fine).
+//!
+//! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies.
+//! - `dem_readers`: the `.npy`, `.asc`, `.hgt` and `.png` parsers of `tin::dem`.
+//! - `tch_load`: [`cull::Hierarchy::from_bytes`]; a file that loads is culled from a few cameras, degenerate ones
+//!   included (inside a node, far away, non-finite).
+
+use std::path::Path;
+
+use cull::{Camera, Culler, Hierarchy};
+use tin::dem::hgt::TileName;
+use tin::{DedupePolicy, DemOptions, ObjImportOptions};
+
+/// Inputs larger than this are cut (keeps each run fast; the parsers' limits are tested elsewhere).
+pub const MAX_INPUT: usize = 1 << 20;
+
+/// `tin::parse_obj` on `data`, every option combination.
+pub fn obj_import(data: &[u8]) {
+    let data = &data[..data.len().min(MAX_INPUT)];
+    for keep_faces in [false, true] {
+        for dedupe in [DedupePolicy::Reject, DedupePolicy::KeepHighest] {
+            let opts = ObjImportOptions { keep_faces, dedupe };
+            if let Ok((tin, _)) = tin::parse_obj(data, "fuzz.obj", &opts) {
+                // A TIN that loads is a valid height field: its basic queries must hold up.
+                let _ = tin.bbox();
+                for t in 0..tin.num_triangles().min(64) {
+                    let _ = tin.triangle_area_3d(t);
+                }
+            }
+        }
+    }
+}
+
+/// The four DEM parsers on `data`.
+pub fn dem_readers(data: &[u8]) {
+    let data = &data[..data.len().min(MAX_INPUT)];
+    let _ = tin::dem::npy::parse_npy(data, Path::new("fuzz.npy"));
+    let opts = DemOptions::default();
+    let _ = tin::dem::asc::parse_asc(data, Path::new("fuzz.asc"), &opts);
+    let tile = TileName { lat: 43, lon: -123 };
+    let _ = tin::dem::hgt::parse_hgt(data, tile, Path::new("N43W123.hgt"), &opts);
+    let png_opts = DemOptions {
+        spacing: Some((10.0, 10.0)),
+        z_scale: 1.0,
+    };
+    if let Ok(grid) = tin::dem::png::parse_png(data, Path::new("fuzz.png"), &png_opts) {
+        let _ = grid.points();
+    }
+}
+
+/// `Hierarchy::from_bytes` on `data`, then a few culls when it loads. A mutated file almost never passes the
+/// checksum, so `data` is also tried with its header resealed (payload length and CRC-32 recomputed): that sends
+/// the mutations on to the decoder and the invariant checks.
+pub fn tch_load(data: &[u8]) {
+    let data = &data[..data.len().min(MAX_INPUT)];
+    if let Ok(h) = Hierarchy::from_bytes(data) {
+        cull_some(&h);
+    }
+    if let Some(sealed) = reseal(data)
+        && let Ok(h) = Hierarchy::from_bytes(&sealed)
+    {
+        cull_some(&h);
+    }
+}
+
+/// `data` with the `.tch` header's length and checksum fields made to match the payload (bytes 24 onwards).
+pub fn reseal(data: &[u8]) -> Option<Vec<u8>> {
+    const HEADER: usize = 24;
+    if data.len() < HEADER {
+        return None;
+    }
+    let payload = &data[HEADER..];
+    let mut out = data.to_vec();
+    out[12..20].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+    out[20..24].copy_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    Some(out)
+}
+
+/// Culls `h` from degenerate and ordinary cameras, checking the draw list's ranges.
+fn cull_some(h: &Hierarchy) {
+    let culler = Culler::new(h);
+    let mut cameras = vec![
+        Camera::all_around(h.origin),
+        Camera::all_around([h.origin[0] + 1e7, h.origin[1] - 1e7, h.origin[2] + 5.0]),
+        Camera::all_around([f64::NAN, 0.0, 0.0]),
+        Camera::all_around([f64::INFINITY, f64::NEG_INFINITY, 1.0]),
+        Camera {
+            position: h.origin,
+            yaw: 1.0,
+            hfov: 0.5,
+        },
+        Camera {
+            position: h.origin,
+            yaw: f64::NAN,
+            hfov: -1.0,
+        },
+    ];
+    for n in h.nodes.iter().take(4) {
+        let p = [
+            h.origin[0] + f64::from(n.centre[0]),
+            h.origin[1] + f64::from(n.centre[1]),
+            h.origin[2] + 2.0,
+        ];
+        cameras.push(Camera::all_around(p));
+        cameras.push(Camera::all_around([
+            p[0] + 3.0 * f64::from(n.radius),
+            p[1],
+            p[2] - 50.0,
+        ]));
+    }
+    let total = h.num_triangles();
+    for c in &cameras {
+        let list = culler.cull(c);
+        let mask = list.mask(total);
+        assert_eq!(mask.len(), total, "a draw mask has one flag per triangle");
+        for r in &list.ranges {
+            assert!(
+                r[0] <= r[1] && r[1] as usize <= total,
+                "draw range {r:?} out of 0..{total}"
+            );
+        }
+    }
+}

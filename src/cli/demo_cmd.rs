@@ -1,0 +1,132 @@
+//! `tincull demo`: the main job on the bundled default terrain: build, evaluate, report, and write `out/`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use super::build_cmd::{print_report, stage_progress};
+use super::eval_cmd::write_outputs;
+use super::mesh_input::MeshArgs;
+use super::{Output, OutputArgs};
+use crate::evaluate::{EvalOptions, evaluate, hierarchy_tin};
+use crate::export::{write_grouped_obj, write_json};
+use crate::pipeline::{BuildParams, build};
+use cull::Hierarchy;
+use tin::Tin;
+use truth::{ViewpointClass, viewpoints};
+use viewer::{Gpu, RenderOptions, Terrain, ViewKind};
+
+/// The bundled default terrain.
+pub const DEFAULT_MESH: &str = "meshes/jacksboro-10k.obj";
+
+/// Arguments of `tincull demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// The terrain (default: the bundled jacksboro-10k, a 10,000-vertex TIN of a public-domain USGS DEM).
+    pub mesh: Option<PathBuf>,
+    /// Directory for the outputs.
+    #[arg(long, default_value = "out")]
+    pub out_dir: PathBuf,
+    /// Viewpoints per class for the evaluation.
+    #[arg(long, default_value_t = 10)]
+    pub viewpoints: usize,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Runs `tincull demo`.
+pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
+    let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
+    let mesh_args = MeshArgs {
+        mesh: mesh.clone(),
+        keep_faces: false,
+        dedupe: Default::default(),
+    };
+    let (tin, _) = mesh_args.load(out)?;
+    let params = BuildParams::default();
+    out.say(format!("tincull demo on {}", mesh.display()));
+    out.say(format!(
+        "build with defaults: {} sectors x {} subsectors, seeds one per 200 triangles, min group {}, {} orphan passes",
+        params.sectors, params.subsectors, params.crystal.min_group, params.crystal.orphan_passes
+    ));
+    let result = build(&tin, &params, Some(stage_progress(out)))?;
+    print_report(&result.report, out);
+
+    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
+    let stem = mesh
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "terrain".into());
+    let path = |suffix: &str| args.out_dir.join(format!("{stem}{suffix}"));
+    result.hierarchy.save(&path(".tch"))?;
+    write_json(&result.hierarchy, &path(".json"))?;
+    write_grouped_obj(&result.hierarchy, &path("-groups.obj"))?;
+
+    let h = &result.hierarchy;
+    let htin = hierarchy_tin(h)?;
+    let opts = EvalOptions {
+        viewpoints: args.viewpoints,
+        ..EvalOptions::default()
+    };
+    let bar = out.progress((opts.viewpoints * opts.classes.len()) as u64, "evaluating");
+    let e = evaluate(h, &htin, &opts, &|done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    out.say(format!(
+        "\naccuracy against ground truth ({} viewpoints per class, 360° view; ground truth is a lower bound of the \
+         visible set):",
+        opts.viewpoints
+    ));
+    out.say(e.table());
+    write_outputs(&e, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
+    let renders = match write_renders(h, &htin, &path("-map.png"), &path("-culling.png")) {
+        Ok(eye) => format!(
+            ", {stem}-map.png (groups, orphans grey) and {stem}-culling.png (valley eye at {:.0}, {:.0}, {:.0}: \
+             drawn groups solid, culled ones wireframe)",
+            eye[0], eye[1], eye[2]
+        ),
+        Err(e) => {
+            out.say(format!("no renders: {e:#}"));
+            String::new()
+        }
+    };
+    out.say(format!(
+        "wrote {}: {stem}.tch (hierarchy), {stem}.json, {stem}-groups.obj/.mtl (groups for Blender or MeshLab), \
+         {stem}-eval.csv/.json{renders}",
+        args.out_dir.display()
+    ));
+    let mut report = serde_json::to_value(&result.report)?;
+    report["evaluation"] = serde_json::to_value(&e.rows)?;
+    report["out_dir"] = serde_json::to_value(&args.out_dir)?;
+    out.json(&report)
+}
+
+/// Renders the groups map and an orbit view of the culling from a valley viewpoint; returns that viewpoint.
+/// Fails (and the demo goes on without images) when no GPU adapter, not even a software one, is available.
+fn write_renders(h: &Hierarchy, htin: &Tin, map: &Path, culling: &Path) -> Result<[f64; 3]> {
+    let gpu = Gpu::headless()?;
+    let terrain = Terrain::from_hierarchy(h.clone())?;
+    let image = viewer::render(&gpu, &terrain, &RenderOptions::default())?.image;
+    viewer::write_png(map, &image)?;
+    let eye = viewpoints(htin, ViewpointClass::Valley, 1, 1)
+        .first()
+        .map(|e| e.to_array())
+        .context("no valley viewpoint on this terrain")?;
+    let options = RenderOptions {
+        view: ViewKind::Orbit,
+        eye: Some(eye),
+        ..RenderOptions::default()
+    };
+    viewer::write_png(culling, &viewer::render(&gpu, &terrain, &options)?.image)?;
+    Ok(eye)
+}
+
+/// The bundled terrain, found relative to the working directory or to the source tree.
+fn default_mesh() -> PathBuf {
+    let local = Path::new(DEFAULT_MESH);
+    if local.exists() {
+        return local.to_path_buf();
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_MESH)
+}

@@ -1,0 +1,81 @@
+//! `tincull eval`: every culling method against ground truth from seeded viewpoint sets.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use cull::Hierarchy;
+use truth::ViewpointClass;
+
+use super::Output;
+use crate::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
+
+/// Arguments of `tincull eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// The hierarchy file written by `tincull build`.
+    pub hierarchy: PathBuf,
+    /// Viewpoints per class.
+    #[arg(long, default_value_t = 20)]
+    pub viewpoints: usize,
+    /// Viewpoint classes, comma-separated: ground, low, high, valley, ridge, sky.
+    #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
+    pub classes: Vec<ViewpointClass>,
+    /// Seed of the viewpoint generator.
+    #[arg(long, default_value_t = 1)]
+    pub rng_seed: u64,
+    /// Horizontal field of view in degrees (360 = all around); below 360 each viewpoint gets a seeded yaw.
+    #[arg(long, default_value_t = 360.0)]
+    pub fov: f64,
+    /// Skip the per-triangle method (it recomputes the horizons of the mesh).
+    #[arg(long)]
+    pub no_per_triangle: bool,
+    /// Write the whole evaluation (rows and every viewpoint) as JSON here.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Write one CSV line per method and class here.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// No progress bar and no table (errors are still printed).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Writes an evaluation's JSON and CSV files where asked.
+pub fn write_outputs(e: &Evaluation, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(e)?;
+        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    }
+    if let Some(path) = csv {
+        let text = e.to_csv();
+        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    }
+    Ok(())
+}
+
+/// Runs `tincull eval`.
+pub fn run(args: &EvalArgs) -> Result<()> {
+    let out = Output {
+        json: false,
+        quiet: args.quiet,
+    };
+    let h = Hierarchy::load(&args.hierarchy)?;
+    let tin = hierarchy_tin(&h)?;
+    let opts = EvalOptions {
+        viewpoints: args.viewpoints,
+        classes: args.classes.clone(),
+        rng_seed: args.rng_seed,
+        fov_deg: args.fov,
+        per_triangle: !args.no_per_triangle,
+    };
+    let bar = out.progress((opts.viewpoints * opts.classes.len()) as u64, "viewpoints");
+    let e = evaluate(&h, &tin, &opts, &|done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    out.say(e.table());
+    out.say(format!(
+        "ground truth: {:.3} s per viewpoint ({} triangles; a lower bound of the visible set)",
+        e.ground_truth_seconds_per_viewpoint, e.triangles
+    ));
+    write_outputs(&e, args.json.as_deref(), args.csv.as_deref())
+}

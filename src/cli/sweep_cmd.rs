@@ -1,0 +1,220 @@
+//! `tincull sweep`: build and evaluate every combination of sectors, subsectors, seeds and random seeds; one CSV
+//! line per combination, method and class (see [`crate::sweep`]). Resumable: combinations already in the file are
+//! skipped, and the file is rewritten atomically after each combination.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use serde_json::json;
+use truth::ViewpointClass;
+
+use super::mesh_input::MeshArgs;
+use super::{Output, OutputArgs};
+use crate::evaluate::{EvalOptions, GroundTruthSet};
+use crate::pipeline::BuildParams;
+use crate::sweep::{SweepSpec, SweepTable, parse_list, run_combo};
+
+/// Arguments of `tincull sweep`.
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// The mesh and how to import it.
+    #[command(flatten)]
+    pub mesh: MeshArgs,
+    /// Sector counts: comma-separated numbers or inclusive ranges `a..b`.
+    #[arg(long, default_value = "4,8,16,32,64")]
+    pub sectors: String,
+    /// Subsectors per sector: comma-separated numbers or ranges.
+    #[arg(long, default_value = "1,2,4,8")]
+    pub subsectors: String,
+    /// Crystal seeds of the first pass: numbers or ranges [default: one per 200 triangles].
+    #[arg(long)]
+    pub seeds: Option<String>,
+    /// Seeds of the crystal's random generator: numbers or ranges (`1..5`, `1,2,3`).
+    #[arg(long, default_value = "1")]
+    pub rng_seeds: String,
+    /// Viewpoints per class.
+    #[arg(long, default_value_t = 10)]
+    pub viewpoints: usize,
+    /// Viewpoint classes, comma-separated: ground, low, high, valley, ridge, sky.
+    #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
+    pub classes: Vec<ViewpointClass>,
+    /// Seed of the viewpoint generator.
+    #[arg(long, default_value_t = 1)]
+    pub view_seed: u64,
+    /// Horizontal field of view in degrees (360 = all around).
+    #[arg(long, default_value_t = 360.0)]
+    pub fov: f64,
+    /// Orphan passes after the first [default: 10].
+    #[arg(long)]
+    pub orphan_passes: Option<u32>,
+    /// Smallest group kept [default: 30].
+    #[arg(long)]
+    pub min_group: Option<usize>,
+    /// Expanse limit of hierarchy nodes as a fraction of the terrain's area [default: 0.25].
+    #[arg(long)]
+    pub max_expanse: Option<f64>,
+    /// Radius (m) of the horizon undersampling fix [default: off].
+    #[arg(long, value_name = "RADIUS")]
+    pub undersampling: Option<f64>,
+    /// Skip the per-triangle method (its culler tests every triangle: by far the slowest part of scoring).
+    #[arg(long)]
+    pub no_per_triangle: bool,
+    /// The CSV file of results; combinations already in it are skipped.
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+fn u32_list(text: &str, what: &str) -> Result<Vec<u32>> {
+    parse_list(text, what)?
+        .into_iter()
+        .map(|v| u32::try_from(v).with_context(|| format!("{what}: {v} is too large")))
+        .collect()
+}
+
+/// Runs `tincull sweep`.
+pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
+    let mut base = BuildParams::default();
+    if let Some(p) = args.orphan_passes {
+        base.crystal.orphan_passes = p;
+    }
+    if let Some(m) = args.min_group {
+        base.crystal.min_group = m;
+    }
+    if let Some(m) = args.max_expanse {
+        base.crystal.max_expanse = m;
+    }
+    if let Some(r) = args.undersampling {
+        anyhow::ensure!(
+            r.is_finite() && r > 0.0,
+            "the undersampling radius must be positive and finite, got {r}"
+        );
+        base.undersampling = Some(r);
+    }
+    anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    let spec = SweepSpec {
+        sectors: u32_list(&args.sectors, "--sectors")?,
+        subsectors: u32_list(&args.subsectors, "--subsectors")?,
+        seeds: match &args.seeds {
+            Some(text) => parse_list(text, "--seeds")?
+                .into_iter()
+                .map(|v| {
+                    usize::try_from(v)
+                        .map(Some)
+                        .with_context(|| format!("--seeds: {v} is too large"))
+                })
+                .collect::<Result<_>>()?,
+            None => vec![None],
+        },
+        rng_seeds: parse_list(&args.rng_seeds, "--rng-seeds")?,
+        base,
+        viewpoints: args.viewpoints,
+    };
+    let eval = EvalOptions {
+        viewpoints: args.viewpoints,
+        classes: args.classes.clone(),
+        rng_seed: args.view_seed,
+        fov_deg: args.fov,
+        per_triangle: !args.no_per_triangle,
+    };
+    anyhow::ensure!(
+        eval.fov_deg > 0.0 && eval.fov_deg <= 360.0,
+        "--fov must be in (0, 360] degrees, got {}",
+        eval.fov_deg
+    );
+    anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
+
+    let mut table = match std::fs::read_to_string(&args.out) {
+        Ok(text) => SweepTable::parse(&text).with_context(|| format!("{}", args.out.display()))?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => SweepTable::default(),
+        Err(e) => return Err(e).with_context(|| format!("cannot read {}", args.out.display())),
+    };
+
+    let (tin, _) = args.mesh.load(out)?;
+    let (combos, notes) = spec.combos(tin.num_triangles());
+    for n in &notes {
+        out.warn(n);
+    }
+    let todo: Vec<_> = combos.iter().filter(|c| !table.contains(&c.key)).collect();
+    let skipped = combos.len() - todo.len();
+    out.say(format!(
+        "{} combinations: {} already in {}, {} to run",
+        combos.len(),
+        skipped,
+        args.out.display(),
+        todo.len()
+    ));
+
+    let start = Instant::now();
+    let mut truth_seconds = 0.0;
+    if !todo.is_empty() {
+        let total = eval.viewpoints * eval.classes.len();
+        let bar = out.progress(total as u64, "ground truth");
+        let t0 = Instant::now();
+        let truth = GroundTruthSet::compute(&tin, &eval, &|done, _| bar.set_position(done as u64))?;
+        truth_seconds = t0.elapsed().as_secs_f64();
+        bar.finish_and_clear();
+        out.say(format!(
+            "ground truth: {} viewpoints in {:.1} s ({} triangles; a lower bound of the visible set)",
+            truth.views.len(),
+            truth_seconds,
+            tin.num_triangles()
+        ));
+        let bar = out.progress(todo.len() as u64, "combinations");
+        for combo in &todo {
+            let k = &combo.key;
+            bar.set_message(format!("s{} k{} r{}", k.sectors, k.subsectors, k.rng_seed));
+            let r = run_combo(&tin, &truth, combo, !args.no_per_triangle, None)
+                .with_context(|| format!("sectors {} x subsectors {}", k.sectors, k.subsectors))?;
+            table.insert(combo.key, r.lines);
+            let text = table.to_csv();
+            tin::write_atomic(&args.out, |w| w.write_all(text.as_bytes()))?;
+            bar.inc(1);
+            let h = r
+                .evaluation
+                .rows
+                .iter()
+                .find(|row| row.method == "hierarchy" && row.class == "all");
+            if let Some(h) = h {
+                let rep = &r.report;
+                let line = format!(
+                    "s {:>3} k {:>2} seeds {:>4} rng {:>3}: prep {:>7.3} s, {:>4} groups, {:>5} orphans; occlusion \
+                     captured {:.3}, false culls {:.2} ({} views), cull {:.1} µs",
+                    k.sectors,
+                    k.subsectors,
+                    k.seeds,
+                    k.rng_seed,
+                    rep.horizon_seconds + rep.regions_seconds + rep.grouping_seconds,
+                    rep.groups,
+                    rep.orphans,
+                    h.summary.occlusion_captured.map_or(0.0, |s| s.mean),
+                    h.summary.false_culls.map_or(0.0, |s| s.mean),
+                    h.summary.viewpoints_with_false_culls,
+                    h.cull_ns / 1000.0
+                );
+                bar.suspend(|| out.say(line));
+            }
+        }
+        bar.finish_and_clear();
+    }
+    out.say(format!(
+        "{}: {} combinations, {} lines",
+        args.out.display(),
+        table.combos(),
+        table.lines()
+    ));
+    out.json(&json!({
+        "output": args.out,
+        "combinations": combos.len(),
+        "ran": todo.len(),
+        "skipped": skipped,
+        "notes": notes,
+        "lines": table.lines(),
+        "ground_truth_seconds": truth_seconds,
+        "seconds": start.elapsed().as_secs_f64(),
+    }))
+}

@@ -1,0 +1,476 @@
+//! Evaluation of culling methods against ground truth (design.md "Measuring accuracy").
+//!
+//! For each viewpoint class, viewpoints are drawn from the seeded generator; for each viewpoint the ground-truth
+//! visible set `V` is computed once (exact segment walks; a lower bound of the true `V`, see [`truth::visible`]), and
+//! every method's drawn set is scored against it. Methods:
+//!
+//! | method | what it draws |
+//! | --- | --- |
+//! | `hierarchy` | the recursive culler over the `.tch` hierarchy |
+//! | `per_triangle` | each triangle tested against its own regions (thesis 5.1.1) |
+//! | `frustum_only` | the hierarchy's frustum test alone (everything at a 360° field of view) |
+//! | `none` | every triangle |
+//!
+//! With a field of view below 360°, each viewpoint gets a yaw from the generator, and `V` is restricted to the
+//! triangles with a vertex or the centroid inside the horizontal view wedge: a triangle wholly outside the view is
+//! not counted as a false cull when culled, one partly inside is.
+
+use std::f64::consts::TAU;
+use std::time::Instant;
+
+use anyhow::Result;
+use cull::{Camera, Culler, DrawList, Hierarchy};
+use glam::DVec3;
+use horizon::{HorizonOptions, SectorConfig};
+use occlusion::RegionTable;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use tin::Tin;
+use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_metrics};
+
+use crate::pipeline::per_triangle_hierarchy;
+
+/// The methods an evaluation compares, in report order.
+pub const METHODS: [&str; 4] = ["hierarchy", "per_triangle", "frustum_only", "none"];
+
+/// What to evaluate.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EvalOptions {
+    /// Viewpoints per class.
+    pub viewpoints: usize,
+    /// Classes to draw viewpoints from.
+    pub classes: Vec<ViewpointClass>,
+    /// Seed of the viewpoint generator.
+    pub rng_seed: u64,
+    /// Horizontal field of view in degrees (360 = all around, the thesis' measurement mode).
+    pub fov_deg: f64,
+    /// Also evaluate the per-triangle method (needs the horizons of the mesh again).
+    pub per_triangle: bool,
+}
+
+impl Default for EvalOptions {
+    fn default() -> Self {
+        EvalOptions {
+            viewpoints: 20,
+            classes: ViewpointClass::ALL.to_vec(),
+            rng_seed: 1,
+            fov_deg: 360.0,
+            per_triangle: true,
+        }
+    }
+}
+
+/// One method on one viewpoint class.
+#[derive(Clone, Debug, Serialize)]
+pub struct EvalRow {
+    /// Method name (see [`METHODS`]).
+    pub method: String,
+    /// Viewpoint class.
+    pub class: String,
+    /// Aggregated metrics.
+    pub summary: Summary,
+    /// Median run-time test time over the viewpoints (ns).
+    pub cull_ns: f64,
+}
+
+/// One viewpoint's ground truth and scores, for tools that chart individual viewpoints.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewpointResult {
+    /// Class of the viewpoint.
+    pub class: String,
+    /// Eye position.
+    pub eye: [f64; 3],
+    /// View direction (degrees), when the field of view is below 360°.
+    pub yaw_deg: Option<f64>,
+    /// Per method, in [`METHODS`] order (methods not evaluated are left out).
+    pub methods: Vec<(String, ViewMetrics, u64)>,
+}
+
+/// The whole evaluation.
+#[derive(Clone, Debug, Serialize)]
+pub struct Evaluation {
+    /// Options used.
+    pub options: EvalOptions,
+    /// Triangles of the mesh.
+    pub triangles: usize,
+    /// Rows per method and class, then per method over all classes (class `all`).
+    pub rows: Vec<EvalRow>,
+    /// Every viewpoint.
+    pub viewpoints: Vec<ViewpointResult>,
+    /// Seconds of ground truth per viewpoint (mean).
+    pub ground_truth_seconds_per_viewpoint: f64,
+    /// Seconds to prepare the per-triangle regions (0 when not evaluated).
+    pub per_triangle_setup_seconds: f64,
+}
+
+/// Times `cull_into` for one camera: the median of 15 runs after a warm-up, in nanoseconds. The result is left in
+/// `out`.
+pub fn timed_cull(culler: &Culler, camera: &Camera, out: &mut DrawList) -> u64 {
+    const RUNS: usize = 15;
+    culler.cull_into(camera, out);
+    let mut times = [0u64; RUNS];
+    for t in &mut times {
+        let start = Instant::now();
+        culler.cull_into(camera, out);
+        *t = start.elapsed().as_nanos() as u64;
+    }
+    times.sort_unstable();
+    times[RUNS / 2]
+}
+
+/// The mesh of a hierarchy as a [`Tin`], triangles in hierarchy order.
+pub fn hierarchy_tin(h: &Hierarchy) -> Result<Tin> {
+    let positions = h.mesh.positions.iter().map(|&p| DVec3::from_array(p)).collect();
+    Ok(Tin::from_parts(positions, h.mesh.triangles.clone())?)
+}
+
+/// The per-triangle hierarchy of `h`'s mesh, recomputing horizons and regions with `h`'s sector configuration.
+pub fn per_triangle_of(h: &Hierarchy, tin: &Tin) -> Result<Hierarchy> {
+    let config = SectorConfig::new(h.sectors, h.build.subsectors.max(1))?;
+    let opts = HorizonOptions {
+        undersampling_radius: h.build.undersampling,
+        progress: None,
+    };
+    let field = horizon::compute(tin, &config, &opts)?;
+    let vertices = RegionTable::from_field(tin.positions(), &field);
+    let triangles = tin.triangles();
+    let regions = vertices.intersect_rows(triangles.len(), |t| triangles[t]);
+    Ok(per_triangle_hierarchy(tin, &regions))
+}
+
+/// Triangles with a vertex or the centroid inside the horizontal wedge `yaw ± half` seen from `eye`.
+fn in_view(tin: &Tin, eye: DVec3, yaw: f64, half: f64) -> Vec<bool> {
+    let inside = |p: DVec3| {
+        let d = p - eye;
+        if d.x == 0.0 && d.y == 0.0 {
+            return true;
+        }
+        let gap = (d.y.atan2(d.x) - yaw + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
+        gap.abs() <= half
+    };
+    (0..tin.num_triangles())
+        .map(|t| {
+            let c = tin.corners(t);
+            c.iter().any(|&p| inside(p)) || inside((c[0] + c[1] + c[2]) / 3.0)
+        })
+        .collect()
+}
+
+/// One viewpoint of a [`GroundTruthSet`].
+#[derive(Clone, Debug)]
+pub struct TruthView {
+    /// Class the viewpoint was drawn from.
+    pub class: ViewpointClass,
+    /// Eye position.
+    pub eye: DVec3,
+    /// View direction (radians; 0 when the field of view is 360°).
+    pub yaw: f64,
+    /// Ground-truth visible set restricted to the view wedge, one flag per triangle of the TIN it was computed on.
+    pub visible: Vec<bool>,
+}
+
+/// The ground truth of every viewpoint of an evaluation over one TIN, in that TIN's triangle order.
+///
+/// It depends only on the mesh and the viewpoint options (classes, count, seed, field of view), never on the build
+/// parameters, so a parameter sweep computes it once and scores every build against it (see [`score`], whose
+/// methods may draw in another triangle order).
+#[derive(Clone, Debug)]
+pub struct GroundTruthSet {
+    /// Options the viewpoints were drawn with.
+    pub options: EvalOptions,
+    /// Triangles of the TIN.
+    pub triangles: usize,
+    /// Every viewpoint, class by class in the options' order.
+    pub views: Vec<TruthView>,
+    /// Seconds of ground truth per viewpoint (mean).
+    pub seconds_per_viewpoint: f64,
+}
+
+impl GroundTruthSet {
+    /// Draws the viewpoints of `opts` over `tin` and computes their visible sets. `progress` is called after each
+    /// viewpoint with `(done, total)`.
+    pub fn compute(tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(usize, usize)) -> Result<GroundTruthSet> {
+        anyhow::ensure!(
+            opts.fov_deg > 0.0 && opts.fov_deg <= 360.0,
+            "the field of view must be in (0, 360] degrees, got {}",
+            opts.fov_deg
+        );
+        anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
+        let truth = GroundTruth::new(tin);
+        let all_around = opts.fov_deg >= 360.0;
+        let total = opts.viewpoints * opts.classes.len();
+        let mut views = Vec::with_capacity(total);
+        let mut truth_seconds = 0.0;
+        for (ci, &class) in opts.classes.iter().enumerate() {
+            let seed = opts
+                .rng_seed
+                .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                .wrapping_add(ci as u64);
+            let eyes = truth::viewpoints(tin, class, opts.viewpoints, seed);
+            let mut yaw_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
+            for eye in eyes {
+                let yaw = if all_around {
+                    0.0
+                } else {
+                    yaw_rng.random_range(0.0..TAU)
+                };
+                let t0 = Instant::now();
+                let mut visible = truth.visible_triangles(eye);
+                truth_seconds += t0.elapsed().as_secs_f64();
+                if !all_around {
+                    let view = in_view(tin, eye, yaw, opts.fov_deg.to_radians() * 0.5);
+                    visible.iter_mut().zip(view).for_each(|(v, inside)| *v &= inside);
+                }
+                views.push(TruthView {
+                    class,
+                    eye,
+                    yaw,
+                    visible,
+                });
+                progress(views.len(), total);
+            }
+        }
+        Ok(GroundTruthSet {
+            options: opts.clone(),
+            triangles: tin.num_triangles(),
+            seconds_per_viewpoint: truth_seconds / views.len().max(1) as f64,
+            views,
+        })
+    }
+}
+
+/// A culling method to score with [`score`].
+pub struct Method<'a> {
+    /// Name (see [`METHODS`]).
+    pub name: &'a str,
+    /// The culler; `None` draws every triangle.
+    pub culler: Option<Culler>,
+    /// Where each of the culler's triangles is in the scored TIN: triangle `i` of the culler's mesh is triangle
+    /// `order[i]` of the TIN (a build's `crystal.order`). `None`: the same order.
+    pub order: Option<&'a [u32]>,
+}
+
+/// The hierarchy's frustum test alone: `h` with every region removed.
+pub fn frustum_only(h: &Hierarchy) -> Hierarchy {
+    let mut f = h.clone();
+    for n in &mut f.nodes {
+        n.regions.clear();
+    }
+    f
+}
+
+/// The methods of [`METHODS`] for a hierarchy `h` whose triangle `i` is triangle `order[i]` of the scored TIN
+/// (`None`: same order), and an optional per-triangle hierarchy in the TIN's own order.
+pub fn standard_methods<'a>(
+    h: &Hierarchy,
+    per_triangle: Option<&Hierarchy>,
+    order: Option<&'a [u32]>,
+) -> Vec<Method<'a>> {
+    vec![
+        Method {
+            name: "hierarchy",
+            culler: Some(Culler::new(h)),
+            order,
+        },
+        Method {
+            name: "per_triangle",
+            culler: per_triangle.map(Culler::new),
+            order: None,
+        },
+        Method {
+            name: "frustum_only",
+            culler: Some(Culler::new(&frustum_only(h))),
+            order,
+        },
+        Method {
+            name: "none",
+            culler: None,
+            order: None,
+        },
+    ]
+}
+
+/// Scores `methods` against the ground truth `truth` of `tin` (every mask in `tin`'s triangle order). A method named
+/// other than `none` without a culler is left out (e.g. `per_triangle` when not evaluated).
+pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method]) -> Result<Evaluation> {
+    let n = tin.num_triangles();
+    anyhow::ensure!(
+        truth.triangles == n,
+        "the ground truth has {} triangles, the mesh {n}",
+        truth.triangles
+    );
+    for m in methods {
+        if let Some(order) = m.order {
+            anyhow::ensure!(
+                order.len() == n && order.iter().all(|&t| (t as usize) < n),
+                "method {}: its triangle order does not map onto the mesh's {n} triangles",
+                m.name
+            );
+        }
+    }
+    let opts = &truth.options;
+    let all_around = opts.fov_deg >= 360.0;
+    let mut list = DrawList::default();
+    let mut results = Vec::with_capacity(truth.views.len());
+    let ordered = methods_in_order(methods);
+    for view in &truth.views {
+        let camera = Camera {
+            position: view.eye.to_array(),
+            yaw: view.yaw,
+            hfov: if all_around { TAU } else { opts.fov_deg.to_radians() },
+        };
+        let mut methods = Vec::new();
+        for m in &ordered {
+            let (drawn, ns) = match &m.culler {
+                Some(c) => {
+                    let ns = timed_cull(c, &camera, &mut list);
+                    let mask = list.mask(n);
+                    let drawn = match m.order {
+                        Some(order) => {
+                            let mut d = vec![false; n];
+                            for (i, &t) in order.iter().enumerate() {
+                                d[t as usize] = mask[i];
+                            }
+                            d
+                        }
+                        None => mask,
+                    };
+                    (drawn, ns)
+                }
+                None if m.name == "none" => (vec![true; n], 0),
+                None => continue,
+            };
+            methods.push((m.name.to_string(), view_metrics(tin, &view.visible, &drawn)?, ns));
+        }
+        results.push(ViewpointResult {
+            class: view.class.name().to_string(),
+            eye: view.eye.to_array(),
+            yaw_deg: (!all_around).then(|| view.yaw.to_degrees()),
+            methods,
+        });
+    }
+    let mut rows = Vec::new();
+    let classes: Vec<String> = opts
+        .classes
+        .iter()
+        .map(|c| c.name().to_string())
+        .chain(["all".into()])
+        .collect();
+    for name in METHODS {
+        for class in &classes {
+            let picked: Vec<(&ViewMetrics, u64)> = results
+                .iter()
+                .filter(|r| class == "all" || &r.class == class)
+                .flat_map(|r| r.methods.iter().filter(|m| m.0 == name).map(|m| (&m.1, m.2)))
+                .collect();
+            if picked.is_empty() {
+                continue;
+            }
+            let metrics: Vec<ViewMetrics> = picked.iter().map(|(m, _)| (*m).clone()).collect();
+            let mut ns: Vec<u64> = picked.iter().map(|p| p.1).collect();
+            ns.sort_unstable();
+            rows.push(EvalRow {
+                method: name.to_string(),
+                class: class.clone(),
+                summary: summarize(&metrics),
+                cull_ns: ns[ns.len() / 2] as f64,
+            });
+        }
+    }
+    Ok(Evaluation {
+        options: opts.clone(),
+        triangles: n,
+        rows,
+        ground_truth_seconds_per_viewpoint: truth.seconds_per_viewpoint,
+        viewpoints: results,
+        per_triangle_setup_seconds: 0.0,
+    })
+}
+
+/// `methods` in [`METHODS`] order (unknown names last, in their given order).
+fn methods_in_order<'m, 'a>(methods: &'m [Method<'a>]) -> Vec<&'m Method<'a>> {
+    let mut v: Vec<&Method> = methods.iter().collect();
+    v.sort_by_key(|m| METHODS.iter().position(|&n| n == m.name).unwrap_or(METHODS.len()));
+    v
+}
+
+/// Evaluates `h` (whose mesh is `tin`) from the viewpoints of `opts`. `progress` is called after each viewpoint's
+/// ground truth.
+pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(usize, usize)) -> Result<Evaluation> {
+    anyhow::ensure!(
+        opts.fov_deg > 0.0 && opts.fov_deg <= 360.0,
+        "the field of view must be in (0, 360] degrees"
+    );
+    anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
+    let start = Instant::now();
+    let per_triangle = if opts.per_triangle {
+        Some(per_triangle_of(h, tin)?)
+    } else {
+        None
+    };
+    let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
+    let truth = GroundTruthSet::compute(tin, opts, progress)?;
+    let methods = standard_methods(h, per_triangle.as_ref(), None);
+    let mut e = score(tin, &truth, &methods)?;
+    e.per_triangle_setup_seconds = per_triangle_setup_seconds;
+    Ok(e)
+}
+
+impl Evaluation {
+    /// The CSV form: one line per method and class.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "method,class,viewpoints,viewpoints_with_false_culls,false_culls_mean,false_culls_max,\
+             false_cull_area_mean,false_cull_area_max,occlusion_captured_mean,occlusion_captured_p50,\
+             occlusion_captured_p95,overdraw_mean,triangles_drawn_mean,cull_ns\n",
+        );
+        let f = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
+        for r in &self.rows {
+            let m = &r.summary;
+            s += &format!(
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                r.method,
+                r.class,
+                m.viewpoints,
+                m.viewpoints_with_false_culls,
+                f(m.false_culls.map(|x| x.mean)),
+                f(m.false_culls.map(|x| x.max)),
+                f(m.false_cull_area.map(|x| x.mean)),
+                f(m.false_cull_area.map(|x| x.max)),
+                f(m.occlusion_captured.map(|x| x.mean)),
+                f(m.occlusion_captured.map(|x| x.p50)),
+                f(m.occlusion_captured.map(|x| x.p95)),
+                f(m.overdraw.map(|x| x.mean)),
+                f(m.triangles_drawn.map(|x| x.mean)),
+                r.cull_ns
+            );
+        }
+        s
+    }
+
+    /// A readable table: per method and class, false culls, occlusion captured, overdraw, drawn, cull time.
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "{:<13} {:<7} {:>4} {:>10} {:>11} {:>13} {:>9} {:>9} {:>10}\n",
+            "method", "class", "n", "false_cull", "fc_views", "occl_capt", "overdraw", "drawn", "cull_µs"
+        );
+        for r in &self.rows {
+            let m = &r.summary;
+            let mean = |x: Option<truth::Stat>| x.map_or("-".to_string(), |x| format!("{:.3}", x.mean));
+            s += &format!(
+                "{:<13} {:<7} {:>4} {:>10} {:>11} {:>13} {:>9} {:>9} {:>10.2}\n",
+                r.method,
+                r.class,
+                m.viewpoints,
+                m.false_culls.map_or("-".to_string(), |x| format!("{:.1}", x.mean)),
+                m.viewpoints_with_false_culls,
+                mean(m.occlusion_captured),
+                mean(m.overdraw),
+                m.triangles_drawn.map_or("-".to_string(), |x| format!("{:.0}", x.mean)),
+                r.cull_ns / 1000.0
+            );
+        }
+        s
+    }
+}

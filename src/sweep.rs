@@ -1,0 +1,455 @@
+//! Parameter sweeps: speed against accuracy over the build parameters (thesis 6.3, Table 3 and Figs. 16–17).
+//!
+//! A sweep builds the hierarchy for every combination of sectors `s`, subsectors `k`, first-pass seeds and crystal
+//! random seeds, and scores each build against one ground truth (the viewpoints and their visible sets depend only
+//! on the mesh and the viewpoint options, so they are computed once for the whole sweep, on the terrain in its
+//! original triangle order; every build's draw lists are mapped back to that order through `crystal.order`).
+//!
+//! Choices:
+//!
+//! - The results are a CSV table, one line per combination × method × class (the classes, then `all`). Lines are
+//!   kept sorted by the combination's key `(sectors, subsectors, seeds, rng_seed, viewpoints)`, then in the
+//!   evaluation's method and class order, so the file's order does not depend on the order the combinations ran in.
+//! - A sweep resumes: combinations whose key is already in the file are not run again. The key leaves out the
+//!   viewpoint classes, the viewpoint seed and the field of view: resume only with the same ones.
+//! - Combinations the horizon sweep rejects (fewer than 4 sectors, no subsectors, `s·k` above the limit) are skipped
+//!   with a note rather than failing the sweep.
+//! - The per-triangle method uses the build's own triangle regions (no second horizon sweep).
+//! - Combinations run one after the other, so that their wall times (each stage is parallel inside) are not
+//!   disturbed by each other.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use anyhow::{Context, Result, bail};
+use horizon::SectorConfig;
+use tin::Tin;
+
+use crate::evaluate::{Evaluation, GroundTruthSet, score, standard_methods};
+use crate::pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy};
+
+/// The header line of a sweep CSV (without the newline).
+pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
+regions_seconds,grouping_seconds,visibility_bytes,groups,orphans,orphan_passes,nodes,levels,top_level,method,class,\
+views,false_culls_mean,false_culls_max,viewpoints_with_false_culls,false_cull_area_mean,occlusion_captured_mean,\
+occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns";
+
+/// What identifies a combination in a sweep file; ordered as the file's lines are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct SweepKey {
+    /// Sectors `s`.
+    pub sectors: u32,
+    /// Subsectors per sector `k`.
+    pub subsectors: u32,
+    /// Seeds of the first crystal pass (resolved: never "default").
+    pub seeds: usize,
+    /// Seed of the crystal's random generator.
+    pub rng_seed: u64,
+    /// Viewpoints per class.
+    pub viewpoints: usize,
+}
+
+/// One combination to build and score.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Combo {
+    /// Its key.
+    pub key: SweepKey,
+    /// The build parameters.
+    pub params: BuildParams,
+}
+
+/// The ranges of a sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSpec {
+    /// Sector counts.
+    pub sectors: Vec<u32>,
+    /// Subsector counts.
+    pub subsectors: Vec<u32>,
+    /// First-pass seed counts; `None` is the default (one per 200 triangles).
+    pub seeds: Vec<Option<usize>>,
+    /// Crystal random seeds.
+    pub rng_seeds: Vec<u64>,
+    /// Everything else of the builds (its sectors, subsectors, seeds and rng seed are replaced).
+    pub base: BuildParams,
+    /// Viewpoints per class of the evaluation.
+    pub viewpoints: usize,
+}
+
+impl SweepSpec {
+    /// The valid combinations for a mesh of `triangles` triangles, in key order without duplicates, and a note for
+    /// each combination left out.
+    pub fn combos(&self, triangles: usize) -> (Vec<Combo>, Vec<String>) {
+        let mut combos = BTreeMap::new();
+        let mut notes = Vec::new();
+        for &s in &self.sectors {
+            for &k in &self.subsectors {
+                if let Err(e) = SectorConfig::new(s, k) {
+                    notes.push(format!("skipped sectors {s} x subsectors {k}: {e}"));
+                    continue;
+                }
+                for &seeds in &self.seeds {
+                    for &rng_seed in &self.rng_seeds {
+                        let mut params = self.base.clone();
+                        params.sectors = s;
+                        params.subsectors = k;
+                        params.crystal.seeds = seeds;
+                        params.crystal.rng_seed = rng_seed;
+                        if let Err(e) = params.crystal.validate() {
+                            notes.push(format!(
+                                "skipped sectors {s} x subsectors {k}, seeds {seeds:?}, rng seed {rng_seed}: {e}"
+                            ));
+                            continue;
+                        }
+                        let key = SweepKey {
+                            sectors: s,
+                            subsectors: k,
+                            seeds: params.crystal.first_seeds(triangles),
+                            rng_seed,
+                            viewpoints: self.viewpoints,
+                        };
+                        combos.entry(key).or_insert(Combo { key, params });
+                    }
+                }
+            }
+        }
+        (combos.into_values().collect(), notes)
+    }
+}
+
+/// Parses a list of non-negative integers: comma-separated items, each a number or an inclusive range `a..b`
+/// (`"1..5"`, `"4,8,16"`, `"1..3,8"`). `what` names the option in errors.
+pub fn parse_list(text: &str, what: &str) -> Result<Vec<u64>> {
+    let mut out = Vec::new();
+    for item in text.split(',').map(str::trim) {
+        if item.is_empty() {
+            bail!("{what}: empty item in {text:?}");
+        }
+        let num = |s: &str| -> Result<u64> {
+            s.trim()
+                .parse::<u64>()
+                .with_context(|| format!("{what}: {s:?} is not a non-negative integer"))
+        };
+        match item.split_once("..") {
+            Some((a, b)) => {
+                let (a, b) = (num(a)?, num(b.strip_prefix('=').unwrap_or(b))?);
+                if a > b {
+                    bail!("{what}: the range {item:?} is empty");
+                }
+                if b - a >= 100_000 {
+                    bail!("{what}: the range {item:?} is too long");
+                }
+                out.extend(a..=b);
+            }
+            None => out.push(num(item)?),
+        }
+    }
+    Ok(out)
+}
+
+/// The sweep CSV's lines for one combination: one per evaluation row (method × class).
+pub fn csv_lines(key: &SweepKey, report: &BuildReport, e: &Evaluation) -> Vec<String> {
+    let f = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
+    e.rows
+        .iter()
+        .map(|r| {
+            let m = &r.summary;
+            let mut line = String::new();
+            let _ = write!(
+                line,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                key.sectors,
+                key.subsectors,
+                key.seeds,
+                key.rng_seed,
+                key.viewpoints,
+                report.vertices,
+                report.triangles,
+                report.horizon_seconds,
+                report.regions_seconds,
+                report.grouping_seconds,
+                report.visibility_bytes,
+                report.groups,
+                report.orphans,
+                report.orphan_passes,
+                report.nodes,
+                report.levels,
+                report.top_level,
+                r.method,
+                r.class,
+                m.viewpoints,
+                f(m.false_culls.map(|x| x.mean)),
+                f(m.false_culls.map(|x| x.max)),
+                m.viewpoints_with_false_culls,
+                f(m.false_cull_area.map(|x| x.mean)),
+                f(m.occlusion_captured.map(|x| x.mean)),
+                f(m.occlusion_captured.map(|x| x.p50)),
+                f(m.overdraw.map(|x| x.mean)),
+                f(m.triangles_drawn.map(|x| x.mean)),
+                r.cull_ns
+            );
+            line
+        })
+        .collect()
+}
+
+/// The lines of a sweep file, grouped by combination.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SweepTable {
+    rows: BTreeMap<SweepKey, Vec<String>>,
+}
+
+impl SweepTable {
+    /// Reads a sweep file's text; the header must be [`HEADER`]. Errors name the offending line.
+    pub fn parse(text: &str) -> Result<SweepTable> {
+        let mut lines = text.lines().enumerate();
+        let mut table = SweepTable::default();
+        match lines.next() {
+            None => return Ok(table),
+            Some((_, h)) if h.trim_end() == HEADER => {}
+            Some((_, h)) => bail!(
+                "line 1: the header {:?} is not that of this version's sweep files; move the file away or name \
+                 another one",
+                h.chars().take(60).collect::<String>()
+            ),
+        }
+        let columns = HEADER.split(',').count();
+        for (i, line) in lines {
+            let line = line.trim_end();
+            if line.is_empty() {
+                continue;
+            }
+            let fields: Vec<&str> = line.split(',').collect();
+            if fields.len() != columns {
+                bail!("line {}: {} fields, expected {columns}", i + 1, fields.len());
+            }
+            let field = |j: usize| -> Result<u64> {
+                fields[j]
+                    .parse::<u64>()
+                    .with_context(|| format!("line {}: field {} ({:?}) is not an integer", i + 1, j + 1, fields[j]))
+            };
+            let small = |j: usize| -> Result<u32> {
+                u32::try_from(field(j)?).with_context(|| format!("line {}: field {} is too large", i + 1, j + 1))
+            };
+            let key = SweepKey {
+                sectors: small(0)?,
+                subsectors: small(1)?,
+                seeds: field(2)? as usize,
+                rng_seed: field(3)?,
+                viewpoints: field(4)? as usize,
+            };
+            table.rows.entry(key).or_default().push(line.to_string());
+        }
+        Ok(table)
+    }
+
+    /// Whether the combination `key` is in the table.
+    pub fn contains(&self, key: &SweepKey) -> bool {
+        self.rows.contains_key(key)
+    }
+
+    /// Sets the lines of a combination.
+    pub fn insert(&mut self, key: SweepKey, lines: Vec<String>) {
+        self.rows.insert(key, lines);
+    }
+
+    /// Number of combinations.
+    pub fn combos(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Number of data lines.
+    pub fn lines(&self) -> usize {
+        self.rows.values().map(Vec::len).sum()
+    }
+
+    /// The file's text: the header, then every combination's lines in key order.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(HEADER);
+        s.push('\n');
+        for line in self.rows.values().flatten() {
+            s += line;
+            s.push('\n');
+        }
+        s
+    }
+}
+
+/// The result of one combination.
+pub struct ComboResult {
+    /// Build figures.
+    pub report: BuildReport,
+    /// The evaluation against the sweep's ground truth.
+    pub evaluation: Evaluation,
+    /// The CSV lines.
+    pub lines: Vec<String>,
+}
+
+/// Builds `combo` on `tin` and scores it (hierarchy, per-triangle when `per_triangle`, frustum only, none) against
+/// `truth`, which must have been computed on `tin`.
+pub fn run_combo(
+    tin: &Tin,
+    truth: &GroundTruthSet,
+    combo: &Combo,
+    per_triangle: bool,
+    progress: Option<BuildProgress>,
+) -> Result<ComboResult> {
+    let b = build(tin, &combo.params, progress)?;
+    let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &b.triangle_regions));
+    let methods = standard_methods(&b.hierarchy, per_triangle.as_ref(), Some(&b.crystal.order));
+    let evaluation = score(tin, truth, &methods)?;
+    let lines = csv_lines(&combo.key, &b.report, &evaluation);
+    Ok(ComboResult {
+        report: b.report,
+        evaluation,
+        lines,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::evaluate::{EvalOptions, evaluate, hierarchy_tin};
+    use truth::ViewpointClass;
+
+    #[test]
+    fn lists_and_ranges_parse() {
+        assert_eq!(parse_list("4,8,16", "x").unwrap(), vec![4, 8, 16]);
+        assert_eq!(parse_list("1..5", "x").unwrap(), vec![1, 2, 3, 4, 5]);
+        assert_eq!(parse_list("1..=3, 8", "x").unwrap(), vec![1, 2, 3, 8]);
+        for bad in ["", "1,,2", "a", "5..1", "-1", "1..x"] {
+            let e = parse_list(bad, "--sectors").unwrap_err().to_string();
+            assert!(e.contains("--sectors"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn combos_skip_invalid_and_come_in_key_order() {
+        let spec = SweepSpec {
+            sectors: vec![64, 2, 8],
+            subsectors: vec![32, 1],
+            seeds: vec![None, Some(0), Some(7)],
+            rng_seeds: vec![2, 1],
+            base: BuildParams::default(),
+            viewpoints: 3,
+        };
+        let (combos, notes) = spec.combos(4000);
+        let keys: Vec<SweepKey> = combos.iter().map(|c| c.key).collect();
+        let mut sorted = keys.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(keys, sorted);
+        // 64 x 32 = 2048 subsectors and 2 sectors are rejected; seeds 0 is invalid or maps to 1 (never run twice).
+        assert!(keys.iter().all(|k| k.sectors * k.subsectors <= 1024 && k.sectors >= 4));
+        assert!(notes.iter().any(|n| n.contains("sectors 64 x subsectors 32")));
+        assert!(notes.iter().any(|n| n.contains("sectors 2 x")));
+        assert!(
+            keys.iter()
+                .any(|k| k.seeds == 20 && k.sectors == 8 && k.subsectors == 32)
+        );
+        for c in &combos {
+            assert_eq!(c.params.sectors, c.key.sectors);
+            assert_eq!(c.params.crystal.first_seeds(4000), c.key.seeds);
+            assert_eq!(c.params.crystal.rng_seed, c.key.rng_seed);
+        }
+    }
+
+    #[test]
+    fn table_round_trips_and_rejects_foreign_files() {
+        let key = SweepKey {
+            sectors: 8,
+            subsectors: 2,
+            seeds: 10,
+            rng_seed: 1,
+            viewpoints: 2,
+        };
+        let line = format!("8,2,10,1,2{}", ",x".repeat(HEADER.split(',').count() - 5));
+        let mut t = SweepTable::default();
+        t.insert(key, vec![line.clone()]);
+        let text = t.to_csv();
+        let back = SweepTable::parse(&text).unwrap();
+        assert_eq!(back, t);
+        assert!(back.contains(&key));
+        assert_eq!(back.to_csv(), text);
+        assert!(SweepTable::parse("a,b\n").unwrap_err().to_string().contains("line 1"));
+        let short = format!("{HEADER}\n1,2,3\n");
+        assert!(SweepTable::parse(&short).unwrap_err().to_string().contains("line 2"));
+        let bad = format!("{HEADER}\n{}\n", line.replacen('8', "eight", 1));
+        assert!(SweepTable::parse(&bad).unwrap_err().to_string().contains("line 2"));
+    }
+
+    /// Scoring a build against ground truth computed once on the original triangle order gives the same figures
+    /// as evaluating the exported hierarchy on its own mesh (viewpoints drawn over the same footprint).
+    #[test]
+    fn shared_ground_truth_matches_a_direct_evaluation() {
+        let tin = tin::synth_tin(&tin::SynthOptions::new(600, 3)).unwrap();
+        let params = BuildParams {
+            sectors: 8,
+            subsectors: 2,
+            ..BuildParams::default()
+        };
+        let opts = EvalOptions {
+            viewpoints: 3,
+            classes: vec![ViewpointClass::Low, ViewpointClass::Ridge],
+            ..EvalOptions::default()
+        };
+        let truth = GroundTruthSet::compute(&tin, &opts, &|_, _| {}).unwrap();
+        let combo = Combo {
+            key: SweepKey {
+                sectors: 8,
+                subsectors: 2,
+                seeds: params.crystal.first_seeds(tin.num_triangles()),
+                rng_seed: 1,
+                viewpoints: 3,
+            },
+            params: params.clone(),
+        };
+        let swept = run_combo(&tin, &truth, &combo, true, None).unwrap();
+        let b = build(&tin, &params, None).unwrap();
+        let htin = hierarchy_tin(&b.hierarchy).unwrap();
+        // The direct evaluation draws its viewpoints over the reordered mesh; score the same eyes both ways.
+        let direct_truth = GroundTruthSet {
+            views: truth
+                .views
+                .iter()
+                .map(|v| crate::evaluate::TruthView {
+                    visible: truth::GroundTruth::new(&htin).visible_triangles(v.eye),
+                    ..v.clone()
+                })
+                .collect(),
+            ..truth.clone()
+        };
+        let pt = crate::evaluate::per_triangle_of(&b.hierarchy, &htin).unwrap();
+        let direct = score(&htin, &direct_truth, &standard_methods(&b.hierarchy, Some(&pt), None)).unwrap();
+        assert_eq!(swept.evaluation.rows.len(), direct.rows.len());
+        for (a, d) in swept.evaluation.rows.iter().zip(&direct.rows) {
+            assert_eq!((&a.method, &a.class), (&d.method, &d.class));
+            // Counts agree exactly; areas are summed in another triangle order, so only to rounding.
+            let (x, y) = (&a.summary, &d.summary);
+            let what = format!("{} {}", a.method, a.class);
+            assert_eq!(x.viewpoints, y.viewpoints, "{what}");
+            assert_eq!(x.viewpoints_with_false_culls, y.viewpoints_with_false_culls, "{what}");
+            assert_eq!(x.false_culls, y.false_culls, "{what}");
+            assert_eq!(x.occlusion_captured, y.occlusion_captured, "{what}");
+            assert_eq!(x.overdraw, y.overdraw, "{what}");
+            assert_eq!(x.triangles_drawn, y.triangles_drawn, "{what}");
+            match (x.false_cull_area, y.false_cull_area) {
+                (Some(p), Some(q)) => {
+                    for (u, v) in [(p.mean, q.mean), (p.max, q.max), (p.p50, q.p50)] {
+                        assert!((u - v).abs() <= 1e-9 * u.abs().max(1.0), "{what}: {u} vs {v}");
+                    }
+                }
+                (p, q) => assert_eq!(p, q, "{what}"),
+            }
+        }
+        assert_eq!(swept.lines.len(), swept.evaluation.rows.len());
+        assert!(
+            swept
+                .lines
+                .iter()
+                .all(|l| l.split(',').count() == HEADER.split(',').count())
+        );
+        // evaluate() still runs end to end on the exported hierarchy.
+        let e = evaluate(&b.hierarchy, &htin, &opts, &|_, _| {}).unwrap();
+        assert_eq!(e.rows.len(), 4 * 3);
+    }
+}

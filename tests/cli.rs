@@ -1,0 +1,348 @@
+//! End-to-end tests of the `tincull` binary: every command on the bundled meshes, bad input, determinism.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tincull"))
+}
+
+fn mesh(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("the binary runs")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "tincull {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = ok(args);
+    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
+}
+
+/// A failing command exits non-zero with a clear `error:` line and no panic.
+fn fails_with(args: &[&str], needle: &str) {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "tincull {args:?} should fail");
+    assert!(!stderr.contains("panicked"), "tincull {args:?} panicked:\n{stderr}");
+    assert!(stderr.contains("error"), "no error message for {args:?}:\n{stderr}");
+    assert!(
+        stderr.contains(needle),
+        "error for {args:?} does not mention {needle:?}:\n{stderr}"
+    );
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+#[test]
+fn info_reports_the_bundled_mesh() {
+    let v = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
+    assert_eq!(v["vertices"], 2000);
+    assert_eq!(v["height_field"], true);
+    assert!(v["triangles"].as_u64().expect("count") > 3800);
+    assert!(v["relief"].as_f64().expect("relief") > 500.0);
+}
+
+#[test]
+fn synth_is_deterministic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let [a, b, c] = ["a.obj", "b.obj", "c.obj"].map(|n| dir.path().join(n));
+    ok(&["synth", "-o", s(&a), "--vertices", "3000", "--rng-seed", "7", "-q"]);
+    ok(&["synth", "-o", s(&b), "--vertices", "3000", "--rng-seed", "7", "-q"]);
+    ok(&["synth", "-o", s(&c), "--vertices", "3000", "--rng-seed", "8", "-q"]);
+    let read = |p: &Path| std::fs::read(p).expect("written");
+    assert_eq!(read(&a), read(&b));
+    assert_ne!(read(&a), read(&c));
+    let v = json(&["info", s(&a), "--json"]);
+    assert_eq!(v["vertices"], 3000);
+}
+
+#[test]
+fn tin_simplifies_an_ascii_grid() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asc = dir.path().join("hill.asc");
+    let mut text =
+        String::from("ncols 40\nnrows 30\nxllcorner 1000\nyllcorner 2000\ncellsize 10\nNODATA_value -9999\n");
+    for r in 0..30 {
+        let row: Vec<String> = (0..40)
+            .map(|c| {
+                if (r, c) == (10, 10) {
+                    "-9999".into()
+                } else {
+                    format!("{}", (r * c) % 17 + r)
+                }
+            })
+            .collect();
+        text += &row.join(" ");
+        text += "\n";
+    }
+    std::fs::write(&asc, text).expect("fixture");
+    let obj = dir.path().join("hill.obj");
+    let v = json(&["tin", s(&asc), "-o", s(&obj), "--vertices", "200", "--json"]);
+    assert_eq!(v["vertices"], 200);
+    assert_eq!(v["voids"], 1);
+    assert!(v["max_error"].as_f64().expect("error") > 0.0);
+    let v = json(&["tin", s(&asc), "-o", s(&obj), "--max-error", "0", "--json"]);
+    assert_eq!(v["max_error"], 0.0);
+    let info = json(&["info", s(&obj), "--json"]);
+    assert_eq!(info["vertices"], v["vertices"]);
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).expect("fixture");
+        p
+    };
+    fails_with(&["info", "/no/such/file.obj"], "No such file");
+    fails_with(&["info", s(&write("empty.obj", ""))], "empty.obj");
+    fails_with(
+        &["info", s(&write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"))],
+        "range.obj:4",
+    );
+    fails_with(
+        &["info", s(&write("nan.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\n"))],
+        "nan.obj:2",
+    );
+    fails_with(
+        &["info", s(&write("wall.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 0 5\n"))],
+        "wall.obj",
+    );
+    fails_with(&["info", s(&write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1"))], "cut.obj:3");
+    let nonmanifold = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3\nf 1 2 4\nf 1 2 5\n";
+    fails_with(&["info", "--keep-faces", s(&write("nm.obj", nonmanifold))], "nm.obj");
+    fails_with(
+        &["info", s(&write("foreign.obj", "\u{0}\u{1}binary garbage\n"))],
+        "foreign.obj",
+    );
+    fails_with(
+        &["tin", "/no/such/dem.npy", "-o", "x.obj", "--vertices", "10"],
+        "dem.npy",
+    );
+    fails_with(
+        &["build", s(&mesh("jacksboro-2k.obj")), "-o", "x.tch", "--sectors", "2"],
+        "sector",
+    );
+    fails_with(
+        &[
+            "horizon",
+            s(&mesh("jacksboro-2k.obj")),
+            "--sectors",
+            "64",
+            "--subsectors",
+            "64",
+        ],
+        "1024",
+    );
+    fails_with(&["cull", "/no/such.tch", "--eye", "0,0,0"], "such.tch");
+    fails_with(
+        &["cull", s(&mesh("jacksboro-2k.obj")), "--eye", "0,0,0"],
+        "not a tincull hierarchy file",
+    );
+    fails_with(&["cull", "x.tch", "--eye", "1,2"], "x,y,z");
+}
+
+#[test]
+fn horizon_sweep_matches_the_oracle() {
+    let v = json(&[
+        "horizon",
+        s(&mesh("jacksboro-2k.obj")),
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--verify",
+        "--json",
+    ]);
+    assert_eq!(v["mismatches"], 0);
+    assert_eq!(v["vertices"], 2000);
+    assert_eq!(v["subsectors"], 16);
+}
+
+#[test]
+fn build_cull_export_eval_round_trip() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("j2k.tch");
+    let report = json(&[
+        "build",
+        s(&mesh("jacksboro-2k.obj")),
+        "-o",
+        s(&tch),
+        "--seeds",
+        "20",
+        "--json",
+    ]);
+    for key in [
+        "horizon_seconds",
+        "grouping_seconds",
+        "orphan_passes",
+        "orphans",
+        "groups",
+        "nodes",
+        "levels",
+        "top_level",
+        "visibility_bytes",
+    ] {
+        assert!(report.get(key).is_some(), "build report lacks {key}");
+    }
+    let groups = report["groups"].as_u64().expect("groups");
+    assert!(groups >= 1);
+
+    let bbox = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"])["bbox"].clone();
+    let (cx, cy) = (
+        (bbox["min"][0].as_f64().expect("x") + bbox["max"][0].as_f64().expect("x")) / 2.0,
+        (bbox["min"][1].as_f64().expect("y") + bbox["max"][1].as_f64().expect("y")) / 2.0,
+    );
+    let eye = format!("{cx},{cy},500");
+    let c = json(&["cull", s(&tch), "--eye", &eye, "--json"]);
+    let triangles = report["triangles"].as_u64().expect("triangles");
+    let drawn: u64 = c["ranges"]
+        .as_array()
+        .expect("ranges")
+        .iter()
+        .map(|r| r[1].as_u64().expect("end") - r[0].as_u64().expect("start"))
+        .sum();
+    assert_eq!(drawn, c["triangles_drawn"].as_u64().expect("drawn"));
+    assert!(drawn <= triangles);
+    let eyes = dir.path().join("eyes.txt");
+    std::fs::write(&eyes, format!("{eye}\n# a comment\n{cx},{cy},5000\n")).expect("eyes");
+    let lines = ok(&["cull", s(&tch), "--eyes", s(&eyes), "--json"]).stdout;
+    assert_eq!(String::from_utf8_lossy(&lines).lines().count(), 2);
+
+    let (json_out, obj_out) = (dir.path().join("h.json"), dir.path().join("h.obj"));
+    ok(&["export", s(&tch), "--json", s(&json_out), "--obj", s(&obj_out)]);
+    let obj = std::fs::read_to_string(&obj_out).expect("obj");
+    assert_eq!(obj.matches("\ng group_").count() as u64, groups);
+    assert!(obj.contains("\ng orphans\n"));
+    assert!(dir.path().join("h.mtl").exists());
+    let h: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_out).expect("json")).expect("parses");
+    assert_eq!(
+        h["nodes"].as_array().expect("nodes").len() as u64,
+        report["nodes"].as_u64().expect("nodes")
+    );
+
+    let csv = dir.path().join("e.csv");
+    ok(&[
+        "eval",
+        s(&tch),
+        "--viewpoints",
+        "2",
+        "--classes",
+        "ground,sky",
+        "--csv",
+        s(&csv),
+        "-q",
+    ]);
+    let csv = std::fs::read_to_string(&csv).expect("csv");
+    assert!(csv.starts_with("method,class,viewpoints,"));
+    for method in ["hierarchy,ground", "per_triangle,sky", "frustum_only,all", "none,all"] {
+        assert!(csv.contains(method), "csv lacks {method}");
+    }
+
+    // Corruption of the file is detected.
+    let mut bytes = std::fs::read(&tch).expect("tch");
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0x55;
+    let bad = dir.path().join("bad.tch");
+    std::fs::write(&bad, &bytes).expect("bad");
+    fails_with(&["cull", s(&bad), "--eye", &eye], "checksum");
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).expect("bad");
+    fails_with(&["export", s(&bad), "--json", s(&json_out)], "truncated");
+}
+
+#[test]
+fn build_is_deterministic_across_threads_and_seeds() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let build = |name: &str, seed: &str, threads: &str| {
+        let p = dir.path().join(name);
+        let out = bin()
+            .args([
+                "build",
+                s(&mesh("jacksboro-2k.obj")),
+                "-o",
+                s(&p),
+                "--rng-seed",
+                seed,
+                "-q",
+            ])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .expect("runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        std::fs::read(p).expect("written")
+    };
+    let one = build("a.tch", "3", "1");
+    let two = build("b.tch", "3", "2");
+    assert!(one == two, "same seed, 1 vs 2 threads: different .tch files");
+    assert!(build("c.tch", "4", "2") != one, "another seed should change the groups");
+}
+
+#[test]
+fn parameters_come_from_toml_and_the_command_line_wins() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let toml = dir.path().join("p.toml");
+    std::fs::write(&toml, "sectors = 8\nsubsectors = 2\nmin_group = 20\n").expect("toml");
+    let tch = dir.path().join("p.tch");
+    let v = json(&[
+        "build",
+        s(&mesh("jacksboro-2k.obj")),
+        "-o",
+        s(&tch),
+        "--config",
+        s(&toml),
+        "--subsectors",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(v["params"]["sectors"], 8);
+    assert_eq!(v["params"]["subsectors"], 1);
+    assert_eq!(v["params"]["crystal"]["min_group"], 20);
+    std::fs::write(&toml, "sector = 8\n").expect("toml");
+    fails_with(
+        &[
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            s(&tch),
+            "--config",
+            s(&toml),
+        ],
+        "p.toml",
+    );
+}
+
+#[test]
+fn delaunay_is_the_same_in_every_process() {
+    // An integer grid: every cell is cocircular, so only a deterministic triangulator gives identical output.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let obj = dir.path().join("grid.obj");
+    let mut text = String::new();
+    for i in 0..60 * 60 {
+        text += &format!("v {} {} {}\n", i % 60, i / 60, (i * 7919) % 13);
+    }
+    std::fs::write(&obj, text).expect("grid");
+    let hashes: Vec<Vec<u8>> = (0..3)
+        .map(|i| {
+            let p = dir.path().join(format!("g{i}.tch"));
+            ok(&["build", s(&obj), "-o", s(&p), "--seeds", "10", "-q"]);
+            std::fs::read(p).expect("written")
+        })
+        .collect();
+    assert!(hashes.windows(2).all(|w| w[0] == w[1]));
+}

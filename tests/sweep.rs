@@ -1,0 +1,185 @@
+//! End-to-end test of `tincull sweep`: a small sweep on the bundled mesh, its CSV, and resuming.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn mesh(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
+}
+
+fn sweep(out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mesh = mesh("jacksboro-2k.obj");
+    let mut args = vec![
+        "sweep",
+        mesh.to_str().expect("utf-8 path"),
+        "--viewpoints",
+        "1",
+        "--classes",
+        "low,ridge",
+        "--json",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ];
+    args.extend_from_slice(extra);
+    let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(&args)
+        .output()
+        .expect("the binary runs");
+    assert!(
+        o.status.success(),
+        "tincull {args:?} failed:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
+}
+
+#[test]
+fn sweep_writes_every_combination_and_resumes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("sweep.csv");
+    // 2 sectors and 64 x 32 subsectors are skipped with notes.
+    let v = sweep(&csv, &["--sectors", "2,64", "--subsectors", "32"]);
+    assert_eq!(v["ran"], 0, "{v}");
+    assert_eq!(v["combinations"], 0, "{v}");
+    let notes: Vec<String> = v["notes"]
+        .as_array()
+        .expect("notes")
+        .iter()
+        .map(|n| n.as_str().expect("text").to_string())
+        .collect();
+    assert!(notes.iter().any(|n| n.contains("sectors 2 x")), "{notes:?}");
+    assert!(
+        notes.iter().any(|n| n.contains("sectors 64 x subsectors 32")),
+        "{notes:?}"
+    );
+
+    let small = dir.path().join("small.csv");
+    let v = sweep(&small, &["--sectors", "4,8", "--subsectors", "1,2"]);
+    assert_eq!(v["ran"], 4);
+    assert_eq!(v["skipped"], 0);
+    let text = std::fs::read_to_string(&small).expect("csv");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // 4 combinations x 4 methods x (2 classes + all).
+    assert_eq!(rows.len(), 4 * 4 * 3);
+    assert!(rows.iter().all(|r| r.len() == header.len()));
+    let combos: Vec<(&str, &str)> = rows.iter().map(|r| (r[col("sectors")], r[col("subsectors")])).collect();
+    let mut expected = Vec::new();
+    for c in [("4", "1"), ("4", "2"), ("8", "1"), ("8", "2")] {
+        expected.extend(std::iter::repeat_n(c, 12));
+    }
+    assert_eq!(combos, expected, "rows in key order");
+    for r in &rows {
+        let num = |name: &str| {
+            r[col(name)]
+                .parse::<f64>()
+                .unwrap_or_else(|_| panic!("{name}: {:?}", r[col(name)]))
+        };
+        assert_eq!(num("viewpoints"), 1.0);
+        assert_eq!(num("seeds"), (num("triangles") / 200.0).floor().max(1.0));
+        assert!(num("groups") >= 1.0 && num("nodes") >= num("groups"));
+        assert!(num("horizon_seconds") > 0.0);
+        let views = if r[col("class")] == "all" { 2.0 } else { 1.0 };
+        assert_eq!(num("views"), views);
+        match r[col("method")] {
+            "none" => {
+                assert_eq!(num("triangles_drawn_mean"), num("triangles"));
+                assert_eq!(num("false_culls_max"), 0.0);
+                if !r[col("occlusion_captured_mean")].is_empty() {
+                    assert_eq!(num("occlusion_captured_mean"), 0.0);
+                }
+            }
+            "hierarchy" | "per_triangle" | "frustum_only" => {
+                assert!(num("triangles_drawn_mean") <= num("triangles"));
+                assert!(num("cull_ns") > 0.0);
+            }
+            m => panic!("unexpected method {m}"),
+        }
+    }
+    // Everything but the timings is deterministic: a second sweep into another file agrees.
+    let again = dir.path().join("again.csv");
+    sweep(&again, &["--sectors", "8,4", "--subsectors", "2,1"]);
+    let strip = |t: &str| -> Vec<String> {
+        let timing = ["horizon_seconds", "regions_seconds", "grouping_seconds", "cull_ns"].map(col);
+        t.lines()
+            .map(|l| {
+                l.split(',')
+                    .enumerate()
+                    .filter(|(i, _)| !timing.contains(i))
+                    .map(|(_, f)| f)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect()
+    };
+    assert_eq!(strip(&text), strip(&std::fs::read_to_string(&again).expect("csv")));
+
+    // Resuming: nothing to run and the file is untouched; a wider sweep runs only the new combinations.
+    let v = sweep(&small, &["--sectors", "4,8", "--subsectors", "1,2"]);
+    assert_eq!(v["ran"], 0);
+    assert_eq!(v["skipped"], 4);
+    assert_eq!(std::fs::read_to_string(&small).expect("csv"), text);
+    let v = sweep(&small, &["--sectors", "4,8", "--subsectors", "1..3"]);
+    assert_eq!(v["ran"], 2);
+    assert_eq!(v["skipped"], 4);
+    let wider = std::fs::read_to_string(&small).expect("csv");
+    assert_eq!(wider.lines().count(), 1 + 6 * 12);
+    let old: Vec<&str> = text.lines().collect();
+    assert!(
+        old.iter().all(|l| wider.lines().any(|w| w == *l)),
+        "old rows kept verbatim"
+    );
+
+    // A file that is not a sweep file is refused, not overwritten.
+    let foreign = dir.path().join("foreign.csv");
+    std::fs::write(&foreign, "a,b\n1,2\n").expect("write");
+    let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["sweep", mesh("jacksboro-2k.obj").to_str().expect("path"), "-q", "-o"])
+        .arg(&foreign)
+        .output()
+        .expect("runs");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("header"));
+    assert_eq!(std::fs::read_to_string(&foreign).expect("read"), "a,b\n1,2\n");
+}
+
+#[test]
+fn sweep_without_per_triangle_has_three_methods() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("s.csv");
+    let v = sweep(&csv, &["--sectors", "4", "--subsectors", "1", "--no-per-triangle"]);
+    assert_eq!(v["ran"], 1);
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    assert_eq!(text.lines().count(), 1 + 3 * 3);
+    assert!(!text.contains("per_triangle"));
+}
+
+#[test]
+fn sweep_rejects_bad_lists() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (opt, val) in [("--sectors", "4,x"), ("--rng-seeds", "5..1"), ("--subsectors", "")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+            .args([
+                "sweep",
+                mesh("jacksboro-2k.obj").to_str().expect("path"),
+                opt,
+                val,
+                "-q",
+                "-o",
+            ])
+            .arg(dir.path().join("x.csv"))
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{opt} {val}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(err.contains(opt), "{opt} {val}: {err}");
+    }
+}
