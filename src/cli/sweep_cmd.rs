@@ -10,10 +10,10 @@ use clap::Args;
 use serde_json::json;
 use truth::ViewpointClass;
 
+use super::build_cmd::ParamArgs;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 use crate::evaluate::{EvalOptions, GroundTruthSet};
-use crate::pipeline::BuildParams;
 use crate::sweep::{SweepSpec, SweepTable, parse_list, run_combo};
 
 /// Arguments of `tincull sweep`.
@@ -78,23 +78,14 @@ fn u32_list(text: &str, what: &str) -> Result<Vec<u32>> {
 
 /// Runs `tincull sweep`.
 pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
-    let mut base = BuildParams::default();
-    if let Some(p) = args.orphan_passes {
-        base.crystal.orphan_passes = p;
+    let base = ParamArgs {
+        orphan_passes: args.orphan_passes,
+        min_group: args.min_group,
+        max_expanse: args.max_expanse,
+        undersampling: args.undersampling,
+        ..ParamArgs::default()
     }
-    if let Some(m) = args.min_group {
-        base.crystal.min_group = m;
-    }
-    if let Some(m) = args.max_expanse {
-        base.crystal.max_expanse = m;
-    }
-    if let Some(r) = args.undersampling {
-        anyhow::ensure!(
-            r.is_finite() && r > 0.0,
-            "the undersampling radius must be positive and finite, got {r}"
-        );
-        base.undersampling = Some(r);
-    }
+    .resolve(None)?;
     anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
     let spec = SweepSpec {
         sectors: u32_list(&args.sectors, "--sectors")?,
