@@ -3,15 +3,34 @@
 //! `cargo bench --bench cull`. Builds `meshes/jacksboro-10k.obj` with default parameters (16 × 4 sectors), draws 20
 //! `ground` and 20 `high` viewpoints (seed 1), and times one cull per viewpoint for the hierarchy and for the
 //! per-triangle method. With `TINCULL_BENCH_MESH=path.obj` another mesh is used instead.
+//!
+//! Before timing, each culler's draw lists are checked against the straightforward reference culler of the `cull`
+//! crate's tests, for 20 viewpoints of every class, with and without a frustum (this also runs under
+//! `cargo test --release --bench cull`), and the number of nodes tested per cull is printed.
+
+#[path = "../crates/cull/tests/reference/mod.rs"]
+mod reference;
 
 use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use tincull::cull::{Camera, Culler, DrawList};
+use tincull::cull::{Camera, Culler, DrawList, Hierarchy};
 use tincull::evaluate::{hierarchy_tin, per_triangle_of};
 use tincull::pipeline::{BuildParams, build};
 use tincull::truth::{ViewpointClass, viewpoints};
+
+/// Panics unless `culler` gives the reference's draw list for every camera.
+fn check_against_reference(method: &str, h: &Hierarchy, culler: &Culler, cameras: &[Camera]) {
+    let reference = reference::ReferenceCuller::new(h);
+    let mut out = DrawList::default();
+    for (i, camera) in cameras.iter().enumerate() {
+        culler.cull_into(camera, &mut out);
+        if let Err(e) = reference::compare(&out, &reference.cull(camera)) {
+            panic!("{method}: camera {i} ({camera:?}): {e}");
+        }
+    }
+}
 
 fn bench(c: &mut Criterion) {
     let path = std::env::var_os("TINCULL_BENCH_MESH")
@@ -25,16 +44,45 @@ fn bench(c: &mut Criterion) {
     let mut eyes = viewpoints(&htin, ViewpointClass::Ground, 20, 1);
     eyes.extend(viewpoints(&htin, ViewpointClass::High, 20, 1));
     let cameras: Vec<Camera> = eyes.iter().map(|e| Camera::all_around(e.to_array())).collect();
+    let mut checks: Vec<Camera> = Vec::new();
+    for class in ViewpointClass::ALL {
+        for (k, e) in viewpoints(&htin, class, 20, 2).iter().enumerate() {
+            checks.push(Camera::all_around(e.to_array()));
+            checks.push(Camera {
+                position: e.to_array(),
+                yaw: k as f64,
+                hfov: 1.0 + 0.25 * (k % 8) as f64,
+            });
+        }
+    }
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let mut group = c.benchmark_group(format!("cull/{name}"));
-    for (method, culler) in [
-        ("hierarchy", Culler::new(&h)),
-        ("per_triangle", Culler::new(&per_triangle)),
-    ] {
+    for (method, hierarchy) in [("hierarchy", &h), ("per_triangle", &per_triangle)] {
+        let culler = Culler::new(hierarchy);
+        check_against_reference(method, hierarchy, &culler, &checks);
         let mut list = DrawList::default();
+        let tested: Vec<u32> = cameras
+            .iter()
+            .map(|cam| {
+                culler.cull_into(cam, &mut list);
+                list.stats.nodes_tested
+            })
+            .collect();
+        let mean = |v: &[u32]| v.iter().map(|&n| f64::from(n)).sum::<f64>() / v.len().max(1) as f64;
+        println!(
+            "cull/{name}/{method}: {} nodes; nodes tested per cull: mean {:.0} (ground {:.0}, high {:.0}), \
+             min {}, max {}; matches the reference on {} cameras",
+            hierarchy.nodes.len(),
+            mean(&tested),
+            mean(&tested[..20]),
+            mean(&tested[20..]),
+            tested.iter().min().unwrap_or(&0),
+            tested.iter().max().unwrap_or(&0),
+            checks.len()
+        );
         let mut i = 0;
         group.bench_function(method, |b| {
             b.iter(|| {
