@@ -29,7 +29,7 @@ use serde::Serialize;
 use tin::Tin;
 use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_metrics};
 
-use crate::pipeline::per_triangle_hierarchy;
+use crate::pipeline::{per_triangle_hierarchy, triangle_regions};
 
 /// The methods an evaluation compares, in report order.
 pub const METHODS: [&str; 4] = ["hierarchy", "per_triangle", "frustum_only", "none"];
@@ -134,9 +134,7 @@ pub fn per_triangle_of(h: &Hierarchy, tin: &Tin) -> Result<Hierarchy> {
     };
     let field = horizon::compute(tin, &config, &opts)?;
     let vertices = RegionTable::from_field(tin.positions(), &field);
-    let triangles = tin.triangles();
-    let regions = vertices.intersect_rows(triangles.len(), |t| triangles[t]);
-    Ok(per_triangle_hierarchy(tin, &regions))
+    Ok(per_triangle_hierarchy(tin, &triangle_regions(tin, &vertices)))
 }
 
 /// Triangles with a vertex or the centroid inside the horizontal wedge `yaw ± half` seen from `eye`.

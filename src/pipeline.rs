@@ -1,5 +1,6 @@
-//! The whole preprocessing pipeline: horizons → vertex and triangle regions → crystal grouping → the exported
-//! [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink).
+//! The whole preprocessing pipeline: horizons → vertex regions → crystal grouping (groups' regions intersected from
+//! their vertices' regions) → the exported [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink).
+//! Per-triangle regions are only made for the per-triangle evaluation method ([`triangle_regions`]).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -51,7 +52,7 @@ pub struct BuildReport {
     pub seeds: usize,
     /// Wall time of the horizon sweep (s).
     pub horizon_seconds: f64,
-    /// Wall time of the vertex and triangle regions (s).
+    /// Wall time of the vertex regions (s).
     pub regions_seconds: f64,
     /// Wall time of crystal growth and the merge hierarchy (s).
     pub grouping_seconds: f64,
@@ -79,8 +80,8 @@ pub struct Build {
     pub hierarchy: Hierarchy,
     /// Figures.
     pub report: BuildReport,
-    /// Per-triangle regions, in the terrain's original triangle order.
-    pub triangle_regions: RegionTable,
+    /// Per-vertex regions (the grouping's input); [`triangle_regions`] derives the per-triangle ones from them.
+    pub vertex_regions: RegionTable,
     /// The grouping.
     pub crystal: Crystal,
 }
@@ -108,15 +109,13 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     let start = Instant::now();
     let vertex_regions = RegionTable::from_field(tin.positions(), &field);
     drop(field);
-    let triangles = tin.triangles();
-    let triangle_regions = vertex_regions.intersect_rows(triangles.len(), |t| triangles[t]);
     let regions_seconds = start.elapsed().as_secs_f64();
 
     if let Some(p) = &progress {
         p("grouping", 0, 1);
     }
     let start = Instant::now();
-    let crystal = crystal::build(tin, &vertex_regions, &triangle_regions, &params.crystal)?;
+    let crystal = crystal::build(tin, &vertex_regions, &params.crystal)?;
     let grouping_seconds = start.elapsed().as_secs_f64();
 
     let hierarchy = export_hierarchy(tin, &crystal, params);
@@ -143,7 +142,7 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     Ok(Build {
         hierarchy,
         report,
-        triangle_regions,
+        vertex_regions,
         crystal,
     })
 }
@@ -161,8 +160,25 @@ fn stored_circle(c: &Circle, origin: [f64; 3]) -> ([f32; 2], f32) {
     (centre, radius)
 }
 
-/// Rounds per-sector regions to the stored f32 form, relative to `origin`; empty sectors are left out.
-pub fn stored_regions(regions: &[Option<Region>], sectors: u32, origin: [f64; 3]) -> Vec<StoredRegion> {
+/// The per-triangle regions of `tin`: each triangle's row is the intersection of its three vertices' rows of
+/// `vertex_regions`, in the terrain's original triangle order. Only the per-triangle method
+/// ([`per_triangle_hierarchy`]) needs them; [`build`] does not make them.
+pub fn triangle_regions(tin: &Tin, vertex_regions: &RegionTable) -> RegionTable {
+    let triangles = tin.triangles();
+    vertex_regions.intersect_rows(triangles.len(), |t| triangles[t])
+}
+
+/// Rounds per-sector regions to the stored f32 form, relative to `origin`; empty sectors are left out. The regions'
+/// plane coordinates are relative to `frame` (`t = r_i · (xy − frame)`, see [`RegionTable::origin`]); the stored ones
+/// are relative to `origin` (`t = r_i · (xy − origin)`, `z − origin.z`), as the exported format defines.
+pub fn stored_regions(
+    regions: &[Option<Region>],
+    sectors: u32,
+    frame: glam::DVec2,
+    origin: [f64; 3],
+) -> Vec<StoredRegion> {
+    // Both are near the terrain, so this difference is small (and exact when both are large and close).
+    let shift = glam::DVec2::new(origin[0], origin[1]) - frame;
     regions
         .iter()
         .enumerate()
@@ -170,7 +186,7 @@ pub fn stored_regions(regions: &[Option<Region>], sectors: u32, origin: [f64; 3]
             let r = r.as_ref()?;
             let i = i as u32;
             let points: Vec<[f64; 2]> = r.points().iter().map(|p| [p.x, p.y]).collect();
-            let origin_t = plane_t(sectors, i, glam::DVec2::new(origin[0], origin[1]));
+            let origin_t = plane_t(sectors, i, shift);
             StoredRegion::from_f64(i as u16, &points, r.tail_slope(), origin_t, origin[2])
         })
         .collect()
@@ -193,7 +209,7 @@ pub fn export_hierarchy(tin: &Tin, crystal: &Crystal, params: &BuildParams) -> H
                 children: n.children.clone(),
                 triangles: [n.range.start, n.range.end],
                 level: n.level,
-                regions: stored_regions(&n.regions, sectors, origin),
+                regions: stored_regions(&n.regions, sectors, crystal.region_origin, origin),
             }
         })
         .collect();
@@ -238,7 +254,7 @@ pub fn per_triangle_hierarchy(tin: &Tin, triangle_regions: &RegionTable) -> Hier
                 children: vec![],
                 triangles: [t, t + 1],
                 level: 0,
-                regions: stored_regions(triangle_regions.row(t), sectors, origin),
+                regions: stored_regions(triangle_regions.row(t), sectors, triangle_regions.origin(), origin),
             }
         })
         .collect();

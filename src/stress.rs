@@ -544,15 +544,13 @@ fn spread_study(tin: &Tin, params: &BuildParams, eyes: &[Eye], seeds: u64) -> Re
         },
     )?;
     let vertex_regions = RegionTable::from_field(tin.positions(), &field);
-    let triangles = tin.triangles();
-    let triangle_regions = vertex_regions.intersect_rows(triangles.len(), |t| triangles[t]);
     let truth = GroundTruth::new(tin);
     let mut rows = Vec::new();
     for seed in 1..=seeds {
         let mut p = params.clone();
         p.crystal.rng_seed = seed;
         let start = Instant::now();
-        let c = crystal::build(tin, &vertex_regions, &triangle_regions, &p.crystal)?;
+        let c = crystal::build(tin, &vertex_regions, &p.crystal)?;
         let h = export_hierarchy(tin, &c, &p);
         let b = Built {
             invariants: check(&h),

@@ -14,7 +14,8 @@
 //!   viewpoint classes, the viewpoint seed and the field of view: resume only with the same ones.
 //! - Combinations the horizon sweep rejects (fewer than 4 sectors, no subsectors, `s·k` above the limit) are skipped
 //!   with a note rather than failing the sweep.
-//! - The per-triangle method uses the build's own triangle regions (no second horizon sweep).
+//! - The per-triangle method uses triangle regions made from the build's own vertex regions (no second horizon
+//!   sweep).
 //! - Combinations run one after the other, so that their wall times (each stage is parallel inside) are not
 //!   disturbed by each other.
 
@@ -26,7 +27,7 @@ use horizon::SectorConfig;
 use tin::Tin;
 
 use crate::evaluate::{Evaluation, GroundTruthSet, score, standard_methods};
-use crate::pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy};
+use crate::pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
 
 /// The header line of a sweep CSV (without the newline).
 pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
@@ -294,7 +295,7 @@ pub fn run_combo(
     progress: Option<BuildProgress>,
 ) -> Result<ComboResult> {
     let b = build(tin, &combo.params, progress)?;
-    let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &b.triangle_regions));
+    let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &triangle_regions(tin, &b.vertex_regions)));
     let methods = standard_methods(&b.hierarchy, per_triangle.as_ref(), Some(&b.crystal.order));
     let evaluation = score(tin, truth, &methods)?;
     let lines = csv_lines(&combo.key, &b.report, &evaluation);

@@ -7,7 +7,8 @@
 //! horizon when the first sample falls outside the terrain). 16 sectors, default parameters.
 //!
 //! Run: `cargo bench -p crystal --bench grouping`. Measures the growth phase alone (seeds, growth, orphan passes) and
-//! the whole of `crystal::build` (plus small-group merging, group regions, hierarchy, reordering).
+//! the whole of `crystal::build` (plus small-group merging, group regions from the vertex regions, hierarchy,
+//! reordering).
 
 use std::f64::consts::TAU;
 
@@ -84,11 +85,10 @@ fn horizons(positions: &[DVec3]) -> Vec<Option<SectorHorizon>> {
 fn bench(c: &mut Criterion) {
     let tin = terrain();
     let h = horizons(tin.positions());
-    let vertices = RegionTable::of_vertices(tin.positions(), SECTORS, |v, s| h[(v * SECTORS + s) as usize]);
-    let tris = tin.triangles();
-    let triangles = vertices.intersect_rows(tin.num_triangles(), |t| tris[t]);
+    let origin = tin.bbox().min.truncate();
+    let vertices = RegionTable::of_vertices(tin.positions(), origin, SECTORS, |v, s| h[(v * SECTORS + s) as usize]);
     let params = CrystalParams::default();
-    let result = crystal::build(&tin, &vertices, &triangles, &params).expect("valid input");
+    let result = crystal::build(&tin, &vertices, &params).expect("valid input");
     result.check_invariants(&tin).expect("invariants");
     eprintln!(
         "{} vertices, {} triangles, {} sectors: {:?}",
@@ -103,7 +103,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| crystal::growth::grow(&tin, &vertices, &params).expect("valid input"))
     });
     group.bench_function("build_200k", |b| {
-        b.iter(|| crystal::build(&tin, &vertices, &triangles, &params).expect("valid input"))
+        b.iter(|| crystal::build(&tin, &vertices, &params).expect("valid input"))
     });
     group.finish();
 }

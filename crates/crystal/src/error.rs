@@ -14,20 +14,12 @@ pub enum CrystalError {
     /// A region table does not have one row per element of the mesh.
     #[error("the {table} region table has {found} rows, but the mesh has {expected} {table}s")]
     TableSize {
-        /// `"vertex"` or `"triangle"`.
+        /// `"vertex"`.
         table: &'static str,
         /// Rows the mesh needs.
         expected: usize,
         /// Rows the table has.
         found: usize,
-    },
-    /// The vertex and triangle region tables were built with different sector counts.
-    #[error("the vertex regions have {vertex} sectors but the triangle regions have {triangle}")]
-    SectorMismatch {
-        /// Sectors of the vertex table.
-        vertex: u32,
-        /// Sectors of the triangle table.
-        triangle: u32,
     },
     /// A grouping broke one of its invariants (see [`crate::Crystal::check_invariants`]).
     #[error("crystal invariant violated: {0}")]

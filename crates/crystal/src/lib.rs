@@ -15,6 +15,7 @@ pub mod params;
 
 use std::ops::Range;
 
+use glam::DVec2;
 use occlusion::RegionTable;
 use serde::{Deserialize, Serialize};
 use tin::{NO_NEIGHBOUR, Tin};
@@ -63,6 +64,8 @@ pub struct Crystal {
     pub params: CrystalParams,
     /// Sectors of the regions.
     pub sectors: u32,
+    /// The origin `o` of the regions' plane coordinates `t = r_i · (xy − o)` (that of the vertex region table).
+    pub region_origin: DVec2,
     /// Triangles of each group (original indices, in join order); group `g` is hierarchy node `g`.
     pub groups: Vec<Vec<u32>>,
     /// The always-visible triangles (original indices, increasing).
@@ -86,29 +89,12 @@ pub struct Crystal {
 
 /// Groups the triangles of `tin` (see the crate documentation and [`growth`], [`merge`]).
 ///
-/// `vertex_regions` has one row per vertex (used by the growth's visibility rule), `triangle_regions` one row per
-/// triangle (intersected into the groups' regions); both with the same sectors.
-pub fn build(
-    tin: &Tin,
-    vertex_regions: &RegionTable,
-    triangle_regions: &RegionTable,
-    params: &CrystalParams,
-) -> Result<Crystal, CrystalError> {
+/// `vertex_regions` has one row per vertex: the growth's visibility rule reads it, and a group's regions are the
+/// intersection of its vertices' regions (the same as that of its triangles' regions, since a triangle's region is the
+/// intersection of its three vertices').
+pub fn build(tin: &Tin, vertex_regions: &RegionTable, params: &CrystalParams) -> Result<Crystal, CrystalError> {
     params.validate()?;
     let nt = tin.num_triangles();
-    if triangle_regions.len() != nt {
-        return Err(CrystalError::TableSize {
-            table: "triangle",
-            expected: nt,
-            found: triangle_regions.len(),
-        });
-    }
-    if vertex_regions.sectors() != triangle_regions.sectors() {
-        return Err(CrystalError::SectorMismatch {
-            vertex: vertex_regions.sectors(),
-            triangle: triangle_regions.sectors(),
-        });
-    }
     let grown = growth::grow(tin, vertex_regions, params)?;
     let crystals = grown.crystals.len();
     let settled = growth::settle_small(grown.crystals, &grown.collisions, params.min_group);
@@ -120,11 +106,12 @@ pub fn build(
         }
     }
     let orphans: Vec<u32> = (0..nt as u32).filter(|&t| group_of[t as usize] == NO_GROUP).collect();
-    let group_regions = merge::group_regions(triangle_regions, &groups);
+    let group_vertices = merge::group_vertices(tin, &groups);
+    let group_regions = merge::vertex_set_regions(vertex_regions, &group_vertices);
     let terrain_area: f64 = (0..nt).map(|t| tin.triangle_area_xy(t)).sum();
     let (mut hierarchy, report) = merge::build_hierarchy(
         tin,
-        &groups,
+        &group_vertices,
         group_regions,
         &settled.collisions,
         params.max_expanse,
@@ -148,6 +135,7 @@ pub fn build(
     Ok(Crystal {
         params: params.clone(),
         sectors: vertex_regions.sectors(),
+        region_origin: vertex_regions.origin(),
         groups,
         orphans,
         group_of,

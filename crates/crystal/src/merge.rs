@@ -25,8 +25,10 @@
 //!   level the first node with a partner either merges or loses an edge, so this only happens once no edges remain.)
 //! - **Levels**: leaves are level 0, a parent is one more than the higher of its two children. Roots are listed in
 //!   increasing id.
-//! - **Group regions** ([`group_regions`]) are the intersection of the group's triangles' regions, computed as a lower
-//!   envelope of lines (see there); parents intersect their two children's regions with [`Region::intersect`].
+//! - **Group regions** ([`group_regions`]) are the intersection of the group's triangles' regions. A triangle's region
+//!   is the intersection of its three vertices' regions, so that is the intersection of the regions of the group's
+//!   distinct vertices, computed from the vertex table as a lower envelope of lines (see there) without any
+//!   per-triangle table; parents intersect their two children's regions with [`Region::intersect`].
 
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -54,7 +56,8 @@ pub struct Node {
     /// The node's triangles: positions `range` of [`crate::Crystal::order`].
     pub range: Range<u32>,
     /// The node's occlusion region in each sector (`None`: never hidden there): for a leaf the intersection of its
-    /// triangles' regions, for a parent the intersection of its children's.
+    /// triangles' regions (equivalently of its vertices'), for a parent the intersection of its children's. Plane
+    /// coordinates are those of the vertex region table ([`crate::Crystal::region_origin`]).
     pub regions: Vec<Option<Region>>,
     /// The collision record when the node was made: `(partner node, count)`, by partner id. Partners are the nodes in
     /// play at that time (for a leaf, other leaves).
@@ -137,16 +140,18 @@ fn circle_of_hull(hull: &[DVec2]) -> Circle {
     })
 }
 
-/// The hull of a group's vertices.
-fn group_hull(tin: &Tin, group: &[u32]) -> Vec<DVec2> {
-    let (tris, pos) = (tin.triangles(), tin.positions());
-    hull_of(
-        group
-            .iter()
-            .flat_map(|&t| tris[t as usize])
-            .map(|v| pos[v as usize].truncate())
-            .collect(),
-    )
+/// The distinct vertices of each group of triangles, in increasing index.
+pub(crate) fn group_vertices(tin: &Tin, groups: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    let tris = tin.triangles();
+    groups
+        .par_iter()
+        .map(|members| {
+            let mut vertices: Vec<u32> = members.iter().flat_map(|&t| tris[t as usize]).collect();
+            vertices.sort_unstable();
+            vertices.dedup();
+            vertices
+        })
+        .collect()
 }
 
 /// Per-sector intersection of two nodes' regions.
@@ -160,28 +165,40 @@ pub(crate) fn intersect_regions(a: &[Option<Region>], b: &[Option<Region>]) -> V
         .collect()
 }
 
-/// The regions of each group: per sector, the intersection of its triangles' regions (empty when any triangle's is).
+/// The regions of each group of triangles of `tin`: per sector, the intersection of its triangles' regions (empty
+/// when any triangle's is), computed from `vertex_regions` (one row per vertex of `tin`).
 ///
-/// A region's upper boundary is concave (it is the lower envelope of its vertices' horizon lines), so it is the
-/// minimum of the lines through its chain segments and its tail. The intersection of many regions is then the lower
-/// envelope of all their lines to the right of the largest left bound, built in `O(L log L)` for `L` lines with the
-/// classic convex-hull sweep, instead of `O(m × chain length)` for a running intersection of `m` regions. It is the
-/// same region as [`occlusion::intersect_all`] over the members, up to rounding in the crossing points. A member whose
-/// chain is not concave (possible for hand-made regions) makes the sector fall back to pairwise intersection in a
-/// balanced tree.
-pub fn group_regions(triangle_regions: &RegionTable, groups: &[Vec<u32>]) -> Vec<Vec<Option<Region>>> {
-    let sectors = triangle_regions.sectors();
-    groups
-        .par_iter()
-        .map_init(Vec::new, |lines, members| {
-            (0..sectors)
-                .map(|s| {
-                    let regions: Option<Vec<&Region>> = members.iter().map(|&t| triangle_regions.get(t, s)).collect();
-                    let regions = regions?;
-                    envelope(&regions, lines).or_else(|| intersect_balanced(&regions))
-                })
-                .collect()
-        })
+/// A triangle's region is the intersection of its three vertices' regions, so a group's is the intersection of the
+/// regions of its distinct vertices (about half as many as its triangles, and each a single wedge): no per-triangle
+/// table is needed. A region's upper boundary is concave (it is the lower envelope of its vertices' horizon lines),
+/// so it is the minimum of the lines through its chain segments and its tail. The intersection of many regions is
+/// then the lower envelope of all their lines to the right of the largest left bound, built in `O(L log L)` for `L`
+/// lines with the classic convex-hull sweep, instead of `O(m × chain length)` for a running intersection of `m`
+/// regions. It is the same region as [`occlusion::intersect_all`] over the members' triangle regions, up to rounding
+/// in the crossing points. A vertex region whose chain is not concave (possible for hand-made tables) makes the sector
+/// fall back to pairwise intersection in a balanced tree.
+pub fn group_regions(tin: &Tin, vertex_regions: &RegionTable, groups: &[Vec<u32>]) -> Vec<Vec<Option<Region>>> {
+    vertex_set_regions(vertex_regions, &group_vertices(tin, groups))
+}
+
+/// Per vertex set and sector, the intersection of the sets' vertices' regions (see [`group_regions`]).
+pub(crate) fn vertex_set_regions(vertex_regions: &RegionTable, sets: &[Vec<u32>]) -> Vec<Vec<Option<Region>>> {
+    let sectors = vertex_regions.sectors();
+    sets.par_iter()
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(regions, lines), vertices| {
+                (0..sectors)
+                    .map(|s| {
+                        regions.clear();
+                        for &v in vertices.iter() {
+                            regions.push(vertex_regions.get(v, s)?);
+                        }
+                        envelope(regions, lines).or_else(|| intersect_balanced(regions))
+                    })
+                    .collect()
+            },
+        )
         .collect()
 }
 
@@ -219,6 +236,7 @@ fn envelope(regions: &[&Region], lines: &mut Vec<Line>) -> Option<Region> {
             });
         }
     }
+    prune(lines);
     // Decreasing slope, ties by increasing value at T0 (only the lowest of parallel lines matters).
     lines.sort_unstable_by(|x, y| y.m.total_cmp(&x.m).then(x.a.total_cmp(&y.a)));
     lines.dedup_by(|later, kept| later.m == kept.m);
@@ -255,6 +273,36 @@ fn envelope(regions: &[&Region], lines: &mut Vec<Line>) -> Option<Region> {
     Region::from_chain(points, hull[i].m)
 }
 
+/// Drops lines that lie above the lower envelope for every `s ≥ 0`, in linear time, so that only the few lines near
+/// the envelope are sorted.
+///
+/// Let `low` be the line lowest at `s = 0` and `flat` the one of smallest slope; the envelope runs from `low` to
+/// `flat`, and `min(low, flat)` is concave with one kink, at their crossing `s* ≥ 0`. A line `ℓ` that reaches the
+/// envelope somewhere reaches `min(low, flat)` there, and `min(low, flat) − ℓ` is concave, at most 0 at `s = 0`
+/// (unless `ℓ` ties `low` there) and non-increasing beyond `s*`: its maximum is at `s*`. So `ℓ` is kept when it ties
+/// `low` at `s = 0` or is not above `min(low, flat)` at `s*`, with a small tolerance that only ever keeps more lines
+/// (extra lines are removed by the hull sweep).
+fn prune(lines: &mut Vec<Line>) {
+    let by_value = |x: &&Line, y: &&Line| x.a.total_cmp(&y.a).then(x.m.total_cmp(&y.m));
+    let by_slope = |x: &&Line, y: &&Line| x.m.total_cmp(&y.m).then(x.a.total_cmp(&y.a));
+    let (Some(&low), Some(&flat)) = (lines.iter().min_by(by_value), lines.iter().min_by(by_slope)) else {
+        return;
+    };
+    let kink = if low.m > flat.m {
+        ((flat.a - low.a) / (low.m - flat.m)).max(0.0)
+    } else {
+        0.0
+    };
+    let floor = (low.a + low.m * kink).min(flat.a + flat.m * kink);
+    if !(kink.is_finite() && floor.is_finite()) {
+        return;
+    }
+    lines.retain(|l| {
+        let v = l.a + l.m * kink;
+        l.a <= low.a || v <= floor + 1e-9 * (1.0 + floor.abs() + (l.m * kink).abs())
+    });
+}
+
 /// Intersects regions pairwise in a balanced tree; `None` for no regions.
 fn intersect_balanced(regions: &[&Region]) -> Option<Region> {
     let mut level: Vec<Region> = regions
@@ -284,20 +332,24 @@ pub(crate) struct MergeReport {
     pub expanse_rejections: usize,
 }
 
-/// Builds the hierarchy over `groups` (see the module documentation). Node ranges are left empty; see
-/// [`crate::order`].
+/// Builds the hierarchy over the groups, given by their distinct vertices (see the module documentation). Node ranges
+/// are left empty; see [`crate::order`].
 pub(crate) fn build_hierarchy(
     tin: &Tin,
-    groups: &[Vec<u32>],
+    group_vertices: &[Vec<u32>],
     group_regions: Vec<Vec<Option<Region>>>,
     collisions: &[(u32, u32, u64)],
     max_expanse: f64,
     terrain_area: f64,
 ) -> (Hierarchy, MergeReport) {
-    let count = groups.len();
+    let count = group_vertices.len();
     let limit = max_expanse * terrain_area;
     // The convex hull of each node's vertices: a parent's circle is computed from its children's hulls.
-    let mut hulls: Vec<Vec<DVec2>> = groups.par_iter().map(|g| group_hull(tin, g)).collect();
+    let pos = tin.positions();
+    let mut hulls: Vec<Vec<DVec2>> = group_vertices
+        .par_iter()
+        .map(|vs| hull_of(vs.iter().map(|&v| pos[v as usize].truncate()).collect()))
+        .collect();
     let mut graph: UnGraphMap<u32, u64> = UnGraphMap::with_capacity(count, collisions.len());
     for g in 0..count as u32 {
         graph.add_node(g);
@@ -431,6 +483,7 @@ fn record(graph: &UnGraphMap<u32, u64>, g: u32) -> Vec<(u32, u64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
     use proptest::prelude::*;
 
     /// Upper boundaries within rounding at the chain vertices of both, between them and beyond; equal left bounds.
@@ -469,6 +522,44 @@ mod tests {
             prop_assert!(close(&balanced, &want), "{balanced:?} vs {want:?}");
         }
 
+        /// The oracle for [`group_regions`]: per-triangle regions (the running intersection of each triangle's three
+        /// vertex regions), then the running intersection over the group's triangles. Groups are arbitrary sets of
+        /// triangles (repeats included); some vertex regions are empty.
+        #[test]
+        fn group_regions_from_vertices_equal_group_regions_from_triangles(
+            points in prop::collection::vec((0.0f64..100.0, 0.0f64..100.0, -20.0f64..20.0), 4..30),
+            horizons in prop::collection::vec(prop::option::weighted(0.9, (-1.0f64..1.0, 0.0f64..50.0)), 30 * 4),
+            picks in prop::collection::vec(prop::collection::vec(any::<prop::sample::Index>(), 1..12), 1..5),
+            offset in prop_oneof![Just(DVec2::ZERO), Just(DVec2::new(5e5, 5e6))],
+        ) {
+            let pts: Vec<DVec3> = points.iter().map(|&(x, y, z)| DVec3::new(x + offset.x, y + offset.y, z)).collect();
+            let triangulated = tin::triangulate(&pts, tin::DedupePolicy::Reject);
+            prop_assume!(triangulated.is_ok());
+            let tin = triangulated.expect("checked").0;
+            let sectors = 4;
+            let vertices = RegionTable::of_vertices(tin.positions(), tin.bbox().min.truncate(), sectors, |v, s| {
+                horizons[(v * sectors + s) as usize].map(|(slope, distance)| occlusion::SectorHorizon { slope, distance })
+            });
+            let tris = tin.triangles();
+            let triangles = vertices.intersect_rows(tin.num_triangles(), |t| tris[t]);
+            let groups: Vec<Vec<u32>> = picks
+                .iter()
+                .map(|g| g.iter().map(|i| i.index(tin.num_triangles()) as u32).collect())
+                .collect();
+            let got = group_regions(&tin, &vertices, &groups);
+            for (g, members) in groups.iter().enumerate() {
+                for s in 0..sectors {
+                    let want = occlusion::intersect_all(members.iter().map(|&t| triangles.get(t, s)));
+                    let have = got[g][s as usize].as_ref();
+                    match (have, want.as_ref()) {
+                        (None, None) => {}
+                        (Some(a), Some(b)) => prop_assert!(close(a, b), "group {g} sector {s}: {a:?} vs {b:?}"),
+                        (a, b) => prop_assert!(false, "group {g} sector {s}: {a:?} vs {b:?}"),
+                    }
+                }
+            }
+        }
+
         #[test]
         fn hull_circle_encloses_every_point(
             points in prop::collection::vec((-1e3f64..1e3, -1e3f64..1e3), 1..80),
@@ -489,10 +580,24 @@ mod tests {
         // A convex kink: slope 0 then slope 1.
         let kinked = Region::from_chain(vec![DVec2::new(0.0, 0.0), DVec2::new(10.0, 0.0)], 1.0).expect("valid chain");
         let other = Region::of_vertex(-5.0, 3.0, -0.1, 7.0);
+        let third = Region::of_vertex(1.0, 4.0, 0.2, 2.0);
         assert!(envelope(&[&kinked, &other], &mut Vec::new()).is_none());
-        let table = RegionTable::from_rows(1, vec![Some(kinked.clone()), Some(other.clone())]);
-        let regions = group_regions(&table, &[vec![0, 1]]);
-        assert_eq!(regions[0][0], Some(kinked.intersect(&other)));
+        let table = RegionTable::from_rows(
+            1,
+            DVec2::ZERO,
+            vec![Some(kinked.clone()), Some(other.clone()), Some(third.clone())],
+        );
+        let tin = Tin::from_parts(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(0.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2]],
+        )
+        .expect("one triangle");
+        let regions = group_regions(&tin, &table, &[vec![0]]);
+        assert_eq!(regions[0][0], Some(kinked.intersect(&other).intersect(&third)));
     }
 
     #[test]

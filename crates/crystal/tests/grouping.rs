@@ -11,7 +11,7 @@ use tin::Tin;
 
 fn group(tin: &Tin, sectors: u32, subsectors: u32, params: &CrystalParams) -> (Crystal, RegionTable, RegionTable) {
     let (v, t) = tables(tin, sectors, subsectors);
-    let c = build(tin, &v, &t, params).expect("valid input");
+    let c = build(tin, &v, params).expect("valid input");
     c.check_invariants(tin).expect("invariants hold");
     recheck_growth(tin, &v, &c);
     recheck_group_regions(&c, &t);
@@ -72,8 +72,8 @@ fn flat_terrain_is_visible_everywhere_and_forms_few_big_groups() {
     assert_eq!(c.hierarchy.roots.len(), 1, "all groups collide and merge into one tree");
     assert_eq!(c.stats.nodes, 11);
     // With no horizons at all (empty regions everywhere) growth sees exactly the same: identical groups.
-    let empty = |rows: usize| RegionTable::from_rows(8, vec![None; rows * 8]);
-    let bare = build(&tin, &empty(tin.num_vertices()), &empty(tin.num_triangles()), &params).expect("valid");
+    let empty = RegionTable::from_rows(8, DVec2::ZERO, vec![None; tin.num_vertices() * 8]);
+    let bare = build(&tin, &empty, &params).expect("valid");
     bare.check_invariants(&tin).expect("invariants");
     assert_eq!(bare.groups, c.groups);
     assert!(
@@ -158,12 +158,11 @@ fn groups_do_not_cross_a_ridge_crest() {
         ..Default::default()
     };
     for (sectors, subsectors) in [(16, 4), (8, 2)] {
-        let (v, t) = tables(&tin, sectors, subsectors);
+        let (v, _) = tables(&tin, sectors, subsectors);
         for rng_seed in 1..=3 {
             let c = build(
                 &tin,
                 &v,
-                &t,
                 &CrystalParams {
                     rng_seed,
                     ..params.clone()
@@ -207,11 +206,10 @@ fn a_sparsely_sampled_crest_lets_groups_cross() {
     // nearby flank vertices, their regions miss the ridge, and crystals grow over it. This pins down that the
     // crossing test above can fail.
     let tin = ridge(10.0);
-    let (v, t) = tables(&tin, 16, 4);
+    let (v, _) = tables(&tin, 16, 4);
     let c = build(
         &tin,
         &v,
-        &t,
         &CrystalParams {
             seeds: Some(10),
             min_group: 10,
@@ -226,16 +224,16 @@ fn a_sparsely_sampled_crest_lets_groups_cross() {
 #[test]
 fn same_seed_same_result_different_seed_different_groups() {
     let tin = random_terrain(20, 20, 11);
-    let (v, t) = tables(&tin, 8, 4);
+    let (v, _) = tables(&tin, 8, 4);
     let params = CrystalParams {
         seeds: Some(6),
         min_group: 10,
         ..Default::default()
     };
-    let a = build(&tin, &v, &t, &params).expect("valid");
-    let b = build(&tin, &v, &t, &params).expect("valid");
+    let a = build(&tin, &v, &params).expect("valid");
+    let b = build(&tin, &v, &params).expect("valid");
     assert_eq!(a, b);
-    let other = build(&tin, &v, &t, &CrystalParams { rng_seed: 2, ..params }).expect("valid");
+    let other = build(&tin, &v, &CrystalParams { rng_seed: 2, ..params }).expect("valid");
     other.check_invariants(&tin).expect("invariants");
     assert_ne!(a.groups, other.groups);
 }
@@ -254,8 +252,8 @@ fn results_do_not_depend_on_the_thread_count() {
             .build()
             .expect("pool")
             .install(|| {
-                let (v, t) = tables(&tin, 8, 4);
-                build(&tin, &v, &t, &params).expect("valid")
+                let (v, _) = tables(&tin, 8, 4);
+                build(&tin, &v, &params).expect("valid")
             })
     };
     let one = run(1);
@@ -325,7 +323,7 @@ fn collision_records_are_symmetric_and_sum_in_parents() {
 #[test]
 fn expanse_limit_keeps_parents_small() {
     let tin = random_terrain(26, 26, 4);
-    let (v, t) = tables(&tin, 8, 2);
+    let (v, _) = tables(&tin, 8, 2);
     let base = CrystalParams {
         seeds: Some(16),
         min_group: 6,
@@ -334,7 +332,6 @@ fn expanse_limit_keeps_parents_small() {
     let loose = build(
         &tin,
         &v,
-        &t,
         &CrystalParams {
             max_expanse: f64::INFINITY,
             ..base.clone()
@@ -344,7 +341,6 @@ fn expanse_limit_keeps_parents_small() {
     let tight = build(
         &tin,
         &v,
-        &t,
         &CrystalParams {
             max_expanse: 0.08,
             ..base
@@ -369,23 +365,14 @@ fn expanse_limit_keeps_parents_small() {
 fn bad_input_is_rejected_with_the_offending_part_named() {
     let tin = random_terrain(6, 6, 1);
     let (v, t) = tables(&tin, 8, 1);
-    let err = build(&tin, &t, &t, &CrystalParams::default()).expect_err("triangle table as vertex table");
-    assert!(matches!(err, CrystalError::TableSize { table: "vertex", .. }), "{err}");
-    let err = build(&tin, &v, &v, &CrystalParams::default()).expect_err("vertex table as triangle table");
+    let err = build(&tin, &t, &CrystalParams::default()).expect_err("triangle table as vertex table");
     assert!(
-        matches!(err, CrystalError::TableSize { table: "triangle", .. }),
-        "{err}"
-    );
-    let (v4, _) = tables(&tin, 4, 1);
-    let err = build(&tin, &v4, &t, &CrystalParams::default()).expect_err("sector mismatch");
-    assert!(
-        matches!(err, CrystalError::SectorMismatch { vertex: 4, triangle: 8 }),
+        matches!(err, CrystalError::TableSize { table: "vertex", expected, found } if expected == tin.num_vertices() && found == tin.num_triangles()),
         "{err}"
     );
     let err = build(
         &tin,
         &v,
-        &t,
         &CrystalParams {
             min_group: 0,
             ..Default::default()
@@ -508,12 +495,12 @@ proptest! {
         // Hand-made horizons unrelated to the terrain: visibility is erratic, which exercises seeds that fail the
         // rule, freed groups and small merges.
         let tin = random_terrain(nx, ny, terrain);
-        let v = RegionTable::of_vertices(tin.positions(), 8, |vx, s| {
+        let v = RegionTable::of_vertices(tin.positions(), DVec2::ZERO, 8, |vx, s| {
             horizons[(vx * 8 + s) as usize].map(|(slope, distance)| occlusion::SectorHorizon { slope, distance })
         });
         let tris = tin.triangles();
         let t = v.intersect_rows(tin.num_triangles(), |i| tris[i]);
-        let c = build(&tin, &v, &t, &params).expect("valid input");
+        let c = build(&tin, &v, &params).expect("valid input");
         c.check_invariants(&tin).expect("invariants hold");
         recheck_growth(&tin, &v, &c);
         recheck_group_regions(&c, &t);

@@ -23,10 +23,10 @@ pub struct StoredRegion {
 }
 
 impl StoredRegion {
-    /// Rounds an f64 boundary (absolute plane coordinates `[t, z]`, strictly increasing `t`, concave) to f32
-    /// relative to `origin_t` and `origin_z` such that the stored region is contained in the original one:
-    /// the left bound rounds up, each vertex is re-evaluated on the original boundary at its rounded `t` and rounded
-    /// down, and the tail slope rounds down.
+    /// Rounds an f64 boundary (plane coordinates `[t, z]` in any frame, strictly increasing `t`, concave) to f32
+    /// relative to `origin_t` and `origin_z` (the file origin's coordinates in that frame) such that the stored
+    /// region is contained in the original one: the left bound rounds up, each vertex is re-evaluated on the original
+    /// boundary at its rounded `t` and rounded down, and the tail slope rounds down.
     pub fn from_f64(
         sector: u16,
         points: &[[f64; 2]],

@@ -13,7 +13,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use tin::Tin;
@@ -95,6 +95,8 @@ pub struct HorizonField {
     edge_points: Vec<(u64, EdgeHorizon)>,
     /// Vertex-major: `summaries[v * s + i]`; `slope` NaN when empty.
     summaries: Vec<SectorHorizon>,
+    /// The point `o` of the projections `t = r · (x − o)` ([`projection_origin`]).
+    origin: DVec2,
 }
 
 impl PartialEq for HorizonField {
@@ -106,6 +108,7 @@ impl PartialEq for HorizonField {
             && self.horizons == other.horizons
             && self.edge_points == other.edge_points
             && self.summaries.iter().map(bits).eq(other.summaries.iter().map(bits))
+            && self.origin.to_array().map(f64::to_bits) == other.origin.to_array().map(f64::to_bits)
     }
 }
 
@@ -123,6 +126,11 @@ impl HorizonField {
     /// The undersampling radius used, if any.
     pub fn undersampling_radius(&self) -> Option<f64> {
         self.undersampling_radius
+    }
+
+    /// The point `o` of every projection `t = r · (x − o)` the field was computed with ([`projection_origin`]).
+    pub fn origin(&self) -> DVec2 {
+        self.origin
     }
 
     /// The horizon vertex of `vertex` in `subsector` under the vertex-only definition (the sweep's answer, also
@@ -256,8 +264,9 @@ impl HorizonField {
         let n = tin.num_vertices();
         let sectors = config.sectors() as usize;
         let k = config.subsectors() as usize;
-        let origin = tin.origin().truncate();
+        let origin = projection_origin(tin);
         let mut field = HorizonField {
+            origin,
             config,
             num_vertices: n,
             undersampling_radius,
@@ -337,7 +346,7 @@ pub fn compute(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> Resul
     let positions = tin.positions();
     let n = positions.len();
     let total = geometry.total();
-    let origin = tin.origin().truncate();
+    let origin = projection_origin(tin);
     let mut horizons = vec![NO_HORIZON; n * total];
     let done = AtomicUsize::new(0);
     // One task per subsector: rayon runs at most one sweep per worker thread at a time, so the working memory is
@@ -368,7 +377,7 @@ pub fn compute(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> Resul
 pub fn brute_force(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> Result<HorizonField, HorizonError> {
     validate(tin, opts)?;
     let geometry = SectorGeometry::new(config);
-    let origin = tin.origin().truncate();
+    let origin = projection_origin(tin);
     let horizons = oracle::vertex_horizons(tin.positions(), origin, &geometry);
     if let Some(progress) = &opts.progress {
         progress(1, 1);
@@ -384,4 +393,12 @@ pub fn brute_force(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> R
         edge_points,
         opts.undersampling_radius,
     ))
+}
+
+/// The point `o` of every projection `t = r · (x − o)` ([`Wedge::project`]) of a TIN: the lower-left corner of its
+/// bounding box in x,y. Unlike [`Tin::origin`] (rounded to whole kilometres) it moves exactly with the terrain under
+/// any exactly representable translation, so `x − o`, and with it every rounding decision, is the same for a
+/// translated copy.
+pub fn projection_origin(tin: &Tin) -> DVec2 {
+    tin.bbox().min.truncate()
 }

@@ -10,8 +10,10 @@
 //!   boundaries are exactly on them. The wedge is then *defined* by these f64 vectors: `q` is in the closed wedge of
 //!   `p` iff `cross(a, q − p) ≥ 0` and `cross(q − p, b) ≥ 0`, decided exactly ([`crate::predicates`]). A direction
 //!   on a boundary therefore belongs to both adjacent subsectors, and the sweep and the oracle agree on every case.
-//! - Projected coordinates are `t = r · (x − o)` in f64 with `o` the TIN's local origin (a constant shift of
-//!   `r · x`, which keeps rounding small on UTM-sized coordinates). Every consumer calls [`Wedge::project`].
+//! - Projected coordinates are `t = r · (x − o)` in f64 with `o` the lower-left corner of the TIN's bounding box
+//!   ([`crate::projection_origin`]; a constant shift of `r · x`, which keeps rounding small on UTM-sized coordinates,
+//!   and which moves exactly with the terrain under an exact translation, so a translated copy makes the same
+//!   rounding decisions). Every consumer calls [`Wedge::project`].
 //! - Since `N ≥ 4`, a wedge spans at most 90°, and `r` lies strictly inside it: every `q ≠ p` in the closed wedge
 //!   has `r · (q − p) ≥ |q − p| cos 45° > 0`. Only rounding of `t` can make `t_q ≤ t_p` for such a `q` (points
 //!   closer than about `1e-15` of the terrain's extent); such vertices are not candidates (see [`crate::oracle`]).

@@ -30,6 +30,43 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// An exact translation (integer coordinates, integer offsets) gives the same horizons and sector summaries (equal
+    /// to the last bit): projections are relative to the bounding-box corner, which moves with the terrain.
+    #[test]
+    fn exact_translation_gives_the_same_field(
+        kind in prop_oneof![Just(Kind::IntegerGrid), Just(Kind::UtmGrid), Just(Kind::Spike), Just(Kind::CollinearRows)],
+        n in 9usize..130,
+        seed in any::<u64>(),
+        dx in 0u32..1_000_000,
+        dy in 0u32..5_000_000,
+    ) {
+        let Some(tin) = terrain(kind, n, seed) else { return Ok(()) };
+        let off = DVec3::new(f64::from(dx), f64::from(dy), 0.0);
+        let moved = Tin::from_parts(tin.positions().iter().map(|&p| p + off).collect(), tin.triangles().to_vec())
+            .expect("valid mesh");
+        prop_assert!(moved.positions().iter().zip(tin.positions()).all(|(m, p)| *m - off == *p), "exact");
+        prop_assert_eq!(moved.bbox().min - off, tin.bbox().min);
+        for (s, k) in [(8, 4), (16, 4)] {
+            let cfg = config(s, k);
+            let a = compute(&tin, &cfg, &HorizonOptions::default()).expect("valid input");
+            let b = compute(&moved, &cfg, &HorizonOptions::default()).expect("valid input");
+            prop_assert_eq!(b.origin() - off.truncate(), a.origin());
+            for v in 0..tin.num_vertices() as u32 {
+                for j in 0..s * k {
+                    prop_assert_eq!(a.horizon(v, j), b.horizon(v, j), "vertex {} subsector {}", v, j);
+                }
+                for i in 0..s {
+                    // Equal values (a height of −0.0 moved by +0.0 becomes +0.0, so a zero slope may change sign).
+                    prop_assert_eq!(a.sector_summary(v, i), b.sector_summary(v, i), "vertex {} sector {}", v, i);
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn every_kind_at_a_larger_size() {
     for (i, kind) in KINDS.into_iter().enumerate() {

@@ -1,7 +1,8 @@
 //! Occlusion regions in a sector plane (thesis 4.6; design.md "Occlusion regions").
 //!
-//! Everything about sector `i` lives in its vertical plane, with coordinates `(t, z)` where `t = r_i · xy` is the
-//! position along the sector's centre direction. The region of a vertex `p` in sector `i` is the set of camera
+//! Everything about sector `i` lives in its vertical plane, with coordinates `(t, z)` where `t = r_i · (xy − o)` is the
+//! position along the sector's centre direction, relative to a fixed origin `o` shared by all regions that are
+//! intersected or tested together (see [`crate::RegionTable`]; [`Region`] itself only sees `t`). The region of a vertex `p` in sector `i` is the set of camera
 //! positions `c` with `t_c ≥ t0` and `z_c ≤ z_p + m·(t_c − t_p)`: a wedge bounded on the left by `t0 = t_p + d` and
 //! above by the line through `p` with the sector's minimum horizon slope `m`. Intersections of such wedges (the
 //! regions of triangles and groups) are convex: a left bound and a concave, piecewise-linear upper boundary that ends
@@ -17,8 +18,10 @@
 use glam::DVec2;
 use smallvec::SmallVec;
 
-/// Chain storage: triangle regions have at most three vertices, so they live inline without allocation.
-pub type Chain = SmallVec<[DVec2; 3]>;
+/// Chain storage: a vertex region has one vertex and lives inline without allocation; longer chains (triangles,
+/// groups) go to the heap. One inline vertex keeps `Option<Region>` at 40 bytes, which matters for the vertex
+/// region table (one entry per vertex and sector, read at random during crystal growth).
+pub type Chain = SmallVec<[DVec2; 1]>;
 
 /// A non-empty convex occlusion region in one sector plane.
 ///
@@ -266,6 +269,11 @@ mod tests {
     /// Membership by the definition: inside every vertex wedge.
     fn in_all(rs: &[Region], t: f64, z: f64) -> bool {
         rs.iter().all(|r| r.contains(t, z))
+    }
+
+    #[test]
+    fn vertex_regions_are_small() {
+        assert!(std::mem::size_of::<Option<Region>>() <= 40);
     }
 
     #[test]

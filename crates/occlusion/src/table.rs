@@ -1,5 +1,10 @@
 //! Per-sector regions of many elements (vertices, triangles, groups), and the vertex-from-point test that crystal
 //! growth uses.
+//!
+//! A table's plane coordinates are relative to its origin `o`: `t = r_i · (xy − o)`, with `o` the horizon field's
+//! projection origin ([`horizon::projection_origin`], the lower-left corner of the terrain's bounding box). That keeps
+//! rounding small on UTM-sized coordinates and, since `o` moves exactly with the terrain, makes every decision
+//! translation-invariant. All regions of one table share that plane, so they intersect directly.
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -8,7 +13,7 @@ use horizon::{HorizonField, SectorHorizon};
 
 use crate::region::{Region, intersect_all};
 
-/// The plane coordinate `t = r_i · xy` of a point in sector `sector` of `sectors`.
+/// The plane coordinate `t = r_i · xy` of a point (or a difference of points) in sector `sector` of `sectors`.
 pub fn plane_t(sectors: u32, sector: u32, xy: DVec2) -> f64 {
     let [x, y] = cull::sector_direction(sectors, sector);
     DVec2::new(x, y).dot(xy)
@@ -18,6 +23,8 @@ pub fn plane_t(sectors: u32, sector: u32, xy: DVec2) -> f64 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RegionTable {
     sectors: u32,
+    /// The origin `o` of the plane coordinates `t = r_i · (xy − o)`.
+    origin: DVec2,
     /// The sectors' centre directions `r_i`.
     directions: Vec<DVec2>,
     regions: Vec<Option<Region>>,
@@ -34,48 +41,55 @@ fn directions(sectors: u32) -> Vec<DVec2> {
 }
 
 impl RegionTable {
-    /// A table from row-major regions (`regions[element * sectors + sector]`).
-    pub fn from_rows(sectors: u32, regions: Vec<Option<Region>>) -> RegionTable {
+    /// A table from row-major regions (`regions[element * sectors + sector]`) whose plane coordinates are relative
+    /// to `origin`.
+    pub fn from_rows(sectors: u32, origin: DVec2, regions: Vec<Option<Region>>) -> RegionTable {
         assert!(
             sectors > 0 && regions.len().is_multiple_of(sectors as usize),
             "region table rows must be complete"
         );
         RegionTable {
             sectors,
+            origin,
             directions: directions(sectors),
             regions,
         }
     }
 
-    /// The regions of every vertex of a mesh: in each sector, the wedge of [`Region::of_vertex`] built from the
-    /// vertex's sector horizon, or empty where `horizon(v, sector)` is `None`.
+    /// The regions of every vertex of a mesh, in plane coordinates relative to `origin`: in each sector, the wedge of
+    /// [`Region::of_vertex`] built from the vertex's sector horizon, or empty where `horizon(v, sector)` is `None`.
     pub fn of_vertices(
         positions: &[DVec3],
+        origin: DVec2,
         sectors: u32,
         horizon: impl Fn(u32, u32) -> Option<SectorHorizon> + Sync,
     ) -> RegionTable {
         let dirs = directions(sectors);
-        let regions = (0..positions.len() as u32)
+        let s = sectors as usize;
+        // An indexed parallel iterator collects straight into the table, without intermediate vectors.
+        let regions = (0..positions.len() * s)
             .into_par_iter()
-            .flat_map_iter(|v| {
-                let p = positions[v as usize];
-                let (horizon, dirs) = (&horizon, &dirs);
-                (0..sectors).map(move |s| {
-                    horizon(v, s)
-                        .map(|h| Region::of_vertex(dirs[s as usize].dot(p.truncate()), p.z, h.slope, h.distance))
-                })
+            .map(|i| {
+                let (v, sector) = (i / s, i % s);
+                let p = positions[v];
+                horizon(v as u32, sector as u32)
+                    .map(|h| Region::of_vertex(dirs[sector].dot(p.truncate() - origin), p.z, h.slope, h.distance))
             })
             .collect();
         RegionTable {
             sectors,
+            origin,
             directions: dirs,
             regions,
         }
     }
 
-    /// The regions of every vertex from a horizon field (see [`RegionTable::of_vertices`]).
+    /// The regions of every vertex from a horizon field (see [`RegionTable::of_vertices`]), relative to the field's
+    /// projection origin.
     pub fn from_field(positions: &[DVec3], field: &HorizonField) -> RegionTable {
-        RegionTable::of_vertices(positions, field.config().sectors(), |v, s| field.sector_summary(v, s))
+        RegionTable::of_vertices(positions, field.origin(), field.config().sectors(), |v, s| {
+            field.sector_summary(v, s)
+        })
     }
 
     /// The regions of element sets: row `e` is the intersection of the rows of `members(e)` of `self`.
@@ -83,18 +97,18 @@ impl RegionTable {
     pub fn intersect_rows<I>(&self, len: usize, members: impl Fn(usize) -> I + Sync) -> RegionTable
     where
         I: IntoIterator<Item = u32>,
-        I::IntoIter: Clone,
     {
         let s = self.sectors;
-        let regions = (0..len)
+        let regions = (0..len * s as usize)
             .into_par_iter()
-            .flat_map_iter(|e| {
-                let ids = members(e).into_iter();
-                (0..s).map(move |sector| intersect_all(ids.clone().map(|m| self.get(m, sector))))
+            .map(|i| {
+                let (e, sector) = (i / s as usize, i as u32 % s);
+                intersect_all(members(e).into_iter().map(|m| self.get(m, sector)))
             })
             .collect();
         RegionTable {
             sectors: s,
+            origin: self.origin,
             directions: self.directions.clone(),
             regions,
         }
@@ -103,6 +117,16 @@ impl RegionTable {
     /// Number of sectors.
     pub fn sectors(&self) -> u32 {
         self.sectors
+    }
+
+    /// The origin `o` of the plane coordinates `t = r_i · (xy − o)`.
+    pub fn origin(&self) -> DVec2 {
+        self.origin
+    }
+
+    /// The plane coordinate `t = r_i · (xy − o)` of the point `xy` in `sector`.
+    pub fn plane_t(&self, sector: u32, xy: DVec2) -> f64 {
+        self.directions[sector as usize].dot(xy - self.origin)
     }
 
     /// Number of elements.
@@ -129,6 +153,7 @@ impl RegionTable {
     /// Whether `element` at `at` is hidden from the camera at `camera`: the camera's plane coordinates lie inside
     /// the element's region in the sector that contains the direction from `at` to the camera. A camera straight
     /// above or below `at` (no direction) never hides it.
+    #[inline]
     pub fn hidden_from(&self, element: u32, at: DVec2, camera: DVec3) -> bool {
         let d = camera.truncate() - at;
         if d == DVec2::ZERO {
@@ -136,7 +161,7 @@ impl RegionTable {
         }
         let sector = cull::sector_of_azimuth(self.sectors, cull::azimuth(d.x, d.y));
         self.get(element, sector)
-            .is_some_and(|r| r.contains(self.directions[sector as usize].dot(camera.truncate()), camera.z))
+            .is_some_and(|r| r.contains(self.plane_t(sector, camera.truncate()), camera.z))
     }
 
     /// Bytes of chain data held (vertices and tail slopes of non-empty regions), a measure of visibility storage.
@@ -156,7 +181,7 @@ mod tests {
             DVec3::new(10.0, 0.0, 1.0),
             DVec3::new(0.0, 10.0, 2.0),
         ];
-        let vertices = RegionTable::of_vertices(&positions, 4, |v, s| {
+        let vertices = RegionTable::of_vertices(&positions, DVec2::ZERO, 4, |v, s| {
             (s != 3 || v != 2).then_some(SectorHorizon {
                 slope: 0.1 * f64::from(v),
                 distance: 5.0,
@@ -184,6 +209,65 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// With integer coordinates and an integer offset every translated coordinate is exact: a table of the
+        /// translated vertices relative to the translated origin holds the same regions, and hides the same vertices
+        /// from the translated cameras.
+        #[test]
+        fn translating_vertices_and_origin_together_changes_nothing(
+            vertices in proptest::collection::vec((-500i32..500, -500i32..500, -50i32..50), 1..10),
+            horizons in proptest::collection::vec(proptest::option::weighted(0.8, (-1.0f64..1.0, 0.0f64..300.0)), 10 * 8),
+            cameras in proptest::collection::vec((-800i32..800, -800i32..800, -80i32..80), 1..10),
+            origin in (-1000i32..1000, -1000i32..1000),
+            offset in (0i32..1_000_000, 0i32..5_000_000),
+        ) {
+            let p3 = |(x, y, z): (i32, i32, i32)| DVec3::new(f64::from(x), f64::from(y), f64::from(z));
+            let off = DVec3::new(f64::from(offset.0), f64::from(offset.1), 0.0);
+            let positions: Vec<DVec3> = vertices.iter().copied().map(p3).collect();
+            let moved: Vec<DVec3> = positions.iter().map(|&p| p + off).collect();
+            let o = DVec2::new(f64::from(origin.0), f64::from(origin.1));
+            let horizon = |v: u32, s: u32| {
+                horizons[(v * 8 + s) as usize].map(|(slope, distance)| SectorHorizon { slope, distance })
+            };
+            let a = RegionTable::of_vertices(&positions, o, 8, horizon);
+            let b = RegionTable::of_vertices(&moved, o + off.truncate(), 8, horizon);
+            proptest::prop_assert_eq!(b.origin() - off.truncate(), a.origin());
+            for v in 0..positions.len() as u32 {
+                proptest::prop_assert_eq!(a.row(v), b.row(v));
+                for &c in &cameras {
+                    let c = p3(c);
+                    let at = positions[v as usize].truncate();
+                    proptest::prop_assert_eq!(
+                        a.hidden_from(v, at, c),
+                        b.hidden_from(v, at + off.truncate(), c + off)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn plane_coordinates_are_relative_to_the_origin() {
+        let positions = vec![DVec3::new(1010.0, 20.0, 5.0)];
+        let origin = DVec2::new(1000.0, 0.0);
+        // Sector 0 of 4 has centre direction 45°.
+        let table = RegionTable::of_vertices(&positions, origin, 4, |_, s| {
+            (s == 0).then_some(SectorHorizon {
+                slope: 0.0,
+                distance: 5.0,
+            })
+        });
+        let r = table.get(0, 0).expect("sector 0");
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert_eq!(r.t0(), h * 10.0 + h * 20.0 + 5.0);
+        assert_eq!(table.plane_t(0, DVec2::new(1000.0, 0.0)), 0.0);
+        assert_eq!(table.plane_t(0, DVec2::new(1010.0, 20.0)), h * 10.0 + h * 20.0);
+        // A camera 30 m further along the diagonal and below the vertex is hidden; one above it is not.
+        let c = DVec2::new(1010.0, 20.0) + DVec2::splat(30.0 * h);
+        assert!(table.hidden_from(0, positions[0].truncate(), c.extend(4.0)));
+        assert!(!table.hidden_from(0, positions[0].truncate(), c.extend(6.0)));
+    }
+
     #[test]
     fn sector_directions_agree_with_the_horizon_stage() {
         for s in 4..=64 {
@@ -199,7 +283,7 @@ mod tests {
     fn hidden_from_uses_the_sector_towards_the_camera() {
         // One vertex at the origin, hidden in sector 0 (azimuth 0..90°) below slope 0 beyond t0 = 0 + 5.
         let positions = vec![DVec3::ZERO];
-        let table = RegionTable::of_vertices(&positions, 4, |_, s| {
+        let table = RegionTable::of_vertices(&positions, DVec2::ZERO, 4, |_, s| {
             (s == 0).then_some(SectorHorizon {
                 slope: 0.0,
                 distance: 5.0,

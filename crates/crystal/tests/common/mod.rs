@@ -126,7 +126,9 @@ pub fn brute_horizons(positions: &[DVec3], sectors: u32, subsectors: u32) -> Vec
 /// Vertex and triangle region tables of `tin` from brute-force horizons.
 pub fn tables(tin: &Tin, sectors: u32, subsectors: u32) -> (RegionTable, RegionTable) {
     let h = brute_horizons(tin.positions(), sectors, subsectors);
-    let vertices = RegionTable::of_vertices(tin.positions(), sectors, |v, s| h[(v * sectors + s) as usize]);
+    let vertices = RegionTable::of_vertices(tin.positions(), tin.bbox().min.truncate(), sectors, |v, s| {
+        h[(v * sectors + s) as usize]
+    });
     let tris = tin.triangles();
     let triangles = vertices.intersect_rows(tin.num_triangles(), |t| tris[t]);
     (vertices, triangles)
