@@ -202,6 +202,10 @@ fn build_cull_export_eval_round_trip() {
     }
     let groups = report["groups"].as_u64().expect("groups");
     assert!(groups >= 1);
+    if cfg!(target_os = "linux") {
+        let peak = report["peak_memory_bytes"].as_u64().expect("peak memory on Linux");
+        assert!((1 << 20..1 << 34).contains(&peak), "peak memory {peak} bytes");
+    }
 
     let bbox = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"])["bbox"].clone();
     let (cx, cy) = (

@@ -144,6 +144,13 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     let result = build(&tin, &params, Some(stage_progress(out)))?;
     result.hierarchy.save(&args.out)?;
     print_report(&result.report, out);
+    let peak = peak_memory_bytes();
+    if let Some(bytes) = peak {
+        out.say(format!(
+            "  peak memory {:.1} MB (the whole process so far)",
+            bytes as f64 / 1e6
+        ));
+    }
     out.say(format!("wrote {}", args.out.display()));
     if let Some(path) = &args.export_json {
         write_json(&result.hierarchy, path)?;
@@ -156,5 +163,20 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     let mut j = serde_json::to_value(&result.report)?;
     j["output"] = json!(args.out);
     j["params"] = serde_json::to_value(&params)?;
+    j["peak_memory_bytes"] = json!(peak);
     out.json(&j)
+}
+
+/// The process's peak resident memory (`VmHWM` of `/proc/self/status`), where the system reports it (Linux).
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line
+        .trim_start_matches("VmHWM:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kib * 1024)
 }
