@@ -116,7 +116,6 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         bail!("--compare works with --view eye");
     }
     let terrain = load_terrain(&args.input, out)?;
-    let gpu = Gpu::headless()?;
     let options = RenderOptions {
         view,
         eye: args.eye,
@@ -130,6 +129,8 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         compare: args.compare,
         timing_runs: args.runs,
     };
+    viewer::validate(&terrain, &options)?;
+    let gpu = Gpu::headless()?;
     let result = viewer::render(&gpu, &terrain, &options)?;
     viewer::write_png(&args.out, &result.image)?;
     out.say(format!(

@@ -124,8 +124,9 @@ pub struct RenderOutput {
     pub compare: Option<Comparison>,
 }
 
-/// Checks options against the terrain, naming the offending option.
-fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
+/// Checks options against the terrain, naming the offending option ([`render`] does this too; call it first to
+/// reject bad options before opening a GPU device).
+pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
     let bad = |m: String| Err(ViewerError::Invalid(m));
     if !(o.fov_deg > 0.0 && o.fov_deg <= 360.0) {
         return bad(format!("--fov must be in (0, 360], got {}", o.fov_deg));

@@ -21,7 +21,7 @@ pub mod scene;
 
 pub use error::{Result, ViewerError};
 pub use gpu::{Gpu, REQUIRE_GPU_ENV, gpu_required};
-pub use headless::{Comparison, RenderOptions, RenderOutput, ViewKind, render};
+pub use headless::{Comparison, RenderOptions, RenderOutput, ViewKind, render, validate};
 pub use palette::{ORPHAN_COLOUR, group_colour};
 pub use png_out::{read_png, write_png};
 pub use render::{DrawItem, DrawStyle, FrameStats, Renderer, RgbaImage};
