@@ -7,8 +7,10 @@
 //!
 //! Choices made where the thesis is vague (each one is tested):
 //! - **Visibility rule** (6.3.1): a triangle may join a crystal only if none of its three vertices is hidden from the
-//!   crystal's *current* lowest vertex (lowest z, ties to the smaller vertex index): `!hidden_from(v, v.xy, low)` for
-//!   each vertex `v` (see [`occlusion::RegionTable::hidden_from`]); a vertex never hides from itself. The lowest
+//!   crystal's *current* lowest vertex (lowest z, ties to the smaller vertex index): `!vertex_hidden_from(v, v, low)`
+//!   for each vertex `v` (see [`occlusion::RegionTable::vertex_hidden_from`]: the region's definition evaluated
+//!   relative to `v`, so that a lowest vertex on the left bound of `v`'s region, typically the horizon vertex that set
+//!   it, is decided as the strict rule says and not by rounding); a vertex never hides from itself. The lowest
 //!   vertex is updated as soon as a triangle with a lower vertex joins, so later tests of the same crystal use it.
 //! - **Seeds** are drawn without replacement, uniformly from the unassigned triangles (partial Fisher-Yates over them
 //!   in index order, `ChaCha8Rng::seed_from_u64(rng_seed)`, one generator for all passes). A drawn triangle that fails
@@ -34,10 +36,9 @@
 //!   small are freed into the always-visible set and their collisions forgotten. Merged groups stay edge-connected,
 //!   because collisions only happen across edges.
 //!
-//! Speed: growth needs no allocation per step. The visibility test reads the vertex region table in place (it is
-//! [`occlusion::RegionTable::hidden_from`] itself), and each vertex remembers its answer for the last camera vertex it
-//! was tested against; the table's entries are small (see [`occlusion::region::Chain`]) because reading them at random
-//! is most of growth's time.
+//! Speed: growth needs no allocation per step. The visibility test reads the vertex table's sector summaries in place
+//! (it is [`occlusion::RegionTable::vertex_hidden_from`] itself), and each vertex remembers its answer for the last
+//! camera vertex it was tested against; reading the table at random is most of growth's time.
 
 use glam::DVec3;
 use occlusion::RegionTable;
@@ -92,8 +93,8 @@ pub struct Growth {
     pub passes: Vec<PassStats>,
 }
 
-/// The vertex-from-point test of growth: [`RegionTable::hidden_from`] with the vertex's own position, read in place
-/// from the vertex region table (no copy of the table is made).
+/// The vertex-from-point test of growth: [`RegionTable::vertex_hidden_from`] with the vertex's own position, read in
+/// place from the vertex region table (no copy of the table is made).
 pub(crate) struct Sight<'a> {
     regions: &'a RegionTable,
     positions: &'a [DVec3],
@@ -107,8 +108,7 @@ impl<'a> Sight<'a> {
     /// Whether vertex `v` is hidden from `camera`.
     #[inline]
     fn hidden(&self, v: u32, camera: DVec3) -> bool {
-        self.regions
-            .hidden_from(v, self.positions[v as usize].truncate(), camera)
+        self.regions.vertex_hidden_from(v, self.positions[v as usize], camera)
     }
 }
 

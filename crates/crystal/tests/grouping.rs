@@ -61,7 +61,7 @@ fn flat_terrain_is_visible_everywhere_and_forms_few_big_groups() {
     let p = tin.positions();
     for a in (0..tin.num_vertices() as u32).step_by(37) {
         for b in (0..tin.num_vertices() as u32).step_by(11) {
-            assert!(!v.hidden_from(a, p[a as usize].truncate(), p[b as usize]));
+            assert!(!v.vertex_hidden_from(a, p[a as usize], p[b as usize]));
         }
     }
     assert_eq!(c.stats.orphans, 0, "{:?}", c.stats);

@@ -5,6 +5,13 @@
 //! projection origin ([`horizon::projection_origin`], the lower-left corner of the terrain's bounding box). That keeps
 //! rounding small on UTM-sized coordinates and, since `o` moves exactly with the terrain, makes every decision
 //! translation-invariant. All regions of one table share that plane, so they intersect directly.
+//!
+//! A vertex table ([`RegionTable::of_vertices`]) also keeps the sector horizon summaries its regions were built from,
+//! for [`RegionTable::vertex_hidden_from`]: growth's cameras are mesh vertices, often the very horizon vertex `q` that
+//! set a region's left bound `t_p + d`, `d = r_i · (q − p)`. Such a camera lies exactly on the bound, outside by the
+//! strict containment rule, but `r_i · (q − o)` against the rounded sum `t_p + d` lets rounding decide. The vertex test
+//! therefore evaluates the definition relative to the vertex, with the horizon stage's own operands:
+//! `t = r_i · (c.xy − p.xy) > d` and `c.z − p.z < m · t`; for `c = q` that `t` is `d` to the last bit.
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -28,7 +35,16 @@ pub struct RegionTable {
     /// The sectors' centre directions `r_i`.
     directions: Vec<DVec2>,
     regions: Vec<Option<Region>>,
+    /// Vertex tables only (else empty): the summaries the regions were built from, laid out like `regions`; an empty
+    /// region has distance `+∞` (nothing lies beyond it).
+    horizons: Vec<SectorHorizon>,
 }
+
+/// The summary stored for an empty vertex region: no camera is ever beyond its left bound.
+const NO_SUMMARY: SectorHorizon = SectorHorizon {
+    slope: 0.0,
+    distance: f64::INFINITY,
+};
 
 /// The centre directions of all sectors.
 fn directions(sectors: u32) -> Vec<DVec2> {
@@ -53,11 +69,13 @@ impl RegionTable {
             origin,
             directions: directions(sectors),
             regions,
+            horizons: Vec::new(),
         }
     }
 
     /// The regions of every vertex of a mesh, in plane coordinates relative to `origin`: in each sector, the wedge of
     /// [`Region::of_vertex`] built from the vertex's sector horizon, or empty where `horizon(v, sector)` is `None`.
+    /// The table keeps the sector horizons too, for [`RegionTable::vertex_hidden_from`].
     pub fn of_vertices(
         positions: &[DVec3],
         origin: DVec2,
@@ -66,21 +84,32 @@ impl RegionTable {
     ) -> RegionTable {
         let dirs = directions(sectors);
         let s = sectors as usize;
-        // An indexed parallel iterator collects straight into the table, without intermediate vectors.
-        let regions = (0..positions.len() * s)
+        // An indexed parallel iterator unzips straight into the two columns, without intermediate vectors.
+        let (regions, horizons) = (0..positions.len() * s)
             .into_par_iter()
             .map(|i| {
                 let (v, sector) = (i / s, i % s);
                 let p = positions[v];
-                horizon(v as u32, sector as u32)
-                    .map(|h| Region::of_vertex(dirs[sector].dot(p.truncate() - origin), p.z, h.slope, h.distance))
+                match horizon(v as u32, sector as u32) {
+                    Some(h) => (
+                        Some(Region::of_vertex(
+                            dirs[sector].dot(p.truncate() - origin),
+                            p.z,
+                            h.slope,
+                            h.distance,
+                        )),
+                        h,
+                    ),
+                    None => (None, NO_SUMMARY),
+                }
             })
-            .collect();
+            .unzip();
         RegionTable {
             sectors,
             origin,
             directions: dirs,
             regions,
+            horizons,
         }
     }
 
@@ -111,6 +140,7 @@ impl RegionTable {
             origin: self.origin,
             directions: self.directions.clone(),
             regions,
+            horizons: Vec::new(),
         }
     }
 
@@ -162,6 +192,28 @@ impl RegionTable {
         let sector = cull::sector_of_azimuth(self.sectors, cull::azimuth(d.x, d.y));
         self.get(element, sector)
             .is_some_and(|r| r.contains(self.plane_t(sector, camera.truncate()), camera.z))
+    }
+
+    /// Whether vertex `vertex` at `position` is hidden from the camera at `camera`, decided exactly by the region's
+    /// definition in the sector towards the camera, relative to the vertex: with that sector's horizon summary
+    /// `(m, d)` of the vertex and `t = r_i · (camera.xy − position.xy)` (the operands and order of the horizon
+    /// stage's `d`), hidden iff `t > d` and `camera.z − position.z < m · t`. A camera at the horizon vertex that set
+    /// `d` is therefore on the left bound, i.e. not hidden, whatever the coordinates. A camera straight above or
+    /// below the vertex never hides it. Tables without vertex summaries (not built by
+    /// [`RegionTable::of_vertices`]) fall back to [`RegionTable::hidden_from`].
+    #[inline]
+    pub fn vertex_hidden_from(&self, vertex: u32, position: DVec3, camera: DVec3) -> bool {
+        if self.horizons.is_empty() {
+            return self.hidden_from(vertex, position.truncate(), camera);
+        }
+        let d = camera.truncate() - position.truncate();
+        if d == DVec2::ZERO {
+            return false;
+        }
+        let sector = cull::sector_of_azimuth(self.sectors, cull::azimuth(d.x, d.y));
+        let h = &self.horizons[vertex as usize * self.sectors as usize + sector as usize];
+        let t = self.directions[sector as usize].dot(d);
+        t > h.distance && camera.z - position.z < h.slope * t
     }
 
     /// Bytes of chain data held (vertices and tail slopes of non-empty regions), a measure of visibility storage.
@@ -296,5 +348,37 @@ mod tests {
             "sector 1 is empty"
         );
         assert!(!table.hidden_from(0, DVec2::ZERO, DVec3::new(0.0, 0.0, -10.0)));
+    }
+
+    #[test]
+    fn vertex_test_without_summaries_falls_back_to_the_regions() {
+        let positions = vec![DVec3::new(3.0, 4.0, 10.0)];
+        let horizon = |_, s| {
+            (s == 0).then_some(SectorHorizon {
+                slope: -0.5,
+                distance: 2.0,
+            })
+        };
+        let with = RegionTable::of_vertices(&positions, DVec2::ZERO, 4, horizon);
+        let without = RegionTable::from_rows(4, DVec2::ZERO, with.row(0).to_vec());
+        let at = positions[0].truncate();
+        for c in [
+            DVec3::new(20.0, 20.0, -5.0),
+            DVec3::new(20.0, 20.0, 9.0),
+            DVec3::new(4.0, 5.0, 0.0),
+            DVec3::new(-20.0, 20.0, -100.0),
+            DVec3::new(3.0, 4.0, -100.0),
+        ] {
+            assert_eq!(
+                without.vertex_hidden_from(0, positions[0], c),
+                without.hidden_from(0, at, c)
+            );
+            assert_eq!(
+                with.vertex_hidden_from(0, positions[0], c),
+                with.hidden_from(0, at, c),
+                "{c}"
+            );
+        }
+        assert!(with.vertex_hidden_from(0, positions[0], DVec3::new(20.0, 20.0, -5.0)));
     }
 }

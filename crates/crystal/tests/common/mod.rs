@@ -144,7 +144,7 @@ pub fn lowest_of(tin: &Tin, tri: [u32; 3]) -> u32 {
 
 /// Re-checks the growth rule independently: replaying each crystal's joins in order, every triangle's recorded lowest
 /// vertex is the crystal's lowest vertex so far (for a seed, the lowest of its own), and none of the triangle's
-/// vertices is hidden from it by [`RegionTable::hidden_from`].
+/// vertices is hidden from it by [`RegionTable::vertex_hidden_from`].
 pub fn recheck_growth(tin: &Tin, vertices: &RegionTable, c: &crystal::Crystal) {
     let p = tin.positions();
     let mut joined: Vec<(u32, u32, u32)> = c
@@ -169,7 +169,7 @@ pub fn recheck_growth(tin: &Tin, vertices: &RegionTable, c: &crystal::Crystal) {
         let camera = p[j.lowest as usize];
         for v in tri {
             assert!(
-                v == j.lowest || !vertices.hidden_from(v, p[v as usize].truncate(), camera),
+                v == j.lowest || !vertices.vertex_hidden_from(v, p[v as usize], camera),
                 "triangle {t} joined crystal {crystal} although vertex {v} is hidden from its lowest vertex {}",
                 j.lowest
             );
