@@ -19,13 +19,7 @@ pub fn write_grouped_obj(h: &Hierarchy, path: &Path) -> Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .context("the OBJ path has no file name")?;
-    let mut leaves: Vec<[u32; 2]> = h
-        .nodes
-        .iter()
-        .filter(|n| n.children.is_empty())
-        .map(|n| n.triangles)
-        .collect();
-    leaves.sort_unstable();
+    let leaves = h.leaf_ranges();
     write_atomic(&mtl_path, |w| {
         writeln!(w, "# tincull groups: one material per leaf group, grey for orphans")?;
         for (i, _) in leaves.iter().enumerate() {

@@ -170,6 +170,18 @@ impl Hierarchy {
         self.mesh.triangles.len()
     }
 
+    /// The triangle ranges of the leaf groups in triangle order; group `i` of the exports and renders is the `i`-th.
+    pub fn leaf_ranges(&self) -> Vec<[u32; 2]> {
+        let mut leaves: Vec<[u32; 2]> = self
+            .nodes
+            .iter()
+            .filter(|n| n.children.is_empty())
+            .map(|n| n.triangles)
+            .collect();
+        leaves.sort_unstable();
+        leaves
+    }
+
     /// Bytes of visibility data: regions, circles, ranges and child links (not the mesh).
     pub fn visibility_bytes(&self) -> usize {
         self.nodes

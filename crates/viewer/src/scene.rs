@@ -72,13 +72,7 @@ impl Terrain {
     pub fn from_hierarchy(h: Hierarchy) -> Result<Terrain> {
         h.check_invariants()?;
         let mut t = Terrain::from_geometry(h.origin, &h.mesh.positions, h.mesh.triangles.clone())?;
-        let mut leaves: Vec<[u32; 2]> = h
-            .nodes
-            .iter()
-            .filter(|n| n.children.is_empty())
-            .map(|n| n.triangles)
-            .collect();
-        leaves.sort_unstable();
+        let leaves = h.leaf_ranges();
         for (i, [s, e]) in leaves.iter().enumerate() {
             t.group_of[*s as usize..*e as usize].fill(i as u32);
         }
