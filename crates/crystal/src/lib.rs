@@ -117,7 +117,13 @@ pub fn build(tin: &Tin, vertex_regions: &RegionTable, params: &CrystalParams) ->
         params.max_expanse,
         terrain_area,
     );
-    let (order, orphan_range) = order::lay_out(&mut hierarchy, &groups, &orphans);
+    let centroids: Vec<[f64; 2]> = (0..nt)
+        .map(|t| {
+            let c = tin.corners(t);
+            [(c[0].x + c[1].x + c[2].x) / 3.0, (c[0].y + c[1].y + c[2].y) / 3.0]
+        })
+        .collect();
+    let (order, orphan_range) = order::lay_out(&mut hierarchy, &groups, &orphans, &centroids);
     let stats = CrystalStats {
         orphan_passes: grown.passes.len().saturating_sub(1) as u32,
         orphans: orphans.len(),
@@ -241,7 +247,9 @@ impl Crystal {
             }
         }
         let tail = (nt - self.orphans.len()) as u32..nt as u32;
-        if self.orphan_range != tail || self.order[self.orphan_range.start as usize..] != self.orphans[..] {
+        let mut tail_triangles = self.order[tail.start as usize..].to_vec();
+        tail_triangles.sort_unstable();
+        if self.orphan_range != tail || tail_triangles != self.orphans {
             return fail("the always-visible set is not the tail of the order".into());
         }
 

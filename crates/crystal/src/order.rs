@@ -1,9 +1,13 @@
 //! Triangle reordering so that every hierarchy node draws with one call (design.md "Crystal grouping").
 //!
 //! A depth-first walk over the forest (roots in increasing id, children in stored order) lays out each group's
-//! triangles, in the order they joined, when it reaches the group's leaf; every node then covers one contiguous range
-//! of the new order, and a parent's range is its children's ranges side by side. The always-visible triangles come
-//! last, in increasing index.
+//! triangles when it reaches the group's leaf; every node then covers one contiguous range of the new order, and a
+//! parent's range is its children's ranges side by side. The always-visible triangles come last.
+//!
+//! Inside a group and inside the always-visible set, triangles are in [`spatial_order`]: a range of `n` triangles
+//! is split at `n / 2` into two halves that are compact in x,y, recursively. Any range obtained by halving is
+//! therefore a compact patch of terrain, which the run-time horizon culler (`cull::safe`) uses to cull below the
+//! groups without storing anything more.
 
 use std::ops::Range;
 
@@ -11,7 +15,12 @@ use crate::merge::Hierarchy;
 
 /// Lays out the triangles and sets every node's range. Returns the order (`order[k]` is the original index of the
 /// triangle drawn `k`-th) and the range of the always-visible set.
-pub(crate) fn lay_out(hierarchy: &mut Hierarchy, groups: &[Vec<u32>], orphans: &[u32]) -> (Vec<u32>, Range<u32>) {
+pub(crate) fn lay_out(
+    hierarchy: &mut Hierarchy,
+    groups: &[Vec<u32>],
+    orphans: &[u32],
+    centroids: &[[f64; 2]],
+) -> (Vec<u32>, Range<u32>) {
     let total = groups.iter().map(Vec::len).sum::<usize>() + orphans.len();
     let mut order = Vec::with_capacity(total);
     let mut stack: Vec<(u32, usize)> = Vec::new();
@@ -21,7 +30,9 @@ pub(crate) fn lay_out(hierarchy: &mut Hierarchy, groups: &[Vec<u32>], orphans: &
         while let Some(&mut (n, ref mut next)) = stack.last_mut() {
             let node = &hierarchy.nodes[n as usize];
             if node.is_leaf() {
+                let at = order.len();
                 order.extend_from_slice(&groups[n as usize]);
+                spatial_order(&mut order[at..], centroids);
             }
             if let Some(&c) = node.children.get(*next) {
                 *next += 1;
@@ -35,6 +46,35 @@ pub(crate) fn lay_out(hierarchy: &mut Hierarchy, groups: &[Vec<u32>], orphans: &
     }
     let start = order.len() as u32;
     order.extend_from_slice(orphans);
+    spatial_order(&mut order[start as usize..], centroids);
     let end = order.len() as u32;
     (order, start..end)
+}
+
+/// Orders `triangles` so that halving is a spatial split: the first `n / 2` are those whose centroids come first
+/// along the longer side of the centroids' bounding box (ties by triangle index), recursively in both halves.
+/// Deterministic: the result depends only on the set of triangles and their centroids.
+pub(crate) fn spatial_order(triangles: &mut [u32], centroids: &[[f64; 2]]) {
+    if triangles.len() <= 2 {
+        triangles.sort_unstable();
+        return;
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &t in triangles.iter() {
+        let c = centroids[t as usize];
+        for k in 0..2 {
+            lo[k] = lo[k].min(c[k]);
+            hi[k] = hi[k].max(c[k]);
+        }
+    }
+    let axis = usize::from(hi[1] - lo[1] > hi[0] - lo[0]);
+    let mid = triangles.len() / 2;
+    triangles.select_nth_unstable_by(mid, |&a, &b| {
+        centroids[a as usize][axis]
+            .total_cmp(&centroids[b as usize][axis])
+            .then(a.cmp(&b))
+    });
+    let (left, right) = triangles.split_at_mut(mid);
+    spatial_order(left, centroids);
+    spatial_order(right, centroids);
 }

@@ -85,10 +85,12 @@ pub struct DrawList {
     pub ranges: Vec<[u32; 2]>,
     /// Counters.
     pub stats: CullStats,
+    /// Working memory of the safe culler, kept between calls.
+    pub(crate) scratch: crate::safe::SafeScratch,
 }
 
 impl DrawList {
-    fn push(&mut self, [s, e]: [u32; 2]) {
+    pub(crate) fn push(&mut self, [s, e]: [u32; 2]) {
         if s == e {
             return;
         }

@@ -1,0 +1,608 @@
+//! The conservative 1-D horizon around a camera (Lloyd & Egbert 2002, §4.3; Downs, Möller & Séquin 2001), on four
+//! vertical image planes, and its proof.
+//!
+//! ## Geometry
+//!
+//! Seen from the camera `c`, a point `p` has the offset `d = p − c`. The plane x,y around `c` is cut into four
+//! closed 90° wedges, the *faces* `k = 0..4`, centred on +x, +y, −x and −y. In face `k` a point has a *forward*
+//! coordinate `f` and a *lateral* coordinate `l` (face 0: `f = dx, l = dy`; face 1: `f = dy, l = −dx`; face 2:
+//! `f = −dx, l = −dy`; face 3: `f = −dy, l = dx`), and, where `f > 0`, the image coordinates `u = l / f` (the face
+//! covers `u ∈ [−1, 1]`) and `v = dz / f`. This is a perspective projection onto the plane `f = 1`, so
+//!
+//! - (P1) a 3-D segment or triangle whose points all have `f > 0` projects to the segment or triangle spanned by its
+//!   projected vertices (perspective maps lines to lines);
+//! - (P2) along one vertical half-plane from `c` (fixed `u`), `v = s / cos φ` with `s = dz / |d.xy|` the elevation
+//!   slope and `φ` the fixed angle between the half-plane and the face axis, so comparing `v` at equal `u` is
+//!   comparing slopes `s`.
+//!
+//! Each face has `w` columns (a power of two); column `j` covers `u ∈ [a_j, a_{j+1}]` with `a_j = −1 + 2j / w`,
+//! computed exactly. The buffer holds one value `H` per column.
+//!
+//! ## What the buffer promises
+//!
+//! **Invariant.** After occluders `O_1 … O_m` (pieces of terrain, or of surfaces lying on or below the terrain, each
+//! lowered by a height margin `μ`) were written, for every column `j` and every `u` in it there is a point `q` of
+//! some `O_i` on the vertical half-plane `u` with `v(q) ≥ H_j`.
+//!
+//! **Theorem.** Let every point of the occluders written so far be at a horizontal distance from `c` strictly below
+//! `D`, and let `N` be a set of terrain points at horizontal distances `≥ D`. If for every column `j` that `N`
+//! touches, every point `p` of `N` in column `j` has `v(p) < H_j`, then every segment `pc` passes strictly below the
+//! terrain (by more than `μ`): `N` is hidden.
+//!
+//! *Proof.* Take `p` in `N` at `u`, column `j`. By the invariant there is `q` on the same half-plane with
+//! `v(q) ≥ H_j > v(p)`; by (P2), `s(q) > s(p)`, and `|q − c| < D ≤ |p − c|` (horizontal), so `q` lies between `c` and
+//! `p` in x,y. The segment `pc` at `q`'s distance `ρ_q` is at height `c.z + s(p) ρ_q < c.z + s(q) ρ_q = q.z`, and `q.z`
+//! is at least `μ` below the terrain there. ∎
+//!
+//! ## Why the invariant holds: writing an occluder
+//!
+//! An occluder is a triangle of the TIN with its three vertices lowered by `μ` (a parallel copy `μ` below the
+//! terrain; every point of it is `μ` below the terrain at its x,y). It is written into face `k` only when all three
+//! vertices have `f > 0`; by (P1) its image is the triangle of the projected vertices. For a fixed `u` inside the
+//! image's span `[u_A, u_C]`, the image's vertical section has the top value `top(u)`, the largest value at `u` of
+//! the (at most two) image edges that span `u`; it is a point of the occluder. `top` is concave on `[u_A, u_C]` (the
+//! upper boundary of a triangle), so its minimum over an interval is at one of the interval's ends.
+//!
+//! - *Full columns*: for a column with `[a_j, a_{j+1}] ⊆ [u_A, u_C]`, `H_j ← max(H_j, min(top(a_j), top(a_{j+1})))`.
+//! - *Partial columns*: the column containing `u_A` is covered by the occluder on `[u_A, a_{j+1}]` with the lower
+//!   bound `min(top(u_A), top(a_{j+1}))`, and the column containing `u_C` on `[a_j, u_C]`. Such a right-anchored
+//!   cover `[x, a_{j+1}]` and a left-anchored cover `[a_j, y]` with `y ≥ x` (from any occluders written so far)
+//!   together cover the whole column, so `H_j ← max(H_j, min(bound₁, bound₂))` keeps the invariant. Each column
+//!   keeps two candidates per side (the highest bound, and the widest cover).
+//!
+//! ## Testing an occludee
+//!
+//! A triangle of the TIN (raised by `μ`, which only adds points above the terrain) projected into face `k` when its
+//! three vertices have `f > 0`: it touches the columns that meet `[u_A, u_C]` and its largest `v` in column `j` is the
+//! largest of `top` at the two ends of `[max(a_j, u_A), min(a_{j+1}, u_C)]` and at the middle vertex's `u` when
+//! inside (the only corner of the concave `top`). A triangle that touches a face in which it cannot be projected
+//! is not hidden.
+//!
+//! A disk of radius `r` around `m` (x,y) with every point at most at height `z_max` (a node's bounding cylinder) whose
+//! distance `δ = |m − c|` exceeds `r`: in face `k`, its points inside the face's wedge have `f ≥ f_lo =
+//! max(m_f − r, (δ − r)/√2)` (inside a 90° wedge `f ≥ |d.xy| / √2`) and `f ≤ f_hi = min(m_f + r, δ + r)`, so their
+//! `v ≤ (z_max − c.z) / f_lo` when that numerator is `≥ 0`, else `≤ (z_max − c.z) / f_hi`; the columns touched are
+//! those between the tangent directions `u± = (m_f m_l ± r √(m_f² + m_l² − r²)) / (m_f² − r²)` when `m_f > r`, else
+//! the whole face if the disk meets the wedge.
+//!
+//! ## Rounding
+//!
+//! All arithmetic is f64 on offsets `p − c`, each one correctly rounded subtraction of world coordinates (relative
+//! error `ε = 2⁻⁵³`). Every derived quantity is moved in the safe direction by more than its rounding error:
+//!
+//! - heights: the margin `μ` (chosen by the caller as `1e-7 (1 + scene size + |camera|)` metres, over 100 times the
+//!   ground truth's own tolerance of `1e-9 (1 + distance + |z|)`, so a sight line that we call blocked is blocked for
+//!   the exact checker too) is subtracted from occluder and added to occludee heights before dividing;
+//! - values `v = (dz ∓ μ) / f`: one subtraction and one division, relative error below `3ε`; moved by `REL = 1e-12`
+//!   relative (down for occluders, up for occludees);
+//! - a line's value between its end points `P, Q`, `P.v + (u − P.u)·κ` with `κ = (Q.v − P.v)/(Q.u − P.u)`: its error,
+//!   from the operands' errors and its own four operations, is below `8ε (|P.v| + |Q.v| + |κ| (|P.u| + |Q.u| + 2))`
+//!   for `u` within `[−1, 1]` and the edge; it is moved by `REL` times that sum;
+//! - column indices: `u` values carry a relative error below `3ε`; full and partial covers are shrunk and occludee
+//!   spans widened by `REL (1 + |u|)` before they are turned into columns; column boundaries `a_j` are exact dyadic
+//!   numbers;
+//! - disks: `f_lo` is decreased and `f_hi` increased by `REL` relative; the tangent values `u±` are computed from a
+//!   square root and a division, each correctly rounded, and moved outward by `1e-9 (1 + |u|)` (also covering the
+//!   cancellation in `m_f² − r²`, which is why a disk with `m_f < (1 + 1e-6) r` takes the whole face).
+
+/// Relative margin applied to every rounded quantity (see the module documentation).
+pub(crate) const REL: f64 = 1e-12;
+
+/// Number of faces (90° wedges) around the camera.
+pub const FACES: usize = 4;
+
+/// Forward and lateral coordinates of the offset `(dx, dy)` in face `k` (exact: only negations).
+#[inline(always)]
+pub(crate) fn face_coords(k: usize, dx: f64, dy: f64) -> (f64, f64) {
+    match k {
+        0 => (dx, dy),
+        1 => (dy, -dx),
+        2 => (-dx, -dy),
+        _ => (-dy, dx),
+    }
+}
+
+/// A vertex projected into one face: `u`, and `v` lowered (`lo`, for occluders) and raised (`hi`, for occludees) by
+/// the height margin and the rounding margin.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Proj {
+    pub u: f64,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// A vertex projected into every face where its forward coordinate is positive (`mask` bit `k`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Projected {
+    pub mask: u8,
+    pub face: [Proj; FACES],
+}
+
+/// Projects the offset `d = p − c` into every face where `f > 0`, with the height margin `mu`.
+#[inline]
+pub(crate) fn project(d: [f64; 3], mu: f64) -> Projected {
+    let mut out = Projected::default();
+    let (dz_lo, dz_hi) = (d[2] - mu, d[2] + mu);
+    for k in 0..FACES {
+        let (f, l) = face_coords(k, d[0], d[1]);
+        if f > 0.0 {
+            let lo = dz_lo / f;
+            let hi = dz_hi / f;
+            out.mask |= 1 << k;
+            out.face[k] = Proj {
+                u: l / f,
+                lo: lo - REL * lo.abs(),
+                hi: hi + REL * hi.abs(),
+            };
+        }
+    }
+    out
+}
+
+/// One image edge `P → Q` with `P.u < Q.u`: its value at `u` and the rounding margin of that value.
+#[derive(Clone, Copy, Debug)]
+struct Edge {
+    u0: f64,
+    u1: f64,
+    v0: f64,
+    slope: f64,
+    margin: f64,
+}
+
+impl Edge {
+    fn new(p: (f64, f64), q: (f64, f64)) -> Option<Edge> {
+        let (p, q) = if p.0 <= q.0 { (p, q) } else { (q, p) };
+        if q.0 <= p.0 {
+            return None;
+        }
+        let slope = (q.1 - p.1) / (q.0 - p.0);
+        if !slope.is_finite() {
+            return None;
+        }
+        Some(Edge {
+            u0: p.0,
+            u1: q.0,
+            v0: p.1,
+            slope,
+            margin: REL * (p.1.abs() + q.1.abs() + slope.abs() * (p.0.abs() + q.0.abs() + 2.0)),
+        })
+    }
+
+    #[inline(always)]
+    fn spans(&self, u: f64) -> bool {
+        self.u0 <= u && u <= self.u1
+    }
+
+    #[inline(always)]
+    fn at(&self, u: f64) -> f64 {
+        self.v0 + (u - self.u0) * self.slope
+    }
+}
+
+/// A projected triangle's upper boundary `top(u)` over `[ua, uc]`, with its middle vertex's `u`.
+#[derive(Clone, Copy, Debug)]
+struct Top {
+    edges: [Option<Edge>; 3],
+    ua: f64,
+    ub: f64,
+    uc: f64,
+}
+
+impl Top {
+    fn new(p: [(f64, f64); 3]) -> Option<Top> {
+        let mut us = [p[0].0, p[1].0, p[2].0];
+        us.sort_unstable_by(f64::total_cmp);
+        if !(us[0] < us[2]) {
+            return None;
+        }
+        Some(Top {
+            edges: [Edge::new(p[0], p[1]), Edge::new(p[1], p[2]), Edge::new(p[2], p[0])],
+            ua: us[0],
+            ub: us[1],
+            uc: us[2],
+        })
+    }
+
+    /// A lower bound of `top(u)` (occluders): the largest edge value at `u` minus its margin.
+    #[inline]
+    fn low(&self, u: f64) -> f64 {
+        let mut best = f64::NEG_INFINITY;
+        for e in self.edges.iter().flatten() {
+            if e.spans(u) {
+                best = best.max(e.at(u) - e.margin);
+            }
+        }
+        best
+    }
+
+    /// An upper bound of `top(u)` (occludees): the largest edge value at `u` plus its margin; `+∞` where no edge
+    /// spans `u`.
+    #[inline]
+    fn high(&self, u: f64) -> f64 {
+        let mut best = f64::NEG_INFINITY;
+        for e in self.edges.iter().flatten() {
+            if e.spans(u) {
+                best = best.max(e.at(u) + e.margin);
+            }
+        }
+        if best == f64::NEG_INFINITY { f64::INFINITY } else { best }
+    }
+}
+
+/// Partial covers of one column: left-anchored (`[a_j, reach]`) and right-anchored (`[start, a_{j+1}]`), two
+/// candidates each: the highest bound and the widest cover.
+#[derive(Clone, Copy, Debug)]
+struct Partial {
+    /// `(bound, reach)`: highest bound, widest reach.
+    left: [(f64, f64); 2],
+    /// `(bound, start)`: highest bound, widest (smallest start).
+    right: [(f64, f64); 2],
+}
+
+const NO_PARTIAL: Partial = Partial {
+    left: [(f64::NEG_INFINITY, f64::NEG_INFINITY); 2],
+    right: [(f64::NEG_INFINITY, f64::INFINITY); 2],
+};
+
+/// The horizon buffer: `4 w` column values and the partial covers behind them.
+#[derive(Clone, Debug)]
+pub struct Horizon {
+    w: usize,
+    half_w: f64,
+    step: f64,
+    h: Vec<f64>,
+    partial: Vec<Partial>,
+}
+
+impl Horizon {
+    /// A buffer of `columns_per_face` columns in each of the four faces (a power of two, at least 2).
+    pub fn new(columns_per_face: usize) -> Horizon {
+        let w = columns_per_face.next_power_of_two().max(2);
+        Horizon {
+            w,
+            half_w: w as f64 * 0.5,
+            step: 2.0 / w as f64,
+            h: vec![f64::NEG_INFINITY; FACES * w],
+            partial: vec![NO_PARTIAL; FACES * w],
+        }
+    }
+
+    /// Columns per face.
+    pub fn columns_per_face(&self) -> usize {
+        self.w
+    }
+
+    /// Column values (`−∞` where nothing covers the column yet), face after face.
+    pub fn values(&self) -> &[f64] {
+        &self.h
+    }
+
+    /// Forgets every occluder.
+    pub fn clear(&mut self) {
+        self.h.fill(f64::NEG_INFINITY);
+        self.partial.fill(NO_PARTIAL);
+    }
+
+    /// Left boundary `a_j` of column `j` (exact).
+    #[inline(always)]
+    fn boundary(&self, j: usize) -> f64 {
+        -1.0 + j as f64 * self.step
+    }
+
+    /// The column containing `u` (clamped to the face), as a float index.
+    #[inline(always)]
+    fn column_of(&self, u: f64) -> f64 {
+        (u + 1.0) * self.half_w
+    }
+
+    /// Writes the lowered triangle `tri` (three projected vertices) into every face where it can be projected.
+    pub(crate) fn write_triangle(&mut self, tri: [&Projected; 3]) {
+        let faces = tri[0].mask & tri[1].mask & tri[2].mask;
+        for k in 0..FACES {
+            if faces & (1 << k) == 0 {
+                continue;
+            }
+            let p = [tri[0].face[k], tri[1].face[k], tri[2].face[k]];
+            let Some(top) = Top::new([(p[0].u, p[0].lo), (p[1].u, p[1].lo), (p[2].u, p[2].lo)]) else {
+                continue;
+            };
+            self.write_top(k, &top);
+        }
+    }
+
+    fn write_top(&mut self, k: usize, top: &Top) {
+        let lo_u = top.ua + REL * (1.0 + top.ua.abs());
+        let hi_u = top.uc - REL * (1.0 + top.uc.abs());
+        if !(lo_u < hi_u) || hi_u <= -1.0 || lo_u >= 1.0 {
+            return;
+        }
+        let w = self.w as isize;
+        // Full columns: j with a_j ≥ lo_u and a_{j+1} ≤ hi_u.
+        let first = self.column_of(lo_u).ceil() as isize;
+        let end = self.column_of(hi_u).floor() as isize; // one past the last full column
+        let (first_c, end_c) = (first.clamp(0, w), end.clamp(0, w));
+        let base = k * self.w;
+        if first_c < end_c {
+            let mut prev = top.low(self.boundary(first_c as usize));
+            for j in first_c..end_c {
+                let next = top.low(self.boundary(j as usize + 1));
+                let slot = &mut self.h[base + j as usize];
+                *slot = slot.max(prev.min(next));
+                prev = next;
+            }
+        }
+        // Partial columns at both ends (only when the triangle does not fit inside one column).
+        let left_col = first - 1; // contains lo_u (unless lo_u is on a boundary, then it is just a weaker cover)
+        let right_col = end; // contains hi_u
+        if left_col < right_col {
+            if (0..w).contains(&left_col) {
+                let b = self.boundary(left_col as usize + 1);
+                let bound = top.low(lo_u).min(top.low(b));
+                self.add_right_anchored(base + left_col as usize, bound, lo_u);
+            }
+            if (0..w).contains(&right_col) {
+                let a = self.boundary(right_col as usize);
+                let bound = top.low(a).min(top.low(hi_u));
+                self.add_left_anchored(base + right_col as usize, bound, hi_u);
+            }
+        }
+    }
+
+    fn add_left_anchored(&mut self, col: usize, bound: f64, reach: f64) {
+        if bound == f64::NEG_INFINITY {
+            return;
+        }
+        let p = &mut self.partial[col];
+        if bound > p.left[0].0 {
+            p.left[0] = (bound, reach);
+        }
+        if reach > p.left[1].1 {
+            p.left[1] = (bound, reach);
+        }
+        self.combine(col);
+    }
+
+    fn add_right_anchored(&mut self, col: usize, bound: f64, start: f64) {
+        if bound == f64::NEG_INFINITY {
+            return;
+        }
+        let p = &mut self.partial[col];
+        if bound > p.right[0].0 {
+            p.right[0] = (bound, start);
+        }
+        if start < p.right[1].1 {
+            p.right[1] = (bound, start);
+        }
+        self.combine(col);
+    }
+
+    fn combine(&mut self, col: usize) {
+        let p = self.partial[col];
+        let mut best = self.h[col];
+        for l in p.left {
+            for r in p.right {
+                if l.1 >= r.1 {
+                    best = best.max(l.0.min(r.0));
+                }
+            }
+        }
+        self.h[col] = best;
+    }
+
+    /// Whether the raised triangle `tri` is strictly below the horizon in every column it touches. A triangle that
+    /// touches a face in which it cannot be projected is not hidden.
+    pub(crate) fn triangle_hidden(&self, tri: [&Projected; 3]) -> bool {
+        let faces = tri[0].mask & tri[1].mask & tri[2].mask;
+        if faces == 0 {
+            return false;
+        }
+        // The wedges the triangle touches: those of its vertices when they are one wedge or two adjacent ones (a
+        // triangle that does not contain the camera spans less than 180° of azimuth, so it stays within them);
+        // anything else is left visible.
+        let mut touched = 0u8;
+        for v in tri {
+            touched |= wedge_of(v);
+        }
+        if !matches!(
+            touched,
+            0b0001 | 0b0010 | 0b0100 | 0b1000 | 0b0011 | 0b0110 | 0b1100 | 0b1001
+        ) {
+            return false;
+        }
+        if touched & !faces != 0 {
+            return false;
+        }
+        for k in 0..FACES {
+            if touched & (1 << k) == 0 {
+                continue;
+            }
+            let p = [tri[0].face[k], tri[1].face[k], tri[2].face[k]];
+            let Some(top) = Top::new([(p[0].u, p[0].hi), (p[1].u, p[1].hi), (p[2].u, p[2].hi)]) else {
+                return false;
+            };
+            if !self.top_hidden(k, &top) {
+                return false;
+            }
+        }
+        true
+    }
+
+    fn top_hidden(&self, k: usize, top: &Top) -> bool {
+        let lo_u = top.ua - REL * (1.0 + top.ua.abs());
+        let hi_u = top.uc + REL * (1.0 + top.uc.abs());
+        if hi_u < -1.0 || lo_u > 1.0 {
+            return true;
+        }
+        let last = self.w as isize - 1;
+        let j0 = (self.column_of(lo_u).floor() as isize).clamp(0, last) as usize;
+        let j1 = (self.column_of(hi_u).floor() as isize).clamp(0, last) as usize;
+        let base = k * self.w;
+        for j in j0..=j1 {
+            let h = self.h[base + j];
+            if h == f64::NEG_INFINITY {
+                return false;
+            }
+            let l = self.boundary(j).max(top.ua);
+            let r = self.boundary(j + 1).min(top.uc);
+            let mut m = top.high(l).max(top.high(r));
+            if l < top.ub && top.ub < r {
+                m = m.max(top.high(top.ub));
+            }
+            // Ends that fall just outside the computed span (inside the margin) are bounded by the end vertices.
+            if l > r {
+                m = top.high(top.ua).max(top.high(top.uc)).max(top.high(top.ub));
+            }
+            if !(m < h) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether a disk (centre offset `m = centre − c` in x,y, radius `r`, `m` farther than `r`) whose points are all at
+    /// most `dz_max` above the camera (already raised by the height margin) is strictly below the horizon in every
+    /// column it touches.
+    pub(crate) fn disk_hidden(&self, m: [f64; 2], r: f64, dz_max: f64) -> bool {
+        let dist = (m[0] * m[0] + m[1] * m[1]).sqrt();
+        // The offset m carries a rounding error below ε |m|: grow the disk by more.
+        let r = r + 1e-15 * dist;
+        if !(dist > r * (1.0 + 1e-6)) {
+            return false;
+        }
+        for k in 0..FACES {
+            let (mf, ml) = face_coords(k, m[0], m[1]);
+            // Does the disk meet the wedge f ≥ |l|?
+            if !disk_meets_wedge(mf, ml, r) {
+                continue;
+            }
+            let f_lo = (mf - r).max((dist - r - 1e-15 * dist) * std::f64::consts::FRAC_1_SQRT_2) * (1.0 - REL);
+            let f_hi = (mf + r).min(dist + r) * (1.0 + REL);
+            if !(f_lo > 0.0) {
+                return false;
+            }
+            let v = if dz_max >= 0.0 { dz_max / f_lo } else { dz_max / f_hi };
+            let v = v + REL * v.abs();
+            let (u_lo, u_hi) = if mf > r * (1.0 + 1e-6) {
+                let den = mf * mf - r * r;
+                let root = r * (mf * mf + ml * ml - r * r).max(0.0).sqrt();
+                let a = (mf * ml - root) / den;
+                let b = (mf * ml + root) / den;
+                (a - 1e-9 * (1.0 + a.abs()), b + 1e-9 * (1.0 + b.abs()))
+            } else {
+                (-1.0, 1.0)
+            };
+            if u_hi < -1.0 || u_lo > 1.0 {
+                continue;
+            }
+            let last = self.w as isize - 1;
+            let j0 = (self.column_of(u_lo.max(-1.0)).floor() as isize).clamp(0, last) as usize;
+            let j1 = (self.column_of(u_hi.min(1.0)).floor() as isize).clamp(0, last) as usize;
+            let base = k * self.w;
+            if !self.h[base + j0..=base + j1].iter().all(|&h| v < h) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// The wedges (as face bits) that may contain the projected vertex: every face where `|u| ≤ 1` up to the rounding
+/// margin (two faces next to a diagonal). A vertex at the camera's x,y is in no face and claims all four.
+#[inline]
+fn wedge_of(p: &Projected) -> u8 {
+    let mut bits = 0;
+    for k in 0..FACES {
+        if p.mask & (1 << k) != 0 && p.face[k].u.abs() <= 1.0 + 4.0 * REL {
+            bits |= 1 << k;
+        }
+    }
+    if bits == 0 { 0b1111 } else { bits }
+}
+
+/// Whether the disk at `(mf, ml)` (face coordinates) with radius `r` meets the wedge `f ≥ |l|` (conservatively:
+/// may answer yes when it does not).
+#[inline]
+fn disk_meets_wedge(mf: f64, ml: f64, r: f64) -> bool {
+    if mf >= ml.abs() {
+        return true;
+    }
+    // Distance to the two boundary rays (1, ±1)/√2, widened slightly.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let r = r * (1.0 + 1e-9) + 1e-12;
+    for sign in [1.0, -1.0] {
+        let t = (mf + sign * ml) * h;
+        let d2 = if t <= 0.0 {
+            mf * mf + ml * ml
+        } else {
+            let (px, py) = (mf - t * h, ml - sign * t * h);
+            px * px + py * py
+        };
+        if d2 <= r * r * (1.0 + 1e-9) {
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn faces_cover_the_plane_counter_clockwise() {
+        // Azimuths 0°, 90°, 180°, 270° are the centres of faces 0..3, at u = 0.
+        let dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+        for (k, &(dx, dy)) in dirs.iter().enumerate() {
+            let (f, l) = face_coords(k, dx, dy);
+            assert_eq!((f, l), (1.0, 0.0));
+        }
+        // u grows counter-clockwise in every face.
+        for k in 0..FACES {
+            let a = std::f64::consts::FRAC_PI_2 * k as f64;
+            let (f0, l0) = face_coords(k, (a - 0.1).cos(), (a - 0.1).sin());
+            let (f1, l1) = face_coords(k, (a + 0.1).cos(), (a + 0.1).sin());
+            assert!(l0 / f0 < l1 / f1);
+        }
+    }
+
+    #[test]
+    fn a_wall_hides_a_lower_triangle_behind_it() {
+        let mu = 1e-6;
+        let mut h = Horizon::new(64);
+        // A wall across face 0 at x = 10, 5 m above the camera: two triangles.
+        let wall = [[10.0, -50.0, 5.0], [10.0, 50.0, 5.0], [11.0, 0.0, 5.0]];
+        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu)).collect();
+        h.write_triangle([&p[0], &p[1], &p[2]]);
+        // Behind it at x = 20..30 and below the sight line (z < 10 at x = 20).
+        let behind = [[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
+        let q: Vec<Projected> = behind.iter().map(|&d| project(d, mu)).collect();
+        assert!(h.triangle_hidden([&q[0], &q[1], &q[2]]));
+        // Above the sight line: visible.
+        let above = [[20.0, -1.0, 10.5], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
+        let q: Vec<Projected> = above.iter().map(|&d| project(d, mu)).collect();
+        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]]));
+        // Beyond the wall's lateral extent: visible.
+        let aside = [[20.0, 45.0, 0.0], [30.0, 70.0, 0.0], [25.0, 60.0, 0.0]];
+        let q: Vec<Projected> = aside.iter().map(|&d| project(d, mu)).collect();
+        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]]));
+        // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
+        assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu));
+        assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0));
+    }
+
+    #[test]
+    fn partial_covers_join_at_a_shared_vertex() {
+        let mu = 0.0;
+        let mut h = Horizon::new(4);
+        // Two triangles meeting at u = 0.1 (inside column 2 of 4: [0, 0.5]) make one wall over [−0.5, 0.6].
+        let a = project([10.0, -5.0, 5.0], mu);
+        let b = project([10.0, 1.0, 5.0], mu);
+        let c = project([10.0, 6.0, 5.0], mu);
+        let apex1 = project([11.0, -2.0, 5.0], mu);
+        let apex2 = project([11.0, 3.0, 5.0], mu);
+        h.write_triangle([&a, &b, &apex1]);
+        assert_eq!(h.values()[2], f64::NEG_INFINITY);
+        h.write_triangle([&b, &c, &apex2]);
+        assert!(h.values()[2] > 0.4, "{:?}", &h.values()[..4]);
+    }
+}

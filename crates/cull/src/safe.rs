@@ -1,0 +1,417 @@
+//! The safe run-time culler: a front-to-back traversal of the hierarchy against a conservative horizon
+//! ([`crate::horizon`]), whose verdict "hidden" is a theorem (design.md, "Safe culling").
+//!
+//! ## The tree
+//!
+//! Built once from a [`Hierarchy`] and its mesh, nothing more stored in the file: the hierarchy's nodes, then below
+//! every leaf group (and below the always-visible set, which this culler may cull too) a binary tree obtained by
+//! halving the triangle range (`[s, e)` splits at `s + (e − s) / 2`) until a range has at most `patch` triangles.
+//! The build lays out every group and the always-visible set in a spatial order in which halving is a spatial split
+//! (`crystal`'s `spatial_order`), so these ranges are compact patches. Every tree node gets, in f64 from the mesh
+//! itself, a bounding circle in x,y (grown to cover rounding) and the largest height of its vertices.
+//!
+//! ## One cull
+//!
+//! Nodes are taken nearest first (by the least horizontal distance `d_min` of their circle from the camera). Before
+//! a node is tested, every drawn patch whose greatest distance `d_max` is below the node's `d_min` is written into
+//! the horizon as occluders (its triangles lowered by `μ`). A node is then
+//!
+//! - *visible* if the camera's x,y is inside its circle;
+//! - *hidden* if its bounding cylinder (circle, height up to its highest vertex plus `μ`) is below the horizon in
+//!   every column it touches ([`crate::horizon`]'s theorem with `D = d_min`: every occluder written so far lies
+//!   nearer than `d_min`). A hidden node is not drawn and none of its descendants is looked at;
+//! - for a patch that passes the cylinder test: hidden if each of its triangles (raised by `μ`) is below the horizon
+//!   in every column it touches (the same theorem, triangle by triangle);
+//! - otherwise visible: an inner node queues its children, a patch is drawn and queued as an occluder.
+//!
+//! Every "hidden" is thus an instance of the theorem, whatever the order, the tree or the parameters; the order and
+//! the parameters only decide how much is culled. With a horizontal field of view below 360°, a node entirely
+//! outside it is culled by the same azimuth test as [`crate::Culler`]'s (a node outside the view cannot be seen).
+//! A non-finite camera draws everything.
+//!
+//! The height margin is `μ = 1e-7 (1 + e + |c − o|₁ + |c.z| + h)` metres with `e` the mesh's extent, `o` its
+//! lowest corner and `h` its largest `|z|`: more than 100 times the exact checker's tolerance (`truth::walk`), so a
+//! sight line called blocked here is blocked there, and far above every rounding error of the arithmetic.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::f64::consts::{PI, TAU};
+
+use crate::culler::{Camera, CullStats, DrawList};
+use crate::hierarchy::Hierarchy;
+use crate::horizon::{Horizon, Projected, project};
+use crate::sector::azimuth;
+
+/// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SafeParams {
+    /// Horizon columns per 90° face (rounded up to a power of two).
+    pub columns_per_face: usize,
+    /// Largest patch (triangles) below the hierarchy's leaves, at most 64.
+    pub patch: usize,
+}
+
+impl Default for SafeParams {
+    fn default() -> Self {
+        SafeParams {
+            columns_per_face: 256,
+            patch: 16,
+        }
+    }
+}
+
+/// One node of the culling tree.
+#[derive(Clone, Copy, Debug)]
+struct TreeNode {
+    centre: [f64; 2],
+    radius: f64,
+    zmax: f64,
+    triangles: [u32; 2],
+    /// Children in `children[kids[0]..kids[1]]`; empty for a patch.
+    kids: [u32; 2],
+    /// For a patch: its vertices in `verts[v[0]..v[1]]` and triangles in `tris[t[0]..t[1]]` (local indices).
+    verts: [u32; 2],
+    tris: [u32; 2],
+}
+
+/// Per-call working memory of [`SafeCuller`], kept in the [`DrawList`] between calls.
+#[derive(Clone, Debug, Default)]
+pub struct SafeScratch {
+    horizon: Option<Horizon>,
+    queue: BinaryHeap<Reverse<(u64, u32)>>,
+    pending: BinaryHeap<Reverse<(u64, u32, u32)>>,
+    projected: Vec<Projected>,
+    drawn: Vec<[u32; 2]>,
+}
+
+impl PartialEq for SafeScratch {
+    /// Working memory carries no result: any two are equal.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+/// The safe culler over a [`Hierarchy`]: see the module documentation.
+#[derive(Clone, Debug)]
+pub struct SafeCuller {
+    params: SafeParams,
+    nodes: Vec<TreeNode>,
+    children: Vec<u32>,
+    roots: Vec<u32>,
+    verts: Vec<[f64; 3]>,
+    tris: Vec<[u8; 3]>,
+    triangles: u32,
+    origin: [f64; 3],
+    extent: f64,
+    zabs: f64,
+}
+
+/// Orders non-negative distances as integers (their bit patterns are monotone).
+#[inline]
+fn key(d: f64) -> u64 {
+    d.max(0.0).to_bits()
+}
+
+impl SafeCuller {
+    /// Prepares the safe culler for `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded file
+    /// does).
+    pub fn new(h: &Hierarchy, params: SafeParams) -> SafeCuller {
+        let params = SafeParams {
+            columns_per_face: params.columns_per_face.clamp(2, 1 << 16).next_power_of_two(),
+            patch: params.patch.clamp(1, 64),
+        };
+        let pos = &h.mesh.positions;
+        let mut c = SafeCuller {
+            params,
+            nodes: Vec::new(),
+            children: Vec::new(),
+            roots: Vec::new(),
+            verts: Vec::new(),
+            tris: Vec::new(),
+            triangles: h.mesh.triangles.len() as u32,
+            origin: h.origin,
+            extent: 0.0,
+            zabs: 0.0,
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in pos {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        if !pos.is_empty() {
+            c.extent = (hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]);
+            c.zabs = lo[2].abs().max(hi[2].abs());
+        }
+        // Hierarchy nodes first (same ids), then the halving trees.
+        let n = h.nodes.len();
+        c.nodes.reserve(n);
+        for node in &h.nodes {
+            c.nodes.push(c.bounds(h, node.triangles));
+        }
+        let mut kids: Vec<Vec<u32>> = h.nodes.iter().map(|n| n.children.clone()).collect();
+        for (i, node) in h.nodes.iter().enumerate() {
+            if node.children.is_empty() {
+                kids[i] = c.halve_below(h, i as u32, &mut Vec::new());
+            }
+        }
+        for (i, k) in kids.into_iter().enumerate() {
+            let start = c.children.len() as u32;
+            c.children.extend(k);
+            c.nodes[i].kids = [start, c.children.len() as u32];
+        }
+        let mut roots: Vec<u32> = h.roots.clone();
+        roots.sort_by_key(|&r| h.nodes[r as usize].triangles[0]);
+        let [a, b] = h.always_visible;
+        if a < b {
+            roots.push(c.halving_tree(h, [a, b]));
+        }
+        c.roots = roots;
+        c
+    }
+
+    /// The children of hierarchy leaf `i` in its halving tree (empty when the leaf is small enough to be a patch,
+    /// which then becomes one).
+    fn halve_below(&mut self, h: &Hierarchy, i: u32, _: &mut Vec<u32>) -> Vec<u32> {
+        let [s, e] = self.nodes[i as usize].triangles;
+        if (e - s) as usize <= self.params.patch {
+            self.make_patch(h, i);
+            return Vec::new();
+        }
+        let mid = s + (e - s) / 2;
+        vec![self.halving_tree(h, [s, mid]), self.halving_tree(h, [mid, e])]
+    }
+
+    /// A halving tree over `range`; returns its root.
+    fn halving_tree(&mut self, h: &Hierarchy, range: [u32; 2]) -> u32 {
+        let id = self.nodes.len() as u32;
+        self.nodes.push(self.bounds(h, range));
+        let [s, e] = range;
+        if (e - s) as usize <= self.params.patch {
+            self.make_patch(h, id);
+        } else {
+            let mid = s + (e - s) / 2;
+            let a = self.halving_tree(h, [s, mid]);
+            let b = self.halving_tree(h, [mid, e]);
+            let start = self.children.len() as u32;
+            self.children.extend([a, b]);
+            self.nodes[id as usize].kids = [start, start + 2];
+        }
+        id
+    }
+
+    /// Stores the local vertices and triangles of node `id`, which becomes a patch.
+    fn make_patch(&mut self, h: &Hierarchy, id: u32) {
+        let [s, e] = self.nodes[id as usize].triangles;
+        let v0 = self.verts.len() as u32;
+        let t0 = self.tris.len() as u32;
+        let mut local: Vec<(u32, u8)> = Vec::new();
+        for t in &h.mesh.triangles[s as usize..e as usize] {
+            let mut tri = [0u8; 3];
+            for (k, &v) in t.iter().enumerate() {
+                let at = match local.iter().find(|(g, _)| *g == v) {
+                    Some(&(_, l)) => l,
+                    None => {
+                        let l = local.len() as u8;
+                        local.push((v, l));
+                        self.verts.push(h.mesh.positions[v as usize]);
+                        l
+                    }
+                };
+                tri[k] = at;
+            }
+            self.tris.push(tri);
+        }
+        let node = &mut self.nodes[id as usize];
+        node.verts = [v0, self.verts.len() as u32];
+        node.tris = [t0, self.tris.len() as u32];
+    }
+
+    /// The bounds of the triangles `range` (f64, from the mesh): circle around the x,y box's centre through the
+    /// farthest vertex, grown by a relative 1e-12 and 1e-9 m; the highest vertex.
+    fn bounds(&self, h: &Hierarchy, range: [u32; 2]) -> TreeNode {
+        let tris = &h.mesh.triangles[range[0] as usize..range[1] as usize];
+        let pos = &h.mesh.positions;
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let mut zmax = f64::NEG_INFINITY;
+        for t in tris {
+            for &v in t {
+                let p = pos[v as usize];
+                lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+                hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+                zmax = zmax.max(p[2]);
+            }
+        }
+        let centre = if tris.is_empty() {
+            [0.0; 2]
+        } else {
+            [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+        };
+        let mut r2: f64 = 0.0;
+        for t in tris {
+            for &v in t {
+                let p = pos[v as usize];
+                let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
+                r2 = r2.max(dx * dx + dy * dy);
+            }
+        }
+        let scale = centre[0].abs() + centre[1].abs();
+        TreeNode {
+            centre,
+            radius: r2.sqrt() * (1.0 + 1e-12) + 1e-12 * scale + 1e-9,
+            zmax,
+            triangles: range,
+            kids: [0, 0],
+            verts: [0, 0],
+            tris: [0, 0],
+        }
+    }
+
+    /// The parameters in use.
+    pub fn params(&self) -> SafeParams {
+        self.params
+    }
+
+    /// Nodes of the culling tree (hierarchy nodes and the halving trees below them).
+    pub fn tree_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Culls for `camera`, returning a new draw list.
+    pub fn cull(&self, camera: &Camera) -> DrawList {
+        let mut out = DrawList::default();
+        self.cull_into(camera, &mut out);
+        out
+    }
+
+    /// Culls for `camera` into `out` (cleared first); reuses `out`'s working memory.
+    pub fn cull_into(&self, camera: &Camera, out: &mut DrawList) {
+        out.ranges.clear();
+        out.stats = CullStats::default();
+        let mut scratch = std::mem::take(&mut out.scratch);
+        let eye = camera.position;
+        if !eye.iter().all(|c| c.is_finite()) {
+            out.push([0, self.triangles]);
+            out.stats.nodes_skipped = self.nodes.len() as u32;
+            out.scratch = scratch;
+            return;
+        }
+        let horizon = scratch
+            .horizon
+            .get_or_insert_with(|| Horizon::new(self.params.columns_per_face));
+        if horizon.columns_per_face() != self.params.columns_per_face {
+            *horizon = Horizon::new(self.params.columns_per_face);
+        }
+        horizon.clear();
+        scratch.queue.clear();
+        scratch.pending.clear();
+        scratch.projected.clear();
+        scratch.drawn.clear();
+        let mu = 1e-7
+            * (1.0
+                + self.extent
+                + (eye[0] - self.origin[0]).abs()
+                + (eye[1] - self.origin[1]).abs()
+                + eye[2].abs()
+                + self.zabs);
+        let frustum = (camera.hfov < TAU).then_some((camera.yaw, camera.hfov * 0.5));
+        let distance = |n: &TreeNode| {
+            let (dx, dy) = (n.centre[0] - eye[0], n.centre[1] - eye[1]);
+            (dx * dx + dy * dy).sqrt()
+        };
+        for &r in &self.roots {
+            let n = &self.nodes[r as usize];
+            scratch.queue.push(Reverse((key(distance(n) - n.radius), r)));
+        }
+        let mut tested = 0u32;
+        while let Some(Reverse((dmin_key, id))) = scratch.queue.pop() {
+            let node = &self.nodes[id as usize];
+            let dist = distance(node);
+            // Occluders strictly nearer than every point of this node (rounding: the distances carry relative
+            // errors below 1e-15, so compare with a relative gap far larger).
+            let dmin = (dist - node.radius) * (1.0 - 1e-12);
+            while let Some(&Reverse((dmax_key, patch, at))) = scratch.pending.peek() {
+                if !(f64::from_bits(dmax_key) < dmin) {
+                    break;
+                }
+                scratch.pending.pop();
+                let p = &self.nodes[patch as usize];
+                let base = at as usize;
+                for t in &self.tris[p.tris[0] as usize..p.tris[1] as usize] {
+                    horizon.write_triangle([
+                        &scratch.projected[base + t[0] as usize],
+                        &scratch.projected[base + t[1] as usize],
+                        &scratch.projected[base + t[2] as usize],
+                    ]);
+                }
+            }
+            let _ = dmin_key;
+            tested += 1;
+            if let Some((yaw, half_fov)) = frustum
+                && outside_view(node, eye, dist, yaw, half_fov)
+            {
+                out.stats.culled_by_frustum += 1;
+                continue;
+            }
+            let inside = dist <= node.radius;
+            if !inside {
+                let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
+                if horizon.disk_hidden(m, node.radius, node.zmax - eye[2] + mu) {
+                    out.stats.culled_by_occlusion += 1;
+                    continue;
+                }
+            }
+            if node.kids[0] < node.kids[1] {
+                for &c in &self.children[node.kids[0] as usize..node.kids[1] as usize] {
+                    let n = &self.nodes[c as usize];
+                    scratch.queue.push(Reverse((key(distance(n) - n.radius), c)));
+                }
+                continue;
+            }
+            // A patch: project its vertices, test its triangles one by one.
+            let at = scratch.projected.len();
+            for p in &self.verts[node.verts[0] as usize..node.verts[1] as usize] {
+                scratch
+                    .projected
+                    .push(project([p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]], mu));
+            }
+            let tris = &self.tris[node.tris[0] as usize..node.tris[1] as usize];
+            let all_hidden = !inside
+                && tris.iter().all(|t| {
+                    horizon.triangle_hidden([
+                        &scratch.projected[at + t[0] as usize],
+                        &scratch.projected[at + t[1] as usize],
+                        &scratch.projected[at + t[2] as usize],
+                    ])
+                });
+            if all_hidden {
+                scratch.projected.truncate(at);
+                out.stats.culled_by_occlusion += 1;
+                continue;
+            }
+            scratch.drawn.push(node.triangles);
+            let dmax = (dist + node.radius) * (1.0 + 1e-12);
+            scratch.pending.push(Reverse((key(dmax), id, at as u32)));
+        }
+        scratch.drawn.sort_unstable();
+        for &r in &scratch.drawn {
+            out.push(r);
+        }
+        out.stats.nodes_tested = tested;
+        out.stats.nodes_skipped = self.nodes.len() as u32 - tested;
+        out.stats.triangles_culled = self.triangles - out.stats.triangles_drawn;
+        out.scratch = scratch;
+    }
+}
+
+/// Whether every direction from the eye to the node's circle misses the horizontal view `yaw ± half_fov`.
+fn outside_view(node: &TreeNode, eye: [f64; 3], dist: f64, yaw: f64, half_fov: f64) -> bool {
+    if dist <= node.radius {
+        return false;
+    }
+    let half = (node.radius / dist).min(1.0).asin() * (1.0 + 1e-12) + 1e-12;
+    let to_node = azimuth(node.centre[0] - eye[0], node.centre[1] - eye[1]);
+    let gap = (to_node - yaw + PI).rem_euclid(TAU) - PI;
+    gap.abs() > half_fov + half
+}
