@@ -6,7 +6,8 @@
 //!
 //! | method | what it draws |
 //! | --- | --- |
-//! | `hierarchy` | the recursive culler over the `.tch` hierarchy |
+//! | `safe` | the safe culler over the `.tch` hierarchy (`cull::SafeCuller`; never culls a visible triangle) |
+//! | `thesis` | the thesis' recursive region test over the `.tch` hierarchy (`cull::Culler`; not conservative) |
 //! | `per_triangle` | each triangle tested against its own regions (thesis 5.1.1) |
 //! | `frustum_only` | the hierarchy's frustum test alone (everything at a 360° field of view) |
 //! | `none` | every triangle |
@@ -14,12 +15,16 @@
 //! With a field of view below 360°, each viewpoint gets a yaw from the generator, and `V` is restricted to the
 //! triangles with a vertex or the centroid inside the horizontal view wedge: a triangle wholly outside the view is
 //! not counted as a false cull when culled, one partly inside is.
+//!
+//! Per viewpoint, besides the methods' metrics: `visible_fraction` (`|V| / |A|`) and `leaf_limit`, the occlusion
+//! captured by culling exactly the hierarchy's leaves that hold no visible triangle (orphans never): the best any
+//! test over this hierarchy's leaves can do.
 
 use std::f64::consts::TAU;
 use std::time::Instant;
 
 use anyhow::Result;
-use cull::{Camera, Culler, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, Culler, DrawList, Hierarchy};
 use glam::DVec3;
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::RegionTable;
@@ -32,7 +37,7 @@ use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_m
 use crate::pipeline::{per_triangle_hierarchy, triangle_regions};
 
 /// The methods an evaluation compares, in report order.
-pub const METHODS: [&str; 4] = ["hierarchy", "per_triangle", "frustum_only", "none"];
+pub const METHODS: [&str; 5] = ["safe", "thesis", "per_triangle", "frustum_only", "none"];
 
 /// What to evaluate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -72,6 +77,13 @@ pub struct EvalRow {
     pub summary: Summary,
     /// Median run-time test time over the viewpoints (ns).
     pub cull_ns: f64,
+    /// Mean `|V| / |A|` over the viewpoints.
+    pub visible_fraction: f64,
+    /// Mean `|D| / |A|` over the viewpoints.
+    pub drawn_fraction: f64,
+    /// Mean leaf limit over the viewpoints where something is hidden (`None` without a hierarchy or when nothing is
+    /// hidden anywhere).
+    pub leaf_limit: Option<f64>,
 }
 
 /// One viewpoint's ground truth and scores, for tools that chart individual viewpoints.
@@ -85,6 +97,10 @@ pub struct ViewpointResult {
     pub yaw_deg: Option<f64>,
     /// Per method, in [`METHODS`] order (methods not evaluated are left out).
     pub methods: Vec<(String, ViewMetrics, u64)>,
+    /// `|V| / |A|`.
+    pub visible_fraction: f64,
+    /// The leaf limit of the scored hierarchy from this viewpoint (`None` without one, or when nothing is hidden).
+    pub leaf_limit: Option<f64>,
 }
 
 /// The whole evaluation.
@@ -106,7 +122,7 @@ pub struct Evaluation {
 
 /// Times `cull_into` for one camera: the median of 15 runs after a warm-up, in nanoseconds. The result is left in
 /// `out`.
-pub fn timed_cull(culler: &Culler, camera: &Camera, out: &mut DrawList) -> u64 {
+pub fn timed_cull(culler: &AnyCuller, camera: &Camera, out: &mut DrawList) -> u64 {
     const RUNS: usize = 15;
     culler.cull_into(camera, out);
     let mut times = [0u64; RUNS];
@@ -243,7 +259,7 @@ pub struct Method<'a> {
     /// Name (see [`METHODS`]).
     pub name: &'a str,
     /// The culler; `None` draws every triangle.
-    pub culler: Option<Culler>,
+    pub culler: Option<AnyCuller>,
     /// Where each of the culler's triangles is in the scored TIN: triangle `i` of the culler's mesh is triangle
     /// `order[i]` of the TIN (a build's `crystal.order`). `None`: the same order.
     pub order: Option<&'a [u32]>,
@@ -267,18 +283,23 @@ pub fn standard_methods<'a>(
 ) -> Vec<Method<'a>> {
     vec![
         Method {
-            name: "hierarchy",
-            culler: Some(Culler::new(h)),
+            name: "safe",
+            culler: Some(AnyCuller::new(h, CullMethod::Safe)),
+            order,
+        },
+        Method {
+            name: "thesis",
+            culler: Some(AnyCuller::new(h, CullMethod::Thesis)),
             order,
         },
         Method {
             name: "per_triangle",
-            culler: per_triangle.map(Culler::new),
+            culler: per_triangle.map(|p| AnyCuller::Thesis(Culler::new(p))),
             order: None,
         },
         Method {
             name: "frustum_only",
-            culler: Some(Culler::new(&frustum_only(h))),
+            culler: Some(AnyCuller::Thesis(Culler::new(&frustum_only(h)))),
             order,
         },
         Method {
@@ -289,9 +310,37 @@ pub fn standard_methods<'a>(
     ]
 }
 
+/// The leaves of a hierarchy for the leaf limit: their triangle ranges in the hierarchy's order, and where each of
+/// its triangles is in the scored TIN (`None`: the same order).
+#[derive(Clone, Copy, Debug)]
+pub struct Leaves<'a> {
+    /// `[start, end)` of every leaf group.
+    pub ranges: &'a [[u32; 2]],
+    /// `order[i]`: the TIN triangle of the hierarchy's triangle `i`.
+    pub order: Option<&'a [u32]>,
+}
+
+/// The leaf limit: the occlusion captured by culling exactly the leaves without a visible triangle (`visible` in the
+/// TIN's order); `None` when nothing is hidden.
+pub fn leaf_limit(visible: &[bool], leaves: Leaves) -> Option<f64> {
+    let hidden = visible.iter().filter(|&&v| !v).count();
+    if hidden == 0 {
+        return None;
+    }
+    let tin_of = |i: u32| leaves.order.map_or(i, |o| o[i as usize]) as usize;
+    let culled: usize = leaves
+        .ranges
+        .iter()
+        .filter(|r| (r[0]..r[1]).all(|i| !visible[tin_of(i)]))
+        .map(|r| (r[1] - r[0]) as usize)
+        .sum();
+    Some(culled as f64 / hidden as f64)
+}
+
 /// Scores `methods` against the ground truth `truth` of `tin` (every mask in `tin`'s triangle order). A method named
-/// other than `none` without a culler is left out (e.g. `per_triangle` when not evaluated).
-pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method]) -> Result<Evaluation> {
+/// other than `none` without a culler is left out (e.g. `per_triangle` when not evaluated). `leaves`, when given,
+/// gives every viewpoint its leaf limit.
+pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Option<Leaves>) -> Result<Evaluation> {
     let n = tin.num_triangles();
     anyhow::ensure!(
         truth.triangles == n,
@@ -346,6 +395,8 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method]) -> Result<Ev
             eye: view.eye.to_array(),
             yaw_deg: (!all_around).then(|| view.yaw.to_degrees()),
             methods,
+            visible_fraction: view.visible.iter().filter(|&&v| v).count() as f64 / n.max(1) as f64,
+            leaf_limit: leaves.and_then(|l| leaf_limit(&view.visible, l)),
         });
     }
     let mut rows = Vec::new();
@@ -357,14 +408,26 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method]) -> Result<Ev
         .collect();
     for name in METHODS {
         for class in &classes {
-            let picked: Vec<(&ViewMetrics, u64)> = results
+            let views: Vec<&ViewpointResult> = results
                 .iter()
-                .filter(|r| class == "all" || &r.class == class)
+                .filter(|r| (class == "all" || &r.class == class) && r.methods.iter().any(|m| m.0 == name))
+                .collect();
+            let picked: Vec<(&ViewMetrics, u64)> = views
+                .iter()
                 .flat_map(|r| r.methods.iter().filter(|m| m.0 == name).map(|m| (&m.1, m.2)))
                 .collect();
             if picked.is_empty() {
                 continue;
             }
+            let mean = |xs: &mut dyn Iterator<Item = f64>| {
+                let (sum, count) = xs.fold((0.0, 0usize), |(s, c), x| (s + x, c + 1));
+                (count > 0).then(|| sum / count as f64)
+            };
+            let visible_fraction = mean(&mut views.iter().map(|r| r.visible_fraction)).unwrap_or(0.0);
+            let leaf_limit_mean = mean(&mut views.iter().filter_map(|r| r.leaf_limit));
+            let drawn_fraction =
+                mean(&mut picked.iter().map(|(m, _)| m.triangles_drawn as f64 / m.triangles.max(1) as f64))
+                    .unwrap_or(0.0);
             let metrics: Vec<ViewMetrics> = picked.iter().map(|(m, _)| (*m).clone()).collect();
             let mut ns: Vec<u64> = picked.iter().map(|p| p.1).collect();
             ns.sort_unstable();
@@ -373,6 +436,9 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method]) -> Result<Ev
                 class: class.clone(),
                 summary: summarize(&metrics),
                 cull_ns: ns[ns.len() / 2] as f64,
+                visible_fraction,
+                drawn_fraction,
+                leaf_limit: leaf_limit_mean,
             });
         }
     }
@@ -410,7 +476,12 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
     let truth = GroundTruthSet::compute(tin, opts, progress)?;
     let methods = standard_methods(h, per_triangle.as_ref(), None);
-    let mut e = score(tin, &truth, &methods)?;
+    let ranges = h.leaf_ranges();
+    let leaves = Leaves {
+        ranges: &ranges,
+        order: None,
+    };
+    let mut e = score(tin, &truth, &methods, Some(leaves))?;
     e.per_triangle_setup_seconds = per_triangle_setup_seconds;
     Ok(e)
 }
@@ -421,13 +492,14 @@ impl Evaluation {
         let mut s = String::from(
             "method,class,viewpoints,viewpoints_with_false_culls,false_culls_mean,false_culls_max,\
              false_cull_area_mean,false_cull_area_max,occlusion_captured_mean,occlusion_captured_p50,\
-             occlusion_captured_p95,overdraw_mean,triangles_drawn_mean,cull_ns\n",
+             occlusion_captured_p95,overdraw_mean,triangles_drawn_mean,cull_ns,visible_fraction,drawn_fraction,\
+             leaf_limit\n",
         );
         let f = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
         for r in &self.rows {
             let m = &r.summary;
             s += &format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.method,
                 r.class,
                 m.viewpoints,
@@ -441,7 +513,10 @@ impl Evaluation {
                 f(m.occlusion_captured.map(|x| x.p95)),
                 f(m.overdraw.map(|x| x.mean)),
                 f(m.triangles_drawn.map(|x| x.mean)),
-                r.cull_ns
+                r.cull_ns,
+                r.visible_fraction,
+                r.drawn_fraction,
+                f(r.leaf_limit)
             );
         }
         s
@@ -450,22 +525,25 @@ impl Evaluation {
     /// A readable table: per method and class, false culls, occlusion captured, overdraw, drawn, cull time.
     pub fn table(&self) -> String {
         let mut s = format!(
-            "{:<13} {:<7} {:>4} {:>10} {:>11} {:>13} {:>9} {:>9} {:>10}\n",
-            "method", "class", "n", "false_cull", "fc_views", "occl_capt", "overdraw", "drawn", "cull_µs"
+            "{:<13} {:<7} {:>4} {:>10} {:>8} {:>9} {:>10} {:>8} {:>8} {:>9} {:>9}\n",
+            "method", "class", "n", "false_cull", "fc_views", "occl_capt", "leaf_limit", "visible", "drawn", "overdraw",
+            "cull_µs"
         );
         for r in &self.rows {
             let m = &r.summary;
             let mean = |x: Option<truth::Stat>| x.map_or("-".to_string(), |x| format!("{:.3}", x.mean));
             s += &format!(
-                "{:<13} {:<7} {:>4} {:>10} {:>11} {:>13} {:>9} {:>9} {:>10.2}\n",
+                "{:<13} {:<7} {:>4} {:>10} {:>8} {:>9} {:>10} {:>7.1}% {:>7.1}% {:>9} {:>9.2}\n",
                 r.method,
                 r.class,
                 m.viewpoints,
                 m.false_culls.map_or("-".to_string(), |x| format!("{:.1}", x.mean)),
                 m.viewpoints_with_false_culls,
                 mean(m.occlusion_captured),
+                r.leaf_limit.map_or("-".to_string(), |x| format!("{x:.3}")),
+                100.0 * r.visible_fraction,
+                100.0 * r.drawn_fraction,
                 mean(m.overdraw),
-                m.triangles_drawn.map_or("-".to_string(), |x| format!("{:.0}", x.mean)),
                 r.cull_ns / 1000.0
             );
         }

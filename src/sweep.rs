@@ -26,7 +26,7 @@ use anyhow::{Context, Result, bail};
 use horizon::SectorConfig;
 use tin::Tin;
 
-use crate::evaluate::{Evaluation, GroundTruthSet, score, standard_methods};
+use crate::evaluate::{Evaluation, GroundTruthSet, Leaves, score, standard_methods};
 use crate::pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
 
 /// The header line of a sweep CSV (without the newline).
@@ -297,7 +297,12 @@ pub fn run_combo(
     let b = build(tin, &combo.params, progress)?;
     let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &triangle_regions(tin, &b.vertex_regions)));
     let methods = standard_methods(&b.hierarchy, per_triangle.as_ref(), Some(&b.crystal.order));
-    let evaluation = score(tin, truth, &methods)?;
+    let ranges = b.hierarchy.leaf_ranges();
+    let leaves = Leaves {
+        ranges: &ranges,
+        order: Some(&b.crystal.order),
+    };
+    let evaluation = score(tin, truth, &methods, Some(leaves))?;
     let lines = csv_lines(&combo.key, &b.report, &evaluation);
     Ok(ComboResult {
         report: b.report,

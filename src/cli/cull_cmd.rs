@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use cull::{Camera, Culler, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
 use serde_json::json;
 
 use super::{Output, OutputArgs};
@@ -27,6 +27,10 @@ pub struct CullArgs {
     /// Horizontal field of view in degrees (360 = no frustum restriction).
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
+    /// Culling method: `safe` (never culls a visible triangle) or `thesis` (the thesis' region test, not
+    /// conservative).
+    #[arg(long, default_value = "safe", value_parser = parse_method)]
+    pub method: CullMethod,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -48,13 +52,21 @@ pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
     Ok(p)
 }
 
+/// Parses a culling method name.
+pub fn parse_method(s: &str) -> Result<CullMethod, String> {
+    CullMethod::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = CullMethod::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown method {s:?}; expected one of {}", names.join(", "))
+    })
+}
+
 /// Runs `tincull cull`.
 pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !(args.fov > 0.0 && args.fov <= 360.0) {
         bail!("--fov must be in (0, 360], got {}", args.fov);
     }
     let h = Hierarchy::load(&args.hierarchy)?;
-    let culler = Culler::new(&h);
+    let culler = AnyCuller::new(&h, args.method);
     let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
         (Some(e), _) => vec![*e],
         (None, Some(path)) => {
@@ -83,6 +95,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         if out.json {
             out.json(&json!({
                 "eye": eye,
+                "method": args.method.name(),
                 "ranges": list.ranges,
                 "triangles_drawn": s.triangles_drawn,
                 "triangles_culled": s.triangles_culled,

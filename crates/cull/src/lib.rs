@@ -10,6 +10,7 @@ pub mod error;
 pub mod file;
 pub mod hierarchy;
 pub mod horizon;
+pub mod method;
 pub mod safe;
 pub mod sector;
 
@@ -17,5 +18,6 @@ pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
 pub use file::{FORMAT_VERSION, MAGIC, write_atomically};
 pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
+pub use method::{AnyCuller, CullMethod};
 pub use safe::{SafeCuller, SafeParams};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};
