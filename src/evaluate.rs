@@ -425,9 +425,12 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
             };
             let visible_fraction = mean(&mut views.iter().map(|r| r.visible_fraction)).unwrap_or(0.0);
             let leaf_limit_mean = mean(&mut views.iter().filter_map(|r| r.leaf_limit));
-            let drawn_fraction =
-                mean(&mut picked.iter().map(|(m, _)| m.triangles_drawn as f64 / m.triangles.max(1) as f64))
-                    .unwrap_or(0.0);
+            let drawn_fraction = mean(
+                &mut picked
+                    .iter()
+                    .map(|(m, _)| m.triangles_drawn as f64 / m.triangles.max(1) as f64),
+            )
+            .unwrap_or(0.0);
             let metrics: Vec<ViewMetrics> = picked.iter().map(|(m, _)| (*m).clone()).collect();
             let mut ns: Vec<u64> = picked.iter().map(|p| p.1).collect();
             ns.sort_unstable();
@@ -526,7 +529,16 @@ impl Evaluation {
     pub fn table(&self) -> String {
         let mut s = format!(
             "{:<13} {:<7} {:>4} {:>10} {:>8} {:>9} {:>10} {:>8} {:>8} {:>9} {:>9}\n",
-            "method", "class", "n", "false_cull", "fc_views", "occl_capt", "leaf_limit", "visible", "drawn", "overdraw",
+            "method",
+            "class",
+            "n",
+            "false_cull",
+            "fc_views",
+            "occl_capt",
+            "leaf_limit",
+            "visible",
+            "drawn",
+            "overdraw",
             "cull_µs"
         );
         for r in &self.rows {

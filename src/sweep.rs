@@ -425,7 +425,13 @@ mod tests {
             ..truth.clone()
         };
         let pt = crate::evaluate::per_triangle_of(&b.hierarchy, &htin).unwrap();
-        let direct = score(&htin, &direct_truth, &standard_methods(&b.hierarchy, Some(&pt), None)).unwrap();
+        let direct = score(
+            &htin,
+            &direct_truth,
+            &standard_methods(&b.hierarchy, Some(&pt), None),
+            None,
+        )
+        .unwrap();
         assert_eq!(swept.evaluation.rows.len(), direct.rows.len());
         for (a, d) in swept.evaluation.rows.iter().zip(&direct.rows) {
             assert_eq!((&a.method, &a.class), (&d.method, &d.class));

@@ -96,7 +96,7 @@ fn sweep_writes_every_combination_and_resumes() {
                     assert_eq!(num("occlusion_captured_mean"), 0.0);
                 }
             }
-            "hierarchy" | "per_triangle" | "frustum_only" => {
+            "safe" | "thesis" | "per_triangle" | "frustum_only" => {
                 assert!(num("triangles_drawn_mean") <= num("triangles"));
                 assert!(num("cull_ns") > 0.0);
             }

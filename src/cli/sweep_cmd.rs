@@ -169,7 +169,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
                 .evaluation
                 .rows
                 .iter()
-                .find(|row| row.method == "hierarchy" && row.class == "all");
+                .find(|row| row.method == "safe" && row.class == "all");
             if let Some(h) = h {
                 let rep = &r.report;
                 let line = format!(

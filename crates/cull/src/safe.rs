@@ -49,6 +49,9 @@ pub struct SafeParams {
     pub columns_per_face: usize,
     /// Largest patch (triangles) below the hierarchy's leaves, at most 64.
     pub patch: usize,
+    /// Most occluder triangles written into the horizon per cull, nearest first: bounds the cost of views that
+    /// see much of the terrain (fewer occluders only cull less, never wrongly).
+    pub occluder_budget: usize,
 }
 
 impl Default for SafeParams {
@@ -56,6 +59,7 @@ impl Default for SafeParams {
         SafeParams {
             columns_per_face: 256,
             patch: 16,
+            occluder_budget: usize::MAX,
         }
     }
 }
@@ -119,6 +123,7 @@ impl SafeCuller {
         let params = SafeParams {
             columns_per_face: params.columns_per_face.clamp(2, 1 << 16).next_power_of_two(),
             patch: params.patch.clamp(1, 64),
+            occluder_budget: params.occluder_budget,
         };
         let pos = &h.mesh.positions;
         let mut c = SafeCuller {
@@ -325,6 +330,7 @@ impl SafeCuller {
             scratch.queue.push(Reverse((key(distance(n) - n.radius), r)));
         }
         let mut tested = 0u32;
+        let mut written = 0usize;
         while let Some(Reverse((dmin_key, id))) = scratch.queue.pop() {
             let node = &self.nodes[id as usize];
             let dist = distance(node);
@@ -339,6 +345,10 @@ impl SafeCuller {
                 let p = &self.nodes[patch as usize];
                 let base = at as usize;
                 for t in &self.tris[p.tris[0] as usize..p.tris[1] as usize] {
+                    if written >= self.params.occluder_budget {
+                        break;
+                    }
+                    written += 1;
                     horizon.write_triangle([
                         &scratch.projected[base + t[0] as usize],
                         &scratch.projected[base + t[1] as usize],

@@ -128,10 +128,12 @@ fn assert_safe(name: &str, tin: &Tin, eyes: &[DVec3]) -> f64 {
             SafeParams {
                 columns_per_face: 8,
                 patch: 1,
+                occluder_budget: usize::MAX,
             },
             SafeParams {
                 columns_per_face: 2048,
                 patch: 4,
+                occluder_budget: 50,
             },
         ] {
             let culler = SafeCuller::new(&h, params);
