@@ -39,8 +39,8 @@
 //! An occluder is a triangle of the TIN with its three vertices lowered by `μ` (a parallel copy `μ` below the
 //! terrain; every point of it is `μ` below the terrain at its x,y). It is written into face `k` only when all three
 //! vertices have `f > 0`; by (P1) its image is the triangle of the projected vertices. For a fixed `u` inside the
-//! image's span `[u_A, u_C]`, the image's vertical section has the top value `top(u)`, the largest value at `u` of
-//! the (at most two) image edges that span `u`; it is a point of the occluder. `top` is concave on `[u_A, u_C]` (the
+//! image's span `[u_A, u_C]`, the image's vertical section has the top value `top(u)`, the larger value at `u` of
+//! the two image edges that span `u` (the long edge `AC` and `AB` or `BC`); it is a point of the occluder. `top` is concave on `[u_A, u_C]` (the
 //! upper boundary of a triangle), so its minimum over an interval is at one of the interval's ends.
 //!
 //! - *Full columns*: for a column with `[a_j, a_{j+1}] ⊆ [u_A, u_C]`, `H_j ← max(H_j, min(top(a_j), top(a_{j+1})))`.
@@ -73,8 +73,8 @@
 //! - heights: the margin `μ` (chosen by the caller as `1e-7 (1 + scene size + |camera|)` metres, over 100 times the
 //!   ground truth's own tolerance of `1e-9 (1 + distance + |z|)`, so a sight line that we call blocked is blocked for
 //!   the exact checker too) is subtracted from occluder and added to occludee heights before dividing;
-//! - values `v = (dz ∓ μ) / f`: one subtraction and one division, relative error below `3ε`; moved by `REL = 1e-12`
-//!   relative (down for occluders, up for occludees);
+//! - values `v = (dz ∓ μ) · (1 / f)` and `u = l · (1 / f)`: one subtraction, one division and one product, relative
+//!   error below `4ε`; `v` is moved by `REL = 1e-12` relative (down for occluders, up for occludees);
 //! - a line's value between its end points `P, Q`, `P.v + (u − P.u)·κ` with `κ = (Q.v − P.v)/(Q.u − P.u)`: its error,
 //!   from the operands' errors and its own four operations, is below `8ε (|P.v| + |Q.v| + |κ| (|P.u| + |Q.u| + 2))`
 //!   for `u` within `[−1, 1]` and the edge; it is moved by `REL` times that sum;
@@ -111,26 +111,36 @@ pub(crate) struct Proj {
     pub hi: f64,
 }
 
-/// A vertex projected into every face where its forward coordinate is positive (`mask` bit `k`).
+/// A vertex projected into every face where its forward coordinate is positive (`mask` bit `k`), with the mesh
+/// vertex it came from (partial covers that end and start at the same vertex meet exactly).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Projected {
     pub mask: u8,
+    pub id: u32,
     pub face: [Proj; FACES],
 }
 
-/// Projects the offset `d = p − c` into every face where `f > 0`, with the height margin `mu`.
+/// No vertex: covers that end here never meet another one exactly.
+pub(crate) const NO_VERTEX: u32 = u32::MAX;
+
+/// Projects the offset `d = p − c` of mesh vertex `id` into every face where `f > 0`, with the height margin `mu`.
 #[inline]
-pub(crate) fn project(d: [f64; 3], mu: f64) -> Projected {
-    let mut out = Projected::default();
+pub(crate) fn project(d: [f64; 3], mu: f64, id: u32) -> Projected {
+    let mut out = Projected {
+        id,
+        ..Projected::default()
+    };
     let (dz_lo, dz_hi) = (d[2] - mu, d[2] + mu);
     for k in 0..FACES {
         let (f, l) = face_coords(k, d[0], d[1]);
         if f > 0.0 {
-            let lo = dz_lo / f;
-            let hi = dz_hi / f;
+            // One division and two products: relative error below 3ε each.
+            let inv = 1.0 / f;
+            let lo = dz_lo * inv;
+            let hi = dz_hi * inv;
             out.mask |= 1 << k;
             out.face[k] = Proj {
-                u: l / f,
+                u: l * inv,
                 lo: lo - REL * lo.abs(),
                 hi: hi + REL * hi.abs(),
             };
@@ -143,7 +153,6 @@ pub(crate) fn project(d: [f64; 3], mu: f64) -> Projected {
 #[derive(Clone, Copy, Debug)]
 struct Edge {
     u0: f64,
-    u1: f64,
     v0: f64,
     slope: f64,
     margin: f64,
@@ -161,16 +170,10 @@ impl Edge {
         }
         Some(Edge {
             u0: p.0,
-            u1: q.0,
             v0: p.1,
             slope,
             margin: REL * (p.1.abs() + q.1.abs() + slope.abs() * (p.0.abs() + q.0.abs() + 2.0)),
         })
-    }
-
-    #[inline(always)]
-    fn spans(&self, u: f64) -> bool {
-        self.u0 <= u && u <= self.u1
     }
 
     #[inline(always)]
@@ -179,69 +182,81 @@ impl Edge {
     }
 }
 
-/// A projected triangle's upper boundary `top(u)` over `[ua, uc]`, with its middle vertex's `u`.
+/// A projected triangle's upper boundary `top(u)` over `[ua, uc]`, with its middle vertex's `u`. With the vertices
+/// sorted by `u` as `A, B, C`, the vertical section at `u` lies between the long edge `AC` and the edge `AB`
+/// (`u ≤ u_B`) or `BC` (`u ≥ u_B`), so `top(u)` is the larger of those two edges' values.
 #[derive(Clone, Copy, Debug)]
 struct Top {
-    edges: [Option<Edge>; 3],
+    ac: Edge,
+    ab: Option<Edge>,
+    bc: Option<Edge>,
     ua: f64,
     ub: f64,
     uc: f64,
+    /// Mesh vertices at `ua` and `uc`.
+    ida: u32,
+    idc: u32,
 }
 
 impl Top {
-    fn new(p: [(f64, f64); 3]) -> Option<Top> {
-        let mut us = [p[0].0, p[1].0, p[2].0];
-        us.sort_unstable_by(f64::total_cmp);
-        if !(us[0] < us[2]) {
-            return None;
-        }
+    fn new(p: [(f64, f64, u32); 3]) -> Option<Top> {
+        let mut q = p;
+        q.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let [a, b, c] = q;
+        let (a2, b2, c2) = ((a.0, a.1), (b.0, b.1), (c.0, c.1));
+        let ac = Edge::new(a2, c2)?;
         Some(Top {
-            edges: [Edge::new(p[0], p[1]), Edge::new(p[1], p[2]), Edge::new(p[2], p[0])],
-            ua: us[0],
-            ub: us[1],
-            uc: us[2],
+            ac,
+            ab: Edge::new(a2, b2),
+            bc: Edge::new(b2, c2),
+            ua: a.0,
+            ub: b.0,
+            uc: c.0,
+            ida: a.2,
+            idc: c.2,
         })
     }
 
-    /// A lower bound of `top(u)` (occluders): the largest edge value at `u` minus its margin.
-    #[inline]
-    fn low(&self, u: f64) -> f64 {
-        let mut best = f64::NEG_INFINITY;
-        for e in self.edges.iter().flatten() {
-            if e.spans(u) {
-                best = best.max(e.at(u) - e.margin);
-            }
-        }
-        best
+    /// The short edge spanning `u` (`AB` up to `u_B`, then `BC`; the other one where one of them has no width).
+    #[inline(always)]
+    fn piece(&self, u: f64) -> Option<Edge> {
+        if u <= self.ub { self.ab.or(self.bc) } else { self.bc.or(self.ab) }
     }
 
-    /// An upper bound of `top(u)` (occludees): the largest edge value at `u` plus its margin; `+∞` where no edge
-    /// spans `u`.
-    #[inline]
-    fn high(&self, u: f64) -> f64 {
-        let mut best = f64::NEG_INFINITY;
-        for e in self.edges.iter().flatten() {
-            if e.spans(u) {
-                best = best.max(e.at(u) + e.margin);
-            }
+    /// A lower bound of `top(u)` for `u` in `[ua, uc]` (occluders).
+    #[inline(always)]
+    fn low(&self, u: f64) -> f64 {
+        let mut v = self.ac.at(u) - self.ac.margin;
+        if let Some(e) = self.piece(u) {
+            v = v.max(e.at(u) - e.margin);
         }
-        if best == f64::NEG_INFINITY { f64::INFINITY } else { best }
+        v
+    }
+
+    /// An upper bound of `top(u)` for `u` in `[ua, uc]` (occludees).
+    #[inline(always)]
+    fn high(&self, u: f64) -> f64 {
+        let mut v = self.ac.at(u) + self.ac.margin;
+        if let Some(e) = self.piece(u) {
+            v = v.max(e.at(u) + e.margin);
+        }
+        v
     }
 }
 
 /// Partial covers of one column: left-anchored (`[a_j, reach]`) and right-anchored (`[start, a_{j+1}]`), two
-/// candidates each: the highest bound and the widest cover.
+/// candidates each (the highest bound and the widest cover), each with the mesh vertex at its inner end.
 #[derive(Clone, Copy, Debug)]
 struct Partial {
-    /// `(bound, reach)`: highest bound, widest reach.
-    left: [(f64, f64); 2],
-    /// `(bound, start)`: highest bound, widest (smallest start).
-    right: [(f64, f64); 2],
+    /// `(bound, reach, vertex)`: highest bound, widest reach.
+    left: [(f64, f64, u32); 2],
+    /// `(bound, start, vertex)`: highest bound, widest (smallest start).
+    right: [(f64, f64, u32); 2],
 }
 
 const NO_PARTIAL: Partial = Partial {
-    left: [(f64::NEG_INFINITY, f64::NEG_INFINITY); 2],
-    right: [(f64::NEG_INFINITY, f64::INFINITY); 2],
+    left: [(f64::NEG_INFINITY, f64::NEG_INFINITY, NO_VERTEX); 2],
+    right: [(f64::NEG_INFINITY, f64::INFINITY, NO_VERTEX); 2],
 };
 
 /// The horizon buffer: `4 w` column values and the partial covers behind them.
@@ -303,7 +318,11 @@ impl Horizon {
                 continue;
             }
             let p = [tri[0].face[k], tri[1].face[k], tri[2].face[k]];
-            let Some(top) = Top::new([(p[0].u, p[0].lo), (p[1].u, p[1].lo), (p[2].u, p[2].lo)]) else {
+            let Some(top) = Top::new([
+                (p[0].u, p[0].lo, tri[0].id),
+                (p[1].u, p[1].lo, tri[1].id),
+                (p[2].u, p[2].lo, tri[2].id),
+            ]) else {
                 continue;
             };
             self.write_top(k, &top);
@@ -335,53 +354,60 @@ impl Horizon {
         let left_col = first - 1; // contains lo_u (unless lo_u is on a boundary, then it is just a weaker cover)
         let right_col = end; // contains hi_u
         if left_col < right_col {
+            // The covers run exactly from and to the end vertices (`ua`, `uc`); whether two covers meet is decided
+            // in `combine`, exactly when they share the vertex, else with the rounding margin.
             if (0..w).contains(&left_col) {
                 let b = self.boundary(left_col as usize + 1);
-                let bound = top.low(lo_u).min(top.low(b));
-                self.add_right_anchored(base + left_col as usize, bound, lo_u);
+                let bound = top.low(top.ua).min(top.low(b));
+                self.add_right_anchored(base + left_col as usize, (bound, top.ua, top.ida));
             }
             if (0..w).contains(&right_col) {
                 let a = self.boundary(right_col as usize);
-                let bound = top.low(a).min(top.low(hi_u));
-                self.add_left_anchored(base + right_col as usize, bound, hi_u);
+                let bound = top.low(a).min(top.low(top.uc));
+                self.add_left_anchored(base + right_col as usize, (bound, top.uc, top.idc));
             }
         }
     }
 
-    fn add_left_anchored(&mut self, col: usize, bound: f64, reach: f64) {
-        if bound == f64::NEG_INFINITY {
+    fn add_left_anchored(&mut self, col: usize, cover: (f64, f64, u32)) {
+        if cover.0 == f64::NEG_INFINITY {
             return;
         }
         let p = &mut self.partial[col];
-        if bound > p.left[0].0 {
-            p.left[0] = (bound, reach);
+        if cover.0 > p.left[0].0 {
+            p.left[0] = cover;
         }
-        if reach > p.left[1].1 {
-            p.left[1] = (bound, reach);
+        if cover.1 > p.left[1].1 {
+            p.left[1] = cover;
         }
         self.combine(col);
     }
 
-    fn add_right_anchored(&mut self, col: usize, bound: f64, start: f64) {
-        if bound == f64::NEG_INFINITY {
+    fn add_right_anchored(&mut self, col: usize, cover: (f64, f64, u32)) {
+        if cover.0 == f64::NEG_INFINITY {
             return;
         }
         let p = &mut self.partial[col];
-        if bound > p.right[0].0 {
-            p.right[0] = (bound, start);
+        if cover.0 > p.right[0].0 {
+            p.right[0] = cover;
         }
-        if start < p.right[1].1 {
-            p.right[1] = (bound, start);
+        if cover.1 < p.right[1].1 {
+            p.right[1] = cover;
         }
         self.combine(col);
     }
 
+    /// Raises column `col` to the best pair of partial covers that together cover it: a left-anchored cover reaching
+    /// the same mesh vertex where a right-anchored one starts (the same point), or reaching past its start by more
+    /// than the rounding margin.
     fn combine(&mut self, col: usize) {
         let p = self.partial[col];
         let mut best = self.h[col];
         for l in p.left {
             for r in p.right {
-                if l.1 >= r.1 {
+                let meet = (l.2 == r.2 && l.2 != NO_VERTEX)
+                    || l.1 - REL * (1.0 + l.1.abs()) >= r.1 + REL * (1.0 + r.1.abs());
+                if meet {
                     best = best.max(l.0.min(r.0));
                 }
             }
@@ -417,7 +443,11 @@ impl Horizon {
                 continue;
             }
             let p = [tri[0].face[k], tri[1].face[k], tri[2].face[k]];
-            let Some(top) = Top::new([(p[0].u, p[0].hi), (p[1].u, p[1].hi), (p[2].u, p[2].hi)]) else {
+            let Some(top) = Top::new([
+                (p[0].u, p[0].hi, NO_VERTEX),
+                (p[1].u, p[1].hi, NO_VERTEX),
+                (p[2].u, p[2].hi, NO_VERTEX),
+            ]) else {
                 return false;
             };
             if !self.top_hidden(k, &top) {
@@ -571,19 +601,19 @@ mod tests {
         let mut h = Horizon::new(64);
         // A wall across face 0 at x = 10, 5 m above the camera: two triangles.
         let wall = [[10.0, -50.0, 5.0], [10.0, 50.0, 5.0], [11.0, 0.0, 5.0]];
-        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu)).collect();
+        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
         h.write_triangle([&p[0], &p[1], &p[2]]);
         // Behind it at x = 20..30 and below the sight line (z < 10 at x = 20).
         let behind = [[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
-        let q: Vec<Projected> = behind.iter().map(|&d| project(d, mu)).collect();
+        let q: Vec<Projected> = behind.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
         assert!(h.triangle_hidden([&q[0], &q[1], &q[2]]));
         // Above the sight line: visible.
         let above = [[20.0, -1.0, 10.5], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
-        let q: Vec<Projected> = above.iter().map(|&d| project(d, mu)).collect();
+        let q: Vec<Projected> = above.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
         assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]]));
         // Beyond the wall's lateral extent: visible.
         let aside = [[20.0, 45.0, 0.0], [30.0, 70.0, 0.0], [25.0, 60.0, 0.0]];
-        let q: Vec<Projected> = aside.iter().map(|&d| project(d, mu)).collect();
+        let q: Vec<Projected> = aside.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
         assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]]));
         // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
         assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu));
@@ -595,11 +625,11 @@ mod tests {
         let mu = 0.0;
         let mut h = Horizon::new(4);
         // Two triangles meeting at u = 0.1 (inside column 2 of 4: [0, 0.5]) make one wall over [−0.5, 0.6].
-        let a = project([10.0, -5.0, 5.0], mu);
-        let b = project([10.0, 1.0, 5.0], mu);
-        let c = project([10.0, 6.0, 5.0], mu);
-        let apex1 = project([11.0, -2.0, 5.0], mu);
-        let apex2 = project([11.0, 3.0, 5.0], mu);
+        let a = project([10.0, -5.0, 5.0], mu, 0);
+        let b = project([10.0, 1.0, 5.0], mu, 1);
+        let c = project([10.0, 6.0, 5.0], mu, 2);
+        let apex1 = project([11.0, -2.0, 5.0], mu, 3);
+        let apex2 = project([11.0, 3.0, 5.0], mu, 4);
         h.write_triangle([&a, &b, &apex1]);
         assert_eq!(h.values()[2], f64::NEG_INFINITY);
         h.write_triangle([&b, &c, &apex2]);

@@ -103,6 +103,8 @@ pub struct SafeCuller {
     children: Vec<u32>,
     roots: Vec<u32>,
     verts: Vec<[f64; 3]>,
+    /// Mesh vertex index of every entry of `verts`.
+    vids: Vec<u32>,
     tris: Vec<[u8; 3]>,
     triangles: u32,
     origin: [f64; 3],
@@ -132,6 +134,7 @@ impl SafeCuller {
             children: Vec::new(),
             roots: Vec::new(),
             verts: Vec::new(),
+            vids: Vec::new(),
             tris: Vec::new(),
             triangles: h.mesh.triangles.len() as u32,
             origin: h.origin,
@@ -221,6 +224,7 @@ impl SafeCuller {
                         let l = local.len() as u8;
                         local.push((v, l));
                         self.verts.push(h.mesh.positions[v as usize]);
+                        self.vids.push(v);
                         l
                     }
                 };
@@ -381,10 +385,11 @@ impl SafeCuller {
             }
             // A patch: project its vertices, test its triangles one by one.
             let at = scratch.projected.len();
-            for p in &self.verts[node.verts[0] as usize..node.verts[1] as usize] {
+            let range = node.verts[0] as usize..node.verts[1] as usize;
+            for (p, &v) in self.verts[range.clone()].iter().zip(&self.vids[range]) {
                 scratch
                     .projected
-                    .push(project([p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]], mu));
+                    .push(project([p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]], mu, v));
             }
             let tris = &self.tris[node.tris[0] as usize..node.tris[1] as usize];
             let all_hidden = !inside
