@@ -318,6 +318,21 @@ impl Horizon {
                 continue;
             }
             let p = [tri[0].face[k], tri[1].face[k], tri[2].face[k]];
+            let (u_min, u_max) = (p[0].u.min(p[1].u).min(p[2].u), p[0].u.max(p[1].u).max(p[2].u));
+            if u_max <= -1.0 || u_min >= 1.0 {
+                continue;
+            }
+            // Inside one column a triangle covers none fully and adds no cover anchored at a column boundary; and
+            // nothing is gained when its highest point (a vertex: `top` is concave) is not above the horizon in any
+            // column it touches: it could raise neither a column nor a future pair of covers.
+            let last = self.w as isize - 1;
+            let j0 = floor(self.column_of(u_min)).clamp(0, last) as usize;
+            let j1 = floor(self.column_of(u_max)).clamp(0, last) as usize;
+            let v_max = p[0].lo.max(p[1].lo).max(p[2].lo);
+            let base = k * self.w;
+            if j0 == j1 || (j1 - j0 < 16 && self.h[base + j0..=base + j1].iter().all(|&h| v_max <= h)) {
+                continue;
+            }
             let Some(top) = Top::new([
                 (p[0].u, p[0].lo, tri[0].id),
                 (p[1].u, p[1].lo, tri[1].id),
@@ -337,8 +352,8 @@ impl Horizon {
         }
         let w = self.w as isize;
         // Full columns: j with a_j ≥ lo_u and a_{j+1} ≤ hi_u.
-        let first = self.column_of(lo_u).ceil() as isize;
-        let end = self.column_of(hi_u).floor() as isize; // one past the last full column
+        let first = ceil(self.column_of(lo_u));
+        let end = floor(self.column_of(hi_u)); // one past the last full column
         let (first_c, end_c) = (first.clamp(0, w), end.clamp(0, w));
         let base = k * self.w;
         if first_c < end_c {
@@ -464,8 +479,8 @@ impl Horizon {
             return true;
         }
         let last = self.w as isize - 1;
-        let j0 = (self.column_of(lo_u).floor() as isize).clamp(0, last) as usize;
-        let j1 = (self.column_of(hi_u).floor() as isize).clamp(0, last) as usize;
+        let j0 = floor(self.column_of(lo_u)).clamp(0, last) as usize;
+        let j1 = floor(self.column_of(hi_u)).clamp(0, last) as usize;
         let base = k * self.w;
         for j in j0..=j1 {
             let h = self.h[base + j];
@@ -525,8 +540,8 @@ impl Horizon {
                 continue;
             }
             let last = self.w as isize - 1;
-            let j0 = (self.column_of(u_lo.max(-1.0)).floor() as isize).clamp(0, last) as usize;
-            let j1 = (self.column_of(u_hi.min(1.0)).floor() as isize).clamp(0, last) as usize;
+            let j0 = floor(self.column_of(u_lo.max(-1.0))).clamp(0, last) as usize;
+            let j1 = floor(self.column_of(u_hi.min(1.0))).clamp(0, last) as usize;
             let base = k * self.w;
             if !self.h[base + j0..=base + j1].iter().all(|&h| v < h) {
                 return false;
@@ -534,6 +549,20 @@ impl Horizon {
         }
         true
     }
+}
+
+/// `⌊x⌋` for column arithmetic (a NaN or out-of-range `x` saturates; callers clamp).
+#[inline(always)]
+fn floor(x: f64) -> isize {
+    let t = x as isize;
+    if (t as f64) > x { t - 1 } else { t }
+}
+
+/// `⌈x⌉`, likewise.
+#[inline(always)]
+fn ceil(x: f64) -> isize {
+    let t = x as isize;
+    if (t as f64) < x { t + 1 } else { t }
 }
 
 /// The wedges (as face bits) that may contain the projected vertex: every face where `|u| ≤ 1` up to the rounding
