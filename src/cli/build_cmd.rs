@@ -10,8 +10,8 @@ use serde_json::json;
 
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
-use crate::export::{write_grouped_obj, write_json};
-use crate::pipeline::{BuildParams, BuildReport, build};
+use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::{BuildParams, BuildReport, build};
 
 /// Parameters that may also come from a TOML file (`--config`); the command line wins.
 #[derive(Debug, Default, Clone, Args, Deserialize)]
@@ -105,7 +105,7 @@ pub struct BuildArgs {
 }
 
 /// A progress bar per pipeline stage.
-pub fn stage_progress(out: Output) -> crate::pipeline::BuildProgress {
+pub fn stage_progress(out: Output) -> pipeline::BuildProgress {
     let bar = out.progress(1, "horizons");
     Arc::new(move |stage: &str, done: u64, total: u64| {
         if bar.message() != stage {

@@ -8,7 +8,7 @@ use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
 use serde_json::json;
 
 use super::{Output, OutputArgs};
-use crate::evaluate::timed_cull;
+use eval::evaluate::timed_cull;
 
 /// Arguments of `tincull cull`.
 #[derive(Debug, Args)]

@@ -9,13 +9,11 @@ use super::build_cmd::{print_report, stage_progress};
 use super::eval_cmd::write_outputs;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
-use crate::evaluate::{EvalOptions, evaluate, hierarchy_tin};
-use crate::export::{write_grouped_obj, write_json};
-use crate::pipeline::{BuildParams, build};
 use cull::Hierarchy;
+use eval::evaluate::{EvalOptions, evaluate, hierarchy_tin};
+use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::{BuildParams, build};
 use tin::Tin;
-use truth::{ViewpointClass, viewpoints};
-use viewer::{Gpu, RenderOptions, Terrain, ViewKind};
 
 /// The bundled default terrain.
 pub const DEFAULT_MESH: &str = "meshes/jacksboro-10k.obj";
@@ -104,7 +102,10 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
 
 /// Renders the groups map and an orbit view of the culling from a valley viewpoint; returns that viewpoint.
 /// Fails (and the demo goes on without images) when no GPU adapter, not even a software one, is available.
+#[cfg(feature = "viewer")]
 fn write_renders(h: &Hierarchy, htin: &Tin, map: &Path, culling: &Path) -> Result<[f64; 3]> {
+    use truth::{ViewpointClass, viewpoints};
+    use viewer::{Gpu, RenderOptions, Terrain, ViewKind};
     let gpu = Gpu::headless()?;
     let terrain = Terrain::from_hierarchy(h.clone())?;
     let image = viewer::render(&gpu, &terrain, &RenderOptions::default())?.image;
@@ -120,6 +121,12 @@ fn write_renders(h: &Hierarchy, htin: &Tin, map: &Path, culling: &Path) -> Resul
     };
     viewer::write_png(culling, &viewer::render(&gpu, &terrain, &options)?.image)?;
     Ok(eye)
+}
+
+/// Without the viewer there are no renders: the demo says so and writes everything else.
+#[cfg(not(feature = "viewer"))]
+fn write_renders(_: &Hierarchy, _: &Tin, _: &Path, _: &Path) -> Result<[f64; 3]> {
+    Err(super::no_viewer("the demo's renders"))
 }
 
 /// The bundled terrain, found relative to the working directory or to the source tree.

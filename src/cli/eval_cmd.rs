@@ -8,7 +8,7 @@ use cull::Hierarchy;
 use truth::ViewpointClass;
 
 use super::Output;
-use crate::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
+use eval::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
 
 /// Arguments of `tincull eval`.
 #[derive(Debug, Args)]

@@ -7,7 +7,7 @@ use clap::Args;
 use cull::Hierarchy;
 
 use super::Output;
-use crate::export::{write_grouped_obj, write_json};
+use pipeline::export::{write_grouped_obj, write_json};
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]

@@ -11,11 +11,13 @@ mod horizon_cmd;
 mod info;
 mod mesh_input;
 pub mod output;
+#[cfg(feature = "viewer")]
 mod render_cmd;
 mod stress_cmd;
 mod sweep_cmd;
 mod synth;
 mod tin_cmd;
+#[cfg(feature = "viewer")]
 mod view_cmd;
 
 use anyhow::Result;
@@ -61,9 +63,35 @@ pub enum Command {
     /// Failure map: a raster of viewpoints over the footprint, false culls and occlusion captured per cell (PNG, CSV).
     Failmap(failmap_cmd::FailmapArgs),
     /// Render a hierarchy or mesh to PNG without a window: map, orbit overview with culling, or eye view.
+    #[cfg(feature = "viewer")]
     Render(render_cmd::RenderArgs),
     /// Open the interactive viewer: fly/orbit camera, live culling, ground truth, rebuild and export.
+    #[cfg(feature = "viewer")]
     View(view_cmd::ViewArgs),
+    /// Render to PNG (not in this build: it was built without the `viewer` feature).
+    #[cfg(not(feature = "viewer"))]
+    Render(NoViewerArgs),
+    /// The interactive viewer (not in this build: it was built without the `viewer` feature).
+    #[cfg(not(feature = "viewer"))]
+    View(NoViewerArgs),
+}
+
+/// Arguments of `render` and `view` in a build without the viewer: anything, refused with a clear error.
+#[cfg(not(feature = "viewer"))]
+#[derive(Debug, clap::Args)]
+pub struct NoViewerArgs {
+    /// Ignored.
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, hide = true)]
+    pub args: Vec<String>,
+}
+
+/// The error of a command that needs the viewer in a build without it.
+#[cfg_attr(feature = "viewer", allow(dead_code))]
+pub(crate) fn no_viewer(what: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{what}: this build of tincull lacks the viewer (it was built without the `viewer` feature); \
+         rebuild with `cargo build --release --features viewer` (it is on by default)"
+    )
 }
 
 /// Runs a parsed command line.
@@ -88,7 +116,9 @@ pub fn run(cli: Cli) -> Result<()> {
         ),
         Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
         Command::Failmap(args) => failmap_cmd::run(&args),
+        #[cfg(feature = "viewer")]
         Command::Render(args) => render_cmd::run(&args, args.output.into()),
+        #[cfg(feature = "viewer")]
         Command::View(args) => view_cmd::run(
             &args,
             Output {
@@ -96,5 +126,9 @@ pub fn run(cli: Cli) -> Result<()> {
                 quiet: args.quiet,
             },
         ),
+        #[cfg(not(feature = "viewer"))]
+        Command::Render(_) => Err(no_viewer("`tincull render`")),
+        #[cfg(not(feature = "viewer"))]
+        Command::View(_) => Err(no_viewer("`tincull view`")),
     }
 }

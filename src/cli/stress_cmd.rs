@@ -1,4 +1,4 @@
-//! `tincull stress`: the stability suite of [`crate::stress`] on one mesh: a table of cases and outcomes, or one
+//! `tincull stress`: the stability suite of [`eval::stress`] on one mesh: a table of cases and outcomes, or one
 //! JSON object with `--json`.
 
 use std::path::PathBuf;
@@ -8,7 +8,7 @@ use clap::Args;
 
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
-use crate::stress::{StressOptions, run as run_suite};
+use eval::stress::{StressOptions, run as run_suite};
 
 /// Arguments of `tincull stress`.
 #[derive(Debug, Args)]

@@ -1,5 +1,5 @@
 //! `tincull sweep`: build and evaluate every combination of sectors, subsectors, seeds and random seeds; one CSV
-//! line per combination, method and class (see [`crate::sweep`]). Resumable: combinations already in the file are
+//! line per combination, method and class (see [`eval::sweep`]). Resumable: combinations already in the file are
 //! skipped, and the file is rewritten atomically after each combination.
 
 use std::path::PathBuf;
@@ -13,8 +13,8 @@ use truth::ViewpointClass;
 use super::build_cmd::ParamArgs;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
-use crate::evaluate::{EvalOptions, GroundTruthSet};
-use crate::sweep::{SweepSpec, SweepTable, parse_list, run_combo};
+use eval::evaluate::{EvalOptions, GroundTruthSet};
+use eval::sweep::{SweepSpec, SweepTable, parse_list, run_combo};
 
 /// Arguments of `tincull sweep`.
 #[derive(Debug, Args)]

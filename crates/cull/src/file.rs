@@ -1,4 +1,5 @@
-//! The `.tch` file: a versioned, checksummed binary container for a [`Hierarchy`], and its JSON form.
+//! The `.tch` file: a versioned, checksummed binary container for a [`Hierarchy`]. (Its JSON form lives in the
+//! `pipeline` crate, `pipeline::export::to_json`, so that this crate needs no JSON library.)
 //!
 //! Layout (little-endian):
 //!
@@ -96,18 +97,6 @@ impl Hierarchy {
     pub fn save(&self, path: &Path) -> Result<(), HierarchyError> {
         let bytes = self.to_bytes()?;
         write_atomically(path, &bytes)
-    }
-
-    /// The JSON form: the same content, for people and notebooks.
-    pub fn to_json(&self) -> Result<String, HierarchyError> {
-        serde_json::to_string(self).map_err(|e| HierarchyError::Decode(e.to_string()))
-    }
-
-    /// Parses the JSON form, checking every structural invariant.
-    pub fn from_json(text: &str) -> Result<Hierarchy, HierarchyError> {
-        let h: Hierarchy = serde_json::from_str(text).map_err(|e| HierarchyError::Decode(e.to_string()))?;
-        h.check_invariants()?;
-        Ok(h)
     }
 }
 

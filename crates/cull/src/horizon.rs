@@ -220,7 +220,11 @@ impl Top {
     /// The short edge spanning `u` (`AB` up to `u_B`, then `BC`; the other one where one of them has no width).
     #[inline(always)]
     fn piece(&self, u: f64) -> Option<Edge> {
-        if u <= self.ub { self.ab.or(self.bc) } else { self.bc.or(self.ab) }
+        if u <= self.ub {
+            self.ab.or(self.bc)
+        } else {
+            self.bc.or(self.ab)
+        }
     }
 
     /// A lower bound of `top(u)` for `u` in `[ua, uc]` (occluders).
@@ -420,8 +424,8 @@ impl Horizon {
         let mut best = self.h[col];
         for l in p.left {
             for r in p.right {
-                let meet = (l.2 == r.2 && l.2 != NO_VERTEX)
-                    || l.1 - REL * (1.0 + l.1.abs()) >= r.1 + REL * (1.0 + r.1.abs());
+                let meet =
+                    (l.2 == r.2 && l.2 != NO_VERTEX) || l.1 - REL * (1.0 + l.1.abs()) >= r.1 + REL * (1.0 + r.1.abs());
                 if meet {
                     best = best.max(l.0.min(r.0));
                 }

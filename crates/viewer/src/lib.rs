@@ -3,7 +3,7 @@
 //! - Headless: [`headless::render`] draws the map, the orbit overview (with a viewpoint's culling) or an eye view
 //!   into an image, and can compare culled with unculled frames; [`png_out::write_png`] saves it.
 //! - Interactive: [`app::run`] opens an eframe window with a fly/orbit camera, the culler's live statistics, ground
-//!   truth on demand and a background rebuild that the caller injects (this crate does not depend on the pipeline).
+//!   truth on demand and a background rebuild with the `pipeline` crate.
 //!
 //! Geometry goes to the GPU as f32 relative to the hierarchy's (or TIN's) local origin; each hierarchy range the
 //! culler returns is one indexed draw.

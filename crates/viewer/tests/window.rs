@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 
 use std::sync::Arc;
 
-use viewer::app::{Progress, RebuildFn, ScreenshotRequest, Source, Startup, ViewerOptions, ViewerParams};
+use viewer::app::{BuildParams, Progress, RebuildFn, ScreenshotRequest, Source, Startup, ViewerOptions};
 use viewer::{RgbaImage, gpu_required};
 
 const CHILD_ENV: &str = "TINCULL_VIEWER_TEST_CHILD";
@@ -79,9 +79,8 @@ fn child(out: &Path) {
     let result = viewer::app::run(ViewerOptions {
         title: "tincull viewer test".into(),
         source: Source::Hierarchy(h),
-        params: ViewerParams::default(),
+        params: BuildParams::default(),
         rebuild: Some(rebuild),
-        export_obj: None,
         export_stem: std::env::temp_dir().join("tincull-viewer-test"),
         eye: Some(common::world(5.0, 25.0, 30.0)),
         screenshot: Some(ScreenshotRequest {

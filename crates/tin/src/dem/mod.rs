@@ -17,6 +17,7 @@
 pub mod asc;
 pub mod hgt;
 pub mod npy;
+#[cfg(feature = "png")]
 pub mod png;
 
 use std::path::Path;
@@ -75,7 +76,13 @@ pub fn read_dem(path: &Path, opts: &DemOptions) -> Result<Grid> {
         "npy" => npy::read_npy(path, opts),
         "asc" => asc::read_asc(path, opts),
         "hgt" => hgt::read_hgt(path, opts),
+        #[cfg(feature = "png")]
         "png" => png::read_png(path, opts),
+        #[cfg(not(feature = "png"))]
+        "png" => Err(TinError::format(
+            path,
+            "PNG height maps need the `png` feature of the tin crate, which this build lacks",
+        )),
         _ => Err(TinError::format(
             path,
             format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt or .png"),

@@ -1,4 +1,4 @@
-//! Background work of the viewer: the rebuild (the caller's injected pipeline) and the ground truth for a
+//! Background work of the viewer: the rebuild (the pipeline, or a test's stand-in) and the ground truth for a
 //! viewpoint run in threads; the UI polls their channels each frame and stays responsive meanwhile. Also the
 //! startup actions that press those buttons by themselves.
 
@@ -161,13 +161,8 @@ impl ViewerApp {
     /// Starts the startup actions in order; true once they are all done.
     pub(super) fn startup_step(&mut self, ctx: &egui::Context) -> bool {
         if self.startup.rebuild {
-            match &self.rebuild {
-                Some(rebuild) => {
-                    let rebuild = Arc::clone(rebuild);
-                    self.start_rebuild(ctx, rebuild);
-                }
-                None => self.status = "no rebuild available".into(),
-            }
+            let rebuild = Arc::clone(&self.rebuild);
+            self.start_rebuild(ctx, rebuild);
             self.startup.rebuild = false;
         }
         if self.rebuild_job.is_some() {

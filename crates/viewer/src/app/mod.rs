@@ -3,15 +3,15 @@
 //! ground truth on demand, exports, and a rebuild with new parameters in a background thread.
 //!
 //! The 3-D view is rendered by [`crate::render::Renderer`] into its own texture (depth-tested, reversed Z) on the
-//! window's wgpu device and shown with egui's `register_native_texture`. This crate does not depend on the
-//! preprocessing pipeline: the caller injects the rebuild ([`RebuildFn`]) and the grouped OBJ writer
-//! ([`ExportObjFn`]). The `.tch` and JSON exports use the `cull` crate directly.
+//! window's wgpu device and shown with egui's `register_native_texture`. Rebuilds run the `pipeline` crate
+//! ([`pipeline::build`]; a test may pass a stand-in, [`RebuildFn`]); the exports use `cull` (`.tch`) and
+//! [`pipeline::export`] (JSON, grouped OBJ).
 //!
 //! Controls: drag in the view to look around (eye) or rotate (orbit); W/S/A/D move the viewpoint, R/F raise and
 //! lower it; the scroll wheel zooms the orbit or moves the eye forward; click on the map to place the viewpoint.
 //! The field of view (up to 360°) is the culler's; the eye view draws at most 150° of it.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -34,47 +34,20 @@ use crate::headless::split_items;
 use crate::render::{DrawItem, DrawStyle, Frame, Marker, Renderer, RgbaImage};
 use crate::scene::{ColourMode, GpuScene, Terrain, paint_false_culls};
 
-/// Errors of injected callbacks.
+pub use pipeline::BuildParams;
+
+/// Errors of a [`RebuildFn`].
 pub type DynError = Box<dyn std::error::Error + Send + Sync>;
 /// Progress of a rebuild: `(stage, done, total)`.
-pub type Progress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
-/// Builds a hierarchy for a terrain with the given parameters (the caller's pipeline), reporting progress.
+pub type Progress = pipeline::BuildProgress;
+/// Builds a hierarchy for a terrain with the given parameters, reporting progress: [`pipeline_rebuild`] or a
+/// stand-in (tests use a slow fake to check that the window stays responsive).
 pub type RebuildFn =
-    Arc<dyn Fn(&Tin, &ViewerParams, Progress) -> std::result::Result<Hierarchy, DynError> + Send + Sync>;
-/// Writes a hierarchy as a grouped OBJ (and its `.mtl`).
-pub type ExportObjFn = Arc<dyn Fn(&Hierarchy, &Path) -> std::result::Result<(), DynError> + Send + Sync>;
+    Arc<dyn Fn(&Tin, &BuildParams, Progress) -> std::result::Result<Hierarchy, DynError> + Send + Sync>;
 
-/// The build parameters the side panel edits.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ViewerParams {
-    /// Sectors.
-    pub sectors: u32,
-    /// Subsectors per sector.
-    pub subsectors: u32,
-    /// Seeds of the first crystal pass; `None` is the pipeline's default (one per 200 triangles).
-    pub seeds: Option<usize>,
-    /// Orphan passes.
-    pub orphan_passes: u32,
-    /// Minimum group size (triangles).
-    pub min_group: usize,
-    /// Expanse limit as a fraction of the terrain's area.
-    pub max_expanse: f64,
-    /// Seed of the random generator.
-    pub rng_seed: u64,
-}
-
-impl Default for ViewerParams {
-    fn default() -> Self {
-        ViewerParams {
-            sectors: 16,
-            subsectors: 4,
-            seeds: None,
-            orphan_passes: 10,
-            min_group: 30,
-            max_expanse: 0.25,
-            rng_seed: 1,
-        }
-    }
+/// The rebuild of the side panel: the whole pipeline ([`pipeline::build`]) with the panel's parameters.
+pub fn pipeline_rebuild() -> RebuildFn {
+    Arc::new(|tin, params, progress| Ok(pipeline::build(tin, params, Some(progress))?.hierarchy))
 }
 
 /// What the viewer shows first.
@@ -99,7 +72,7 @@ pub struct ScreenshotRequest {
 /// (with the panel's parameters), then the ground truth for the viewpoint. A screenshot waits for both.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Startup {
-    /// Press Rebuild at the first frame (needs a [`RebuildFn`]).
+    /// Press Rebuild at the first frame (with the pipeline, or the stand-in of [`ViewerOptions::rebuild`]).
     pub rebuild: bool,
     /// Press "Ground truth here" once the hierarchy is ready.
     pub ground_truth: bool,
@@ -128,12 +101,10 @@ pub struct ViewerOptions {
     pub title: String,
     /// The terrain.
     pub source: Source,
-    /// Initial build parameters (shown in the side panel).
-    pub params: ViewerParams,
-    /// The rebuild, if the caller offers one.
+    /// Initial build parameters (shown in the side panel; the undersampling radius is kept as given).
+    pub params: BuildParams,
+    /// A stand-in for the pipeline; `None` rebuilds with [`pipeline_rebuild`].
     pub rebuild: Option<RebuildFn>,
-    /// The grouped OBJ writer, if the caller offers one.
-    pub export_obj: Option<ExportObjFn>,
     /// Path stem of exports (`STEM.tch`, `STEM.json`, `STEM.obj`).
     pub export_stem: PathBuf,
     /// Initial viewpoint (world); default: the terrain's centre, 20 m above the ground.
@@ -152,7 +123,6 @@ impl std::fmt::Debug for ViewerOptions {
             .field("title", &self.title)
             .field("params", &self.params)
             .field("rebuild", &self.rebuild.is_some())
-            .field("export_obj", &self.export_obj.is_some())
             .field("export_stem", &self.export_stem)
             .field("eye", &self.eye)
             .field("screenshot", &self.screenshot)
@@ -198,13 +168,13 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         source,
         params,
         rebuild,
-        export_obj,
         export_stem,
         eye,
         screenshot,
         window_size,
         startup,
     } = options;
+    let rebuild = rebuild.unwrap_or_else(pipeline_rebuild);
     let summary = Arc::new(Mutex::new(RunSummary::default()));
     let model = Model::new(source)?;
     let native = eframe::NativeOptions {
@@ -217,7 +187,6 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         model,
         params,
         rebuild,
-        export_obj,
         export_stem,
         eye,
         screenshot,
@@ -239,9 +208,8 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
 
 struct Setup {
     model: Model,
-    params: ViewerParams,
-    rebuild: Option<RebuildFn>,
-    export_obj: Option<ExportObjFn>,
+    params: BuildParams,
+    rebuild: RebuildFn,
     export_stem: PathBuf,
     eye: Option<[f64; 3]>,
     screenshot: Option<ScreenshotRequest>,
@@ -309,9 +277,8 @@ struct ViewerApp {
     main: View,
     map: View,
     map_view: MapView,
-    params: ViewerParams,
-    rebuild: Option<RebuildFn>,
-    export_obj: Option<ExportObjFn>,
+    params: BuildParams,
+    rebuild: RebuildFn,
     export_stem: String,
     // Camera.
     mode: ViewMode,
@@ -359,7 +326,6 @@ impl ViewerApp {
             model,
             params,
             rebuild,
-            export_obj,
             export_stem,
             eye,
             screenshot,
@@ -395,7 +361,6 @@ impl ViewerApp {
             map,
             params,
             rebuild,
-            export_obj,
             export_stem: export_stem.display().to_string(),
             mode: ViewMode::Eye,
             eye,

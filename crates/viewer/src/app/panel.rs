@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use eframe::egui;
 use glam::{Vec2, Vec3};
+use pipeline::export::{write_grouped_obj, write_json};
 
 use super::{ViewMode, ViewerApp};
 use crate::scene::ColourMode;
@@ -196,29 +197,30 @@ impl ViewerApp {
             ui.add(egui::DragValue::new(&mut p.subsectors).range(1..=64));
             ui.end_row();
             ui.label("seeds (0 = default)");
-            let mut seeds = p.seeds.unwrap_or(0);
+            let mut seeds = p.crystal.seeds.unwrap_or(0);
             if ui.add(egui::DragValue::new(&mut seeds).range(0..=1_000_000)).changed() {
-                p.seeds = (seeds > 0).then_some(seeds);
+                p.crystal.seeds = (seeds > 0).then_some(seeds);
             }
             ui.end_row();
             ui.label("orphan passes");
-            ui.add(egui::DragValue::new(&mut p.orphan_passes).range(0..=100));
+            ui.add(egui::DragValue::new(&mut p.crystal.orphan_passes).range(0..=100));
             ui.end_row();
             ui.label("min group");
-            ui.add(egui::DragValue::new(&mut p.min_group).range(1..=100_000));
+            ui.add(egui::DragValue::new(&mut p.crystal.min_group).range(1..=100_000));
             ui.end_row();
             ui.label("max expanse");
-            ui.add(egui::DragValue::new(&mut p.max_expanse).range(0.001..=1.0).speed(0.005));
+            ui.add(
+                egui::DragValue::new(&mut p.crystal.max_expanse)
+                    .range(0.001..=1.0)
+                    .speed(0.005),
+            );
             ui.end_row();
             ui.label("rng seed");
-            ui.add(egui::DragValue::new(&mut p.rng_seed));
+            ui.add(egui::DragValue::new(&mut p.crystal.rng_seed));
             ui.end_row();
         });
-        match (&self.rebuild, &self.rebuild_job) {
-            (None, _) => {
-                ui.label("(rebuild not available)");
-            }
-            (Some(_), Some(job)) => {
+        match &self.rebuild_job {
+            Some(job) => {
                 let (stage, done, total) = job.progress.lock().map(|g| g.clone()).unwrap_or_default();
                 let f = if total > 0 { done as f32 / total as f32 } else { 0.0 };
                 ui.add(egui::ProgressBar::new(f).text(format!(
@@ -226,9 +228,9 @@ impl ViewerApp {
                     job.started.elapsed().as_secs_f64()
                 )));
             }
-            (Some(rebuild), None) => {
+            None => {
                 if ui.button("Rebuild").clicked() {
-                    let rebuild = Arc::clone(rebuild);
+                    let rebuild = Arc::clone(&self.rebuild);
                     self.start_rebuild(ui.ctx(), rebuild);
                 }
             }
@@ -251,18 +253,11 @@ impl ViewerApp {
             }
             if ui.button("JSON").clicked() {
                 let path = stem.with_extension("json");
-                result = Some(
-                    h.to_json()
-                        .map_err(|e| e.to_string())
-                        .and_then(|text| cull::write_atomically(&path, text.as_bytes()).map_err(|e| e.to_string()))
-                        .map(|_| path),
-                );
+                result = Some(write_json(h, &path).map(|_| path).map_err(|e| format!("{e:#}")));
             }
-            if let Some(export) = &self.export_obj
-                && ui.button("grouped OBJ").clicked()
-            {
+            if ui.button("grouped OBJ").clicked() {
                 let path = stem.with_extension("obj");
-                result = Some(export(h, &path).map(|_| path).map_err(|e| e.to_string()));
+                result = Some(write_grouped_obj(h, &path).map(|_| path).map_err(|e| format!("{e:#}")));
             }
         });
         match result {

@@ -9,7 +9,7 @@ use cull::Hierarchy;
 
 use tin::write_atomic;
 
-pub use viewer::palette::{ORPHAN_COLOUR, group_colour};
+use crate::palette::{ORPHAN_COLOUR, group_colour};
 
 /// Writes the hierarchy's mesh as OBJ with one group per leaf (in triangle order) and the orphans last, plus a
 /// `.mtl` beside it with a colour per group. Positions are written exactly (shortest round-trip f64 text).
@@ -59,8 +59,20 @@ pub fn write_grouped_obj(h: &Hierarchy, path: &Path) -> Result<()> {
     })?)
 }
 
+/// The hierarchy's JSON form: the same content as the `.tch` file, for people and notebooks.
+pub fn to_json(h: &Hierarchy) -> Result<String> {
+    Ok(serde_json::to_string(h)?)
+}
+
+/// Parses the JSON form, checking every structural invariant of the hierarchy.
+pub fn from_json(text: &str) -> Result<Hierarchy> {
+    let h: Hierarchy = serde_json::from_str(text).context("cannot decode the hierarchy's JSON form")?;
+    h.check_invariants()?;
+    Ok(h)
+}
+
 /// Writes the hierarchy's JSON form atomically.
 pub fn write_json(h: &Hierarchy, path: &Path) -> Result<()> {
-    let text = h.to_json()?;
+    let text = to_json(h)?;
     Ok(write_atomic(path, |w| w.write_all(text.as_bytes()))?)
 }

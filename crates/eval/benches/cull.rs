@@ -1,24 +1,24 @@
 //! Run-time culling cost per viewpoint, per method, on the bundled default terrain.
 //!
-//! `cargo bench --bench cull`. Builds `meshes/jacksboro-10k.obj` with default parameters (16 × 4 sectors), draws 20
+//! `cargo bench -p eval --bench cull`. Builds `meshes/jacksboro-10k.obj` with default parameters (16 × 4 sectors), draws 20
 //! `ground` and 20 `high` viewpoints (seed 1), and times one cull per viewpoint for the hierarchy and for the
 //! per-triangle method. With `TINCULL_BENCH_MESH=path.obj` another mesh is used instead.
 //!
 //! Before timing, each culler's draw lists are checked against the straightforward reference culler of the `cull`
 //! crate's tests, for 20 viewpoints of every class, with and without a frustum (this also runs under
-//! `cargo test --release --bench cull`), and the number of nodes tested per cull is printed.
+//! `cargo test -p eval --release --bench cull`), and the number of nodes tested per cull is printed.
 
-#[path = "../crates/cull/tests/reference/mod.rs"]
+#[path = "../../cull/tests/reference/mod.rs"]
 mod reference;
 
 use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use tincull::cull::{Camera, Culler, DrawList, Hierarchy};
-use tincull::evaluate::{hierarchy_tin, per_triangle_of};
-use tincull::pipeline::{BuildParams, build};
-use tincull::truth::{ViewpointClass, viewpoints};
+use cull::{Camera, Culler, DrawList, Hierarchy};
+use eval::evaluate::{hierarchy_tin, per_triangle_of};
+use pipeline::{BuildParams, build};
+use truth::{ViewpointClass, viewpoints};
 
 /// Panics unless `culler` gives the reference's draw list for every camera.
 fn check_against_reference(method: &str, h: &Hierarchy, culler: &Culler, cameras: &[Camera]) {
@@ -35,8 +35,8 @@ fn check_against_reference(method: &str, h: &Hierarchy, culler: &Culler, cameras
 fn bench(c: &mut Criterion) {
     let path = std::env::var_os("TINCULL_BENCH_MESH")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/jacksboro-10k.obj"));
-    let (tin, _) = tincull::tin::read_obj(&path, &Default::default()).expect("bench mesh");
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../meshes/jacksboro-10k.obj"));
+    let (tin, _) = tin::read_obj(&path, &Default::default()).expect("bench mesh");
     let built = build(&tin, &BuildParams::default(), None).expect("build");
     let h = built.hierarchy;
     let htin = hierarchy_tin(&h).expect("mesh");

@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use tincull::evaluate::{EvalOptions, Evaluation, evaluate};
-use tincull::pipeline::{BuildParams, build};
+use eval::evaluate::{EvalOptions, Evaluation, evaluate};
+use pipeline::{BuildParams, build};
 
 fn mesh(name: &str) -> tin::Tin {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../meshes").join(name);
     tin::read_obj(&path, &tin::ObjImportOptions::default())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
         .0
@@ -25,7 +25,7 @@ fn eval(tin: &tin::Tin, sectors: u32, subsectors: u32, viewpoints: usize) -> Eva
         per_triangle: false,
         ..EvalOptions::default()
     };
-    let htin = tincull::evaluate::hierarchy_tin(&b.hierarchy).expect("mesh");
+    let htin = eval::evaluate::hierarchy_tin(&b.hierarchy).expect("mesh");
     evaluate(&b.hierarchy, &htin, &opts, &|_, _| {}).expect("evaluation")
 }
 

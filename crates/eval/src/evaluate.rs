@@ -34,7 +34,7 @@ use serde::Serialize;
 use tin::Tin;
 use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_metrics};
 
-use crate::pipeline::{per_triangle_hierarchy, triangle_regions};
+use pipeline::{per_triangle_hierarchy, triangle_regions};
 
 /// The methods an evaluation compares, in report order.
 pub const METHODS: [&str; 5] = ["safe", "thesis", "per_triangle", "frustum_only", "none"];

@@ -1,6 +1,21 @@
-//! The whole preprocessing pipeline: horizons → vertex regions → crystal grouping (groups' regions intersected from
-//! their vertices' regions) → the exported [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink).
-//! Per-triangle regions are only made for the per-triangle evaluation method ([`triangle_regions`]).
+//! The preprocessing pipeline of tincull, as a library: horizons → vertex regions → crystal grouping (groups'
+//! regions intersected from their vertices' regions) → the exported [`cull::Hierarchy`] (regions rounded to f32 so
+//! that they only shrink). Per-triangle regions are only made for the per-triangle evaluation method
+//! ([`triangle_regions`]).
+//!
+//! Where it sits (data flows one way, left to right; nothing here depends on the evaluation, the viewer or the CLI):
+//!
+//! ```text
+//! tin ──► horizon ──► occlusion ──► crystal ──► cull
+//!  └─────────┴────────────┴─────────────┴─────────┴──► pipeline ──► eval ──► viewer ──► tincull (CLI)
+//! ```
+//!
+//! Besides [`build`] it owns the writers for people and other tools ([`export`]: the grouped OBJ + MTL and the
+//! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
+#![warn(missing_docs)]
+
+pub mod export;
+pub mod palette;
 
 use std::sync::Arc;
 use std::time::Instant;

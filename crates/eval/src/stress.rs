@@ -1,7 +1,7 @@
 //! Stability suite: where the methods fail (design.md "Measuring accuracy"; thesis 5.1.2 on undersampling, 6.3 on
 //! sector counts and crystal seeds).
 //!
-//! Every case runs the whole pipeline ([`crate::pipeline`]) on one terrain with one set of parameters, checks the
+//! Every case runs the whole pipeline ([`pipeline`]) on one terrain with one set of parameters, checks the
 //! exported hierarchy's invariants, then scores the `hierarchy` culler against ground truth ([`truth::GroundTruth`])
 //! from a set of viewpoints, always all around (360°). The cases:
 //!
@@ -42,7 +42,7 @@ use serde::Serialize;
 use tin::{DedupePolicy, Tin};
 use truth::{GroundTruth, ViewpointClass, view_metrics};
 
-use crate::pipeline::{BuildParams, build, export_hierarchy};
+use pipeline::{BuildParams, build, export_hierarchy};
 
 /// What the stability suite runs.
 #[derive(Clone, Debug, Serialize)]

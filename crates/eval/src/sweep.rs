@@ -27,7 +27,7 @@ use horizon::SectorConfig;
 use tin::Tin;
 
 use crate::evaluate::{Evaluation, GroundTruthSet, Leaves, score, standard_methods};
-use crate::pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
+use pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
 
 /// The header line of a sweep CSV (without the newline).
 pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
@@ -462,6 +462,6 @@ mod tests {
         );
         // evaluate() still runs end to end on the exported hierarchy.
         let e = evaluate(&b.hierarchy, &htin, &opts, &|_, _| {}).unwrap();
-        assert_eq!(e.rows.len(), 4 * 3);
+        assert_eq!(e.rows.len(), 5 * 3);
     }
 }
