@@ -8,6 +8,7 @@ use cull::Hierarchy;
 use truth::ViewpointClass;
 
 use super::Output;
+use super::culling_args::{SafeArgs, read_eyes};
 use eval::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
 
 /// Arguments of `tincull eval`.
@@ -30,6 +31,13 @@ pub struct EvalArgs {
     /// Skip the per-triangle method (it recomputes the horizons of the mesh).
     #[arg(long)]
     pub no_per_triangle: bool,
+    /// Score your own camera path: a file of eye positions, one `x,y,z` per line (class `path`; replaces
+    /// `--classes` and `--viewpoints`).
+    #[arg(long, value_name = "FILE")]
+    pub eyes: Option<PathBuf>,
+    /// The safe culler's parameters.
+    #[command(flatten)]
+    pub safe: SafeArgs,
     /// Write the whole evaluation (rows and every viewpoint) as JSON here.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -68,8 +76,14 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         rng_seed: args.rng_seed,
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
+        safe: args.safe.params()?,
+        eyes: args.eyes.as_deref().map(read_eyes).transpose()?,
     };
-    let bar = out.progress((opts.viewpoints * opts.classes.len()) as u64, "viewpoints");
+    let total = opts
+        .eyes
+        .as_ref()
+        .map_or(opts.viewpoints * opts.classes.len(), Vec::len);
+    let bar = out.progress(total as u64, "viewpoints");
     let e = evaluate(&h, &tin, &opts, &|done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     out.say(e.table());

@@ -2,6 +2,7 @@
 
 mod build_cmd;
 pub mod cull_cmd;
+pub mod culling_args;
 mod demo_cmd;
 mod eval_cmd;
 mod export_cmd;

@@ -111,6 +111,8 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         rng_seed: args.view_seed,
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
+        safe: cull::SafeParams::default(),
+        eyes: None,
     };
     anyhow::ensure!(
         eval.fov_deg > 0.0 && eval.fov_deg <= 360.0,

@@ -24,7 +24,7 @@ use std::f64::consts::TAU;
 use std::time::Instant;
 
 use anyhow::Result;
-use cull::{AnyCuller, Camera, CullMethod, Culler, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, Culler, DrawList, Hierarchy, SafeParams};
 use glam::DVec3;
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::RegionTable;
@@ -52,6 +52,10 @@ pub struct EvalOptions {
     pub fov_deg: f64,
     /// Also evaluate the per-triangle method (needs the horizons of the mesh again).
     pub per_triangle: bool,
+    /// Parameters of the safe culler.
+    pub safe: SafeParams,
+    /// Score these eyes (class `path`, a user's camera path) instead of drawing viewpoints from `classes`.
+    pub eyes: Option<Vec<[f64; 3]>>,
 }
 
 impl Default for EvalOptions {
@@ -62,6 +66,8 @@ impl Default for EvalOptions {
             rng_seed: 1,
             fov_deg: 360.0,
             per_triangle: true,
+            safe: SafeParams::default(),
+            eyes: None,
         }
     }
 }
@@ -213,15 +219,32 @@ impl GroundTruthSet {
         anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
         let truth = GroundTruth::new(tin);
         let all_around = opts.fov_deg >= 360.0;
-        let total = opts.viewpoints * opts.classes.len();
+        let groups: Vec<(ViewpointClass, Vec<DVec3>, u64)> = match &opts.eyes {
+            Some(eyes) => {
+                anyhow::ensure!(!eyes.is_empty(), "no eyes to score");
+                vec![(
+                    ViewpointClass::Path,
+                    eyes.iter().map(|&e| DVec3::from_array(e)).collect(),
+                    opts.rng_seed,
+                )]
+            }
+            None => opts
+                .classes
+                .iter()
+                .enumerate()
+                .map(|(ci, &class)| {
+                    let seed = opts
+                        .rng_seed
+                        .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                        .wrapping_add(ci as u64);
+                    (class, truth::viewpoints(tin, class, opts.viewpoints, seed), seed)
+                })
+                .collect(),
+        };
+        let total: usize = groups.iter().map(|g| g.1.len()).sum();
         let mut views = Vec::with_capacity(total);
         let mut truth_seconds = 0.0;
-        for (ci, &class) in opts.classes.iter().enumerate() {
-            let seed = opts
-                .rng_seed
-                .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-                .wrapping_add(ci as u64);
-            let eyes = truth::viewpoints(tin, class, opts.viewpoints, seed);
+        for (class, eyes, seed) in groups {
             let mut yaw_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
             for eye in eyes {
                 let yaw = if all_around {
@@ -280,11 +303,12 @@ pub fn standard_methods<'a>(
     h: &Hierarchy,
     per_triangle: Option<&Hierarchy>,
     order: Option<&'a [u32]>,
+    safe: SafeParams,
 ) -> Vec<Method<'a>> {
     vec![
         Method {
             name: "safe",
-            culler: Some(AnyCuller::new(h, CullMethod::Safe)),
+            culler: Some(AnyCuller::with_params(h, CullMethod::Safe, safe)),
             order,
         },
         Method {
@@ -400,12 +424,15 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
         });
     }
     let mut rows = Vec::new();
-    let classes: Vec<String> = opts
-        .classes
-        .iter()
-        .map(|c| c.name().to_string())
-        .chain(["all".into()])
-        .collect();
+    let classes: Vec<String> = match opts.eyes {
+        Some(_) => vec![ViewpointClass::Path.name().to_string()],
+        None => opts
+            .classes
+            .iter()
+            .map(|c| c.name().to_string())
+            .chain(["all".into()])
+            .collect(),
+    };
     for name in METHODS {
         for class in &classes {
             let views: Vec<&ViewpointResult> = results
@@ -478,7 +505,7 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     };
     let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
     let truth = GroundTruthSet::compute(tin, opts, progress)?;
-    let methods = standard_methods(h, per_triangle.as_ref(), None);
+    let methods = standard_methods(h, per_triangle.as_ref(), None, opts.safe);
     let ranges = h.leaf_ranges();
     let leaves = Leaves {
         ranges: &ranges,
