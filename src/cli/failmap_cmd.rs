@@ -16,6 +16,9 @@ use super::Output;
 pub struct FailmapArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
+    /// Culling method to map: `safe` (never culls a visible triangle) or `thesis` (where its false culls are).
+    #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
+    pub method: cull::CullMethod,
     /// Eye height above the ground at each cell centre (m).
     #[arg(long, default_value_t = 2.0)]
     pub eye_height: f64,
@@ -62,7 +65,9 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     );
     let (cols, rows) = failmap::grid_size(&tin, args.cell)?;
     let bar = out.progress((cols * rows) as u64, "cells");
-    let map = failmap::compute(&h, &tin, args.eye_height, args.cell, &|done| bar.set_position(done))?;
+    let map = failmap::compute(&h, args.method, &tin, args.eye_height, args.cell, &|done| {
+        bar.set_position(done)
+    })?;
     bar.finish_and_clear();
     let worst = map.worst();
     if let Some(path) = &args.output {

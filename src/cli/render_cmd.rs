@@ -17,6 +17,9 @@ use super::{Output, OutputArgs};
 pub struct RenderArgs {
     /// A hierarchy (.tch) or a terrain mesh (.obj; coloured by height, no culling).
     pub input: PathBuf,
+    /// Culling method for a viewpoint: `safe` (never culls a visible triangle) or `thesis` (not conservative).
+    #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
+    pub method: cull::CullMethod,
     /// The PNG to write.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -128,6 +131,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         level: args.level,
         compare: args.compare,
         timing_runs: args.runs,
+        method: args.method,
     };
     viewer::validate(&terrain, &options)?;
     let gpu = Gpu::headless()?;

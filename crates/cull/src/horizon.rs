@@ -85,6 +85,9 @@
 //!   square root and a division, each correctly rounded, and moved outward by `1e-9 (1 + |u|)` (also covering the
 //!   cancellation in `m_f² − r²`, which is why a disk with `m_f < (1 + 1e-6) r` takes the whole face).
 
+// Comparisons are written so that a NaN anywhere answers "not hidden" (`!(a < b)`), on purpose.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 /// Relative margin applied to every rounded quantity (see the module documentation).
 pub(crate) const REL: f64 = 1e-12;
 

@@ -33,6 +33,9 @@
 //! lowest corner and `h` its largest `|z|`: more than 100 times the exact checker's tolerance (`truth::walk`), so a
 //! sight line called blocked here is blocked there, and far above every rounding error of the arithmetic.
 
+// Comparisons are written so that a NaN anywhere answers "not hidden" (`!(a < b)`), on purpose.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::f64::consts::{PI, TAU};

@@ -136,7 +136,19 @@ impl ViewerApp {
     pub(super) fn stats_ui(&mut self, ui: &mut egui::Ui) {
         let s = self.list.stats;
         let n = self.terrain().num_triangles();
-        if self.model.culler.is_some() {
+        if let Some(culler) = &self.model.culler {
+            let current = culler.method();
+            let mut chosen = current;
+            egui::ComboBox::from_label("culling method")
+                .selected_text(current.name())
+                .show_ui(ui, |ui| {
+                    for m in cull::CullMethod::ALL {
+                        ui.selectable_value(&mut chosen, m, m.name());
+                    }
+                });
+            if chosen != current {
+                self.set_method(chosen);
+            }
             ui.label(format!(
                 "nodes tested {}, culled {} (occlusion {}, frustum {}), skipped {}",
                 s.nodes_tested,
