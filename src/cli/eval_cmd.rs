@@ -31,6 +31,9 @@ pub struct EvalArgs {
     /// Skip the per-triangle method (it recomputes the horizons of the mesh).
     #[arg(long)]
     pub no_per_triangle: bool,
+    /// Skip the conservative precomputed regions (method `safe_regions`; computing them takes a few seconds).
+    #[arg(long)]
+    pub no_safe_regions: bool,
     /// Score your own camera path: a file of eye positions, one `x,y,z` per line (class `path`; replaces
     /// `--classes` and `--viewpoints`).
     #[arg(long, value_name = "FILE")]
@@ -77,6 +80,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
         safe: args.safe.params()?,
+        safe_regions: !args.no_safe_regions,
         eyes: args.eyes.as_deref().map(read_eyes).transpose()?,
     };
     let total = opts

@@ -112,6 +112,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
         safe: cull::SafeParams::default(),
+        safe_regions: false,
         eyes: None,
     };
     anyhow::ensure!(

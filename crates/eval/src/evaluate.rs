@@ -7,6 +7,7 @@
 //! | method | what it draws |
 //! | --- | --- |
 //! | `safe` | the safe culler over the `.tch` hierarchy (`cull::SafeCuller`; never culls a visible triangle) |
+//! | `safe_regions` | the thesis' run-time test over conservative precomputed regions (`pipeline::conservative_hierarchy`; never culls a visible triangle) |
 //! | `thesis` | the thesis' recursive region test over the `.tch` hierarchy (`cull::Culler`; not conservative) |
 //! | `per_triangle` | each triangle tested against its own regions (thesis 5.1.1) |
 //! | `frustum_only` | the hierarchy's frustum test alone (everything at a 360° field of view) |
@@ -37,7 +38,7 @@ use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_m
 use pipeline::{per_triangle_hierarchy, triangle_regions};
 
 /// The methods an evaluation compares, in report order.
-pub const METHODS: [&str; 5] = ["safe", "thesis", "per_triangle", "frustum_only", "none"];
+pub const METHODS: [&str; 6] = ["safe", "safe_regions", "thesis", "per_triangle", "frustum_only", "none"];
 
 /// What to evaluate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -54,6 +55,8 @@ pub struct EvalOptions {
     pub per_triangle: bool,
     /// Parameters of the safe culler.
     pub safe: SafeParams,
+    /// Also evaluate the thesis' test over conservative precomputed regions (computes them first).
+    pub safe_regions: bool,
     /// Score these eyes (class `path`, a user's camera path) instead of drawing viewpoints from `classes`.
     pub eyes: Option<Vec<[f64; 3]>>,
 }
@@ -67,6 +70,7 @@ impl Default for EvalOptions {
             fov_deg: 360.0,
             per_triangle: true,
             safe: SafeParams::default(),
+            safe_regions: true,
             eyes: None,
         }
     }
@@ -124,6 +128,8 @@ pub struct Evaluation {
     pub ground_truth_seconds_per_viewpoint: f64,
     /// Seconds to prepare the per-triangle regions (0 when not evaluated).
     pub per_triangle_setup_seconds: f64,
+    /// Seconds to compute the conservative regions of `safe_regions` (0 when not evaluated).
+    pub safe_regions_setup_seconds: f64,
 }
 
 /// Times `cull_into` for one camera: the median of 15 runs after a warm-up, in nanoseconds. The result is left in
@@ -479,6 +485,7 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
         ground_truth_seconds_per_viewpoint: truth.seconds_per_viewpoint,
         viewpoints: results,
         per_triangle_setup_seconds: 0.0,
+        safe_regions_setup_seconds: 0.0,
     })
 }
 
@@ -505,7 +512,16 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     };
     let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
     let truth = GroundTruthSet::compute(tin, opts, progress)?;
-    let methods = standard_methods(h, per_triangle.as_ref(), None, opts.safe);
+    let mut methods = standard_methods(h, per_triangle.as_ref(), None, opts.safe);
+    let start = Instant::now();
+    if opts.safe_regions {
+        methods.push(Method {
+            name: "safe_regions",
+            culler: Some(AnyCuller::Thesis(Culler::new(&pipeline::conservative_hierarchy(h)))),
+            order: None,
+        });
+    }
+    let safe_regions_setup_seconds = start.elapsed().as_secs_f64();
     let ranges = h.leaf_ranges();
     let leaves = Leaves {
         ranges: &ranges,
@@ -513,6 +529,7 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     };
     let mut e = score(tin, &truth, &methods, Some(leaves))?;
     e.per_triangle_setup_seconds = per_triangle_setup_seconds;
+    e.safe_regions_setup_seconds = safe_regions_setup_seconds;
     Ok(e)
 }
 

@@ -287,3 +287,40 @@ pub fn per_triangle_hierarchy(tin: &Tin, triangle_regions: &RegionTable) -> Hier
         build: BuildInfo::default(),
     }
 }
+
+/// `h` with every node's regions replaced by conservative ones ([`occlusion::conservative`]): the thesis' run-time
+/// test over them never culls a visible triangle. Computed from the hierarchy's own mesh and circles (widened to
+/// cover their f32 storage), so it applies to any hierarchy, crystal or not.
+pub fn conservative_hierarchy(h: &Hierarchy) -> Hierarchy {
+    let positions: Vec<glam::DVec3> = h.mesh.positions.iter().map(|&p| glam::DVec3::from_array(p)).collect();
+    let order: Vec<u32> = (0..h.mesh.triangles.len() as u32).collect();
+    let [ox, oy, oz] = h.origin;
+    let shapes: Vec<occlusion::NodeShape> = h
+        .nodes
+        .iter()
+        .map(|n| {
+            let centre = glam::DVec2::new(ox + f64::from(n.centre[0]), oy + f64::from(n.centre[1]));
+            // The world centre is rounded once (relative error ε): grow the radius by far more.
+            let slack = 1e-12 * (centre.x.abs() + centre.y.abs()) + 1e-9;
+            occlusion::NodeShape {
+                triangles: &order[n.triangles[0] as usize..n.triangles[1] as usize],
+                centre,
+                radius: f64::from(n.radius) + slack,
+            }
+        })
+        .collect();
+    let regions = occlusion::conservative_regions(&positions, &h.mesh.triangles, &shapes, h.sectors);
+    let mut out = h.clone();
+    for (node, rows) in out.nodes.iter_mut().zip(regions) {
+        node.regions = rows
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, r)| {
+                let (points, tail) = r?;
+                let origin_t = occlusion::plane_t(h.sectors, i as u32, glam::DVec2::new(ox, oy));
+                StoredRegion::from_f64(i as u16, &points, tail, origin_t, oz)
+            })
+            .collect();
+    }
+    out
+}
