@@ -8,6 +8,7 @@ use cull::Hierarchy;
 use truth::ViewpointClass;
 
 use super::Output;
+use super::files::Outputs;
 use eval::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
 
 /// Arguments of `tincull eval`.
@@ -41,15 +42,26 @@ pub struct EvalArgs {
     pub quiet: bool,
 }
 
-/// Writes an evaluation's JSON and CSV files where asked.
-pub fn write_outputs(e: &Evaluation, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
+/// Checks the evaluation's outputs (before the work).
+pub fn check_outputs(files: &mut Outputs, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
+    for path in json.into_iter().chain(csv) {
+        files.check(path)?;
+    }
+    Ok(())
+}
+
+/// Adds an evaluation's JSON and CSV files where asked.
+pub fn add_outputs(
+    files: &mut Outputs,
+    e: &Evaluation,
+    json: Option<&std::path::Path>,
+    csv: Option<&std::path::Path>,
+) -> Result<()> {
     if let Some(path) = json {
-        let text = serde_json::to_string_pretty(e)?;
-        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        files.add_bytes(path, serde_json::to_string_pretty(e)?.as_bytes())?;
     }
     if let Some(path) = csv {
-        let text = e.to_csv();
-        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        files.add_bytes(path, e.to_csv().as_bytes())?;
     }
     Ok(())
 }
@@ -59,7 +71,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let out = Output {
         json: false,
         quiet: args.quiet,
+        quiet_text: false,
     };
+    let mut files = Outputs::new();
+    check_outputs(&mut files, args.json.as_deref(), args.csv.as_deref())?;
     let h = Hierarchy::load(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
@@ -77,5 +92,6 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         "ground truth: {:.3} s per viewpoint ({} triangles; a lower bound of the visible set)",
         e.ground_truth_seconds_per_viewpoint, e.triangles
     ));
-    write_outputs(&e, args.json.as_deref(), args.csv.as_deref())
+    add_outputs(&mut files, &e, args.json.as_deref(), args.csv.as_deref())?;
+    files.commit()
 }

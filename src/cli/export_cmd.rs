@@ -7,7 +7,9 @@ use clap::Args;
 use cull::Hierarchy;
 
 use super::Output;
-use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::export::to_json;
+
+use super::files::Outputs;
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]
@@ -28,13 +30,26 @@ pub struct ExportArgs {
 
 /// Runs `tincull export`.
 pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
+    let mut out = out;
+    let mut files = Outputs::new();
+    if let Some(path) = &args.json {
+        files.check_or_stdout(path, &mut out)?;
+    }
+    if let Some(path) = &args.obj {
+        files.check_grouped_obj(path)?;
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
     if let Some(path) = &args.json {
-        write_json(&h, path)?;
+        files.add_bytes(path, to_json(&h)?.as_bytes())?;
+    }
+    if let Some(path) = &args.obj {
+        files.add_grouped_obj(&h, path)?;
+    }
+    files.commit()?;
+    if let Some(path) = &args.json {
         out.say(format!("wrote {}", path.display()));
     }
     if let Some(path) = &args.obj {
-        write_grouped_obj(&h, path)?;
         out.say(format!("wrote {} and its .mtl", path.display()));
     }
     Ok(())

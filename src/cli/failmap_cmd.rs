@@ -10,6 +10,7 @@ use eval::evaluate::hierarchy_tin;
 use eval::failmap;
 
 use super::Output;
+use super::files::Outputs;
 
 /// Arguments of `tincull failmap`.
 #[derive(Debug, Args)]
@@ -38,6 +39,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     let out = Output {
         json: false,
         quiet: args.quiet,
+        quiet_text: false,
     };
     ensure!(
         args.cell.is_finite() && args.cell > 0.0,
@@ -53,6 +55,10 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         args.output.is_some() || args.csv.is_some(),
         "nothing to write: give -o MAP.png and/or --csv MAP.csv"
     );
+    let mut files = Outputs::new();
+    for path in args.output.iter().chain(&args.csv) {
+        files.check(path)?;
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;
     ensure!(
@@ -76,12 +82,12 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
             w.write_image_data(&rgba)?;
             w.finish()?;
         }
-        tin::write_atomic(path, |w| w.write_all(&png_bytes))?;
+        files.add_bytes(path, &png_bytes)?;
     }
     if let Some(path) = &args.csv {
-        let text = map.to_csv();
-        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        files.add_bytes(path, map.to_csv().as_bytes())?;
     }
+    files.commit()?;
     let scored: Vec<&failmap::Cell> = map.scored().collect();
     let with_fc = scored.iter().filter(|c| c.metrics.false_culls > 0).count();
     let occ: Vec<f64> = scored.iter().filter_map(|c| c.metrics.occlusion_captured).collect();

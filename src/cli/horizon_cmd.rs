@@ -11,6 +11,7 @@ use horizon::{HorizonField, HorizonOptions, HorizonPoint, SectorConfig};
 use serde_json::json;
 use tin::Tin;
 
+use super::files::Outputs;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 
@@ -69,6 +70,10 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
     {
         anyhow::bail!("--undersampling radius must be positive and finite, got {r}");
     }
+    let mut files = Outputs::new();
+    if let Some(path) = &args.export_json {
+        files.check(path)?;
+    }
     let (tin, _) = args.mesh.load(out)?;
     let (field, seconds) = compute_with_progress(&tin, &config, args.undersampling, out)?;
     let n = tin.num_vertices();
@@ -120,14 +125,15 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         }
     }
     if let Some(path) = &args.export_json {
-        export_json(&tin, &field, path)?;
+        export_json(&tin, &field, path, &mut files)?;
+        files.commit()?;
         out.say(format!("wrote {}", path.display()));
     }
     out.json(&report)
 }
 
 /// Writes per vertex: the horizon per subsector (vertex index, an edge point, or null) and the sector summaries.
-fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path) -> Result<()> {
+fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path, files: &mut Outputs) -> Result<()> {
     let config = *field.config();
     let write = |w: &mut dyn Write| -> std::io::Result<()> {
         write!(
@@ -158,5 +164,5 @@ fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path) -> Resul
         }
         w.write_all(b"]}\n")
     };
-    Ok(tin::write_atomic(path, write)?)
+    files.add(path, write)
 }

@@ -6,6 +6,7 @@ mod demo_cmd;
 mod eval_cmd;
 mod export_cmd;
 mod failmap_cmd;
+mod files;
 mod horizon_cmd;
 
 mod info;
@@ -112,6 +113,7 @@ pub fn run(cli: Cli) -> Result<()> {
             Output {
                 json: false,
                 quiet: args.quiet,
+                quiet_text: false,
             },
         ),
         Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
@@ -124,6 +126,7 @@ pub fn run(cli: Cli) -> Result<()> {
             Output {
                 json: false,
                 quiet: args.quiet,
+                quiet_text: false,
             },
         ),
         #[cfg(not(feature = "viewer"))]

@@ -1,4 +1,4 @@
-//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars, atomic file writes.
+//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars (files: [`super::files`]).
 
 use std::io::Write;
 use std::time::Duration;
@@ -22,6 +22,7 @@ impl From<OutputArgs> for Output {
         Output {
             json: a.json,
             quiet: a.quiet,
+            quiet_text: false,
         }
     }
 }
@@ -33,12 +34,14 @@ pub struct Output {
     pub json: bool,
     /// No progress bars and no human text.
     pub quiet: bool,
+    /// No human text on stdout (an output goes there: `-o -`); progress bars stay on stderr.
+    pub quiet_text: bool,
 }
 
 impl Output {
     /// Prints a line of human-readable text on stdout (not with `--json` or `--quiet`).
     pub fn say(&self, text: impl AsRef<str>) {
-        if !self.quiet && !self.json {
+        if !self.quiet && !self.json && !self.quiet_text {
             println!("{}", text.as_ref());
         }
     }

@@ -9,6 +9,7 @@ use serde_json::json;
 use viewer::{ColourMode, Gpu, RenderOptions, Terrain, ViewKind};
 
 use super::cull_cmd::parse_point;
+use super::files::Outputs;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 
@@ -130,9 +131,21 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         timing_runs: args.runs,
     };
     viewer::validate(&terrain, &options)?;
+    let mut files = Outputs::new();
+    files.check(&args.out)?;
+    if args.compare {
+        files.check(&diff_path(&args.out))?;
+    }
     let gpu = Gpu::headless()?;
     let result = viewer::render(&gpu, &terrain, &options)?;
-    viewer::write_png(&args.out, &result.image)?;
+    let png = |image: &viewer::RgbaImage| {
+        viewer::png_out::encode_png(image).map_err(|e| anyhow::anyhow!("{}: {e}", args.out.display()))
+    };
+    files.add_bytes(&args.out, &png(&result.image)?)?;
+    if let Some(c) = &result.compare {
+        files.add_bytes(&diff_path(&args.out), &png(&c.difference)?)?;
+    }
+    files.commit()?;
     out.say(format!(
         "wrote {} ({}x{}, {} draws of {} triangles, on {})",
         args.out.display(),
@@ -166,7 +179,6 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     });
     if let Some(c) = &result.compare {
         let diff = diff_path(&args.out);
-        viewer::write_png(&diff, &c.difference)?;
         out.say(format!(
             "{} differing pixels (false culls on screen); wrote {}",
             c.differing_pixels,

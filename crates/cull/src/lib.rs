@@ -13,6 +13,6 @@ pub mod sector;
 
 pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
-pub use file::{FORMAT_VERSION, MAGIC, write_atomically};
+pub use file::{FORMAT_VERSION, MAGIC};
 pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};

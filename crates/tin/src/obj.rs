@@ -27,8 +27,8 @@
 //! lines. Vertex numbers in messages are the file's own 1-based numbers.
 //!
 //! Export writes `v` lines with Rust's shortest round-trip formatting of f64 (`{}`), so positions survive export and
-//! import bit for bit, and `f` lines with the TIN's triangles in order; writing is atomic (see
-//! [`crate::atomic::write_atomic`]).
+//! import bit for bit, and `f` lines with the TIN's triangles in order ([`write_obj_to`], to any writer; tincull puts
+//! it in a file with its one output writer, the `outfile` crate).
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -36,7 +36,6 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
-use crate::atomic::write_atomic;
 use crate::delaunay::{DedupePolicy, triangulate};
 use crate::error::{Result, TinError};
 use crate::mesh::Tin;
@@ -680,9 +679,4 @@ pub fn write_obj_to<W: Write + ?Sized>(tin: &Tin, out: &mut W) -> io::Result<()>
         writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
     }
     w.flush()
-}
-
-/// Writes `tin` to an OBJ file atomically (a temporary file in the same directory, renamed when complete).
-pub fn write_obj(tin: &Tin, path: &Path) -> Result<()> {
-    write_atomic(path, |w| write_obj_to(tin, w))
 }
