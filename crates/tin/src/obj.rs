@@ -39,7 +39,8 @@ use serde::Serialize;
 use crate::delaunay::{DedupePolicy, triangulate};
 use crate::error::{Result, TinError};
 use crate::mesh::Tin;
-use crate::validate::{find_overlaps, orient_exact};
+use crate::predicates::orient2d;
+use crate::validate::find_overlaps;
 
 /// Largest polygon (number of vertices in one face) the importer triangulates.
 pub const MAX_POLYGON_VERTICES: usize = 1024;
@@ -548,11 +549,9 @@ fn ear_clip(polygon: &[u32], positions: &[DVec3]) -> Option<Vec<[u32; 3]>> {
         return None;
     }
     let sign = twice_area.signum();
-    let convex = |a: DVec2, b: DVec2, c: DVec2| orient_exact(a, b, c) * sign > 0.0;
+    let convex = |a: DVec2, b: DVec2, c: DVec2| orient2d(a, b, c) * sign > 0.0;
     let inside_closed = |a: DVec2, b: DVec2, c: DVec2, q: DVec2| {
-        orient_exact(a, b, q) * sign >= 0.0
-            && orient_exact(b, c, q) * sign >= 0.0
-            && orient_exact(c, a, q) * sign >= 0.0
+        orient2d(a, b, q) * sign >= 0.0 && orient2d(b, c, q) * sign >= 0.0 && orient2d(c, a, q) * sign >= 0.0
     };
     let mut ring = polygon.to_vec();
     let mut out = Vec::with_capacity(k - 2);
