@@ -1,6 +1,6 @@
 //! Outputs of the `tincull` binary never destroy what is not theirs (issue 16): every output path is checked before
 //! the work, FIFOs and directories are refused and left alone, symlinks are followed (the link stays), a failed
-//! command leaves none of its outputs, `export --obj same.mtl` is refused, and `-o -` writes to standard output.
+//! command leaves none of its outputs, `export --export-obj same.mtl` is refused, and `-o -` writes to standard output.
 //! Everything is made in a temporary directory; no real device is touched.
 
 use std::fs;
@@ -122,11 +122,11 @@ fn export_refuses_an_obj_named_like_its_materials() {
     let m = mesh(SMALL);
     ok(&["build", p(&m), "-o", p(&tch), "--quiet"]);
     let same = dir.path().join("same.mtl");
-    fails_with(&["export", p(&tch), "--obj", p(&same)], &["same.mtl", ".mtl"]);
+    fails_with(&["export", p(&tch), "--export-obj", p(&same)], &["same.mtl", ".mtl"]);
     assert_eq!(names(dir.path()), ["h.tch"]);
     // A good pair is written together.
     let obj = dir.path().join("g.obj");
-    ok(&["export", p(&tch), "--obj", p(&obj), "--quiet"]);
+    ok(&["export", p(&tch), "--export-obj", p(&obj), "--quiet"]);
     assert_eq!(names(dir.path()), ["g.mtl", "g.obj", "h.tch"]);
 }
 

@@ -109,11 +109,18 @@ pub struct BuildArgs {
 /// A progress bar per pipeline stage.
 pub fn stage_progress(out: Output) -> pipeline::BuildProgress {
     let bar = out.progress(1, "horizons");
+    // Threads report out of order: within a stage the bar only moves forward.
+    let high = std::sync::Mutex::new(0u64);
     Arc::new(move |stage: &str, done: u64, total: u64| {
+        let Ok(mut high) = high.lock() else { return };
         if bar.message() != stage {
             bar.set_message(stage.to_string());
             bar.reset();
+            *high = 0;
+        } else if done < *high {
+            return;
         }
+        *high = done;
         bar.set_length(total);
         bar.set_position(done);
     })

@@ -8,7 +8,7 @@ use clap::Args;
 use super::build_cmd::{print_report, stage_progress};
 use super::eval_cmd::{add_outputs, check_outputs};
 use super::files::Outputs;
-use super::mesh_input::MeshArgs;
+use super::mesh_input::ImportArgs;
 use super::{Output, OutputArgs};
 use cull::Hierarchy;
 use eval::evaluate::{EvalOptions, evaluate, hierarchy_tin};
@@ -30,6 +30,9 @@ pub struct DemoArgs {
     /// Viewpoints per class for the evaluation.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
+    /// How to import the mesh.
+    #[command(flatten)]
+    pub import: ImportArgs,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -38,12 +41,7 @@ pub struct DemoArgs {
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
-    let mesh_args = MeshArgs {
-        mesh: mesh.clone(),
-        keep_faces: false,
-        dedupe: Default::default(),
-    };
-    let (tin, _) = mesh_args.load(out)?;
+    let (tin, _) = args.import.mesh(&mesh).load(out)?;
     let params = BuildParams::default();
     out.say(format!("tincull demo on {}", mesh.display()));
     out.say(format!(

@@ -25,7 +25,7 @@ pub struct FailmapArgs {
     pub cell: f64,
     /// The PNG image to write.
     #[arg(long, short = 'o', value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    pub out: Option<PathBuf>,
     /// The CSV to write: x, y, eye_z, false_culls, false_cull_area, occlusion_captured, triangles_drawn.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -52,11 +52,11 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         args.eye_height
     );
     ensure!(
-        args.output.is_some() || args.csv.is_some(),
+        args.out.is_some() || args.csv.is_some(),
         "nothing to write: give -o MAP.png and/or --csv MAP.csv"
     );
     let mut files = Outputs::new();
-    for path in args.output.iter().chain(&args.csv) {
+    for path in args.out.iter().chain(&args.csv) {
         files.check(path)?;
     }
     let h = Hierarchy::load(&args.hierarchy)?;
@@ -68,10 +68,11 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     );
     let (cols, rows) = failmap::grid_size(&tin, args.cell)?;
     let bar = out.progress((cols * rows) as u64, "cells");
-    let map = failmap::compute(&h, &tin, args.eye_height, args.cell, &|done| bar.set_position(done))?;
+    let advance = Output::monotone(&bar);
+    let map = failmap::compute(&h, &tin, args.eye_height, args.cell, &advance)?;
     bar.finish_and_clear();
     let worst = map.worst();
-    if let Some(path) = &args.output {
+    if let Some(path) = &args.out {
         let rgba = map.to_rgba();
         let mut png_bytes = Vec::new();
         {

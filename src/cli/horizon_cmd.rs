@@ -50,10 +50,10 @@ pub fn compute_with_progress(
     out: Output,
 ) -> Result<(HorizonField, f64)> {
     let bar = out.progress(u64::from(config.total_subsectors()), "horizons");
-    let progress_bar = bar.clone();
+    let advance = Output::monotone(&bar);
     let opts = HorizonOptions {
         undersampling_radius: undersampling,
-        progress: Some(Arc::new(move |done, _| progress_bar.set_position(done as u64))),
+        progress: Some(Arc::new(move |done, _| advance(done as u64))),
     };
     let start = Instant::now();
     let field = horizon::compute(tin, config, &opts)?;
@@ -82,8 +82,8 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         "mesh": args.mesh.mesh,
         "vertices": n,
         "sectors": config.sectors(),
-        "subsectors": config.total_subsectors(),
-        "subsectors_per_sector": config.subsectors(),
+        "subsectors": config.subsectors(),
+        "total_subsectors": config.total_subsectors(),
         "undersampling": args.undersampling,
         "seconds": seconds,
         "vertex_subsectors_per_second": pairs / seconds.max(1e-9),

@@ -106,16 +106,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
         Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
-        Command::Eval(args) => eval_cmd::run(&args),
+        Command::Eval(args) => eval_cmd::run(&args, args.output.into()),
         Command::Sweep(args) => sweep_cmd::run(&args, args.output.into()),
-        Command::Export(args) => export_cmd::run(
-            &args,
-            Output {
-                json: false,
-                quiet: args.quiet,
-                quiet_text: false,
-            },
-        ),
+        Command::Export(args) => export_cmd::run(&args, args.output.into()),
         Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
         Command::Failmap(args) => failmap_cmd::run(&args),
         #[cfg(feature = "viewer")]

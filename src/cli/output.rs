@@ -78,6 +78,21 @@ impl Output {
         bar
     }
 
+    /// A progress report for `bar` that never moves it backwards, for work whose threads report out of order
+    /// (the horizon sweep's subsectors, the failure map's cells).
+    pub fn monotone(bar: &ProgressBar) -> impl Fn(u64) + Send + Sync + 'static {
+        let bar = bar.clone();
+        let high = std::sync::Mutex::new(0u64);
+        move |done: u64| {
+            if let Ok(mut h) = high.lock()
+                && done > *h
+            {
+                *h = done;
+                bar.set_position(done);
+            }
+        }
+    }
+
     /// A spinner on stderr for work of unknown length.
     pub fn spinner(&self, message: &str) -> ProgressBar {
         if self.quiet {

@@ -10,7 +10,7 @@ use viewer::{ColourMode, Gpu, RenderOptions, Terrain, ViewKind};
 
 use super::cull_cmd::parse_point;
 use super::files::Outputs;
-use super::mesh_input::MeshArgs;
+use super::mesh_input::ImportArgs;
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull render`.
@@ -27,6 +27,9 @@ pub struct RenderArgs {
     /// Viewpoint `x,y,z` in world coordinates (m): the camera of the eye view, the culled viewpoint of the orbit.
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
+    /// How to import a mesh input.
+    #[command(flatten)]
+    pub import: ImportArgs,
     /// View direction in degrees, counter-clockwise from east [eye: 0, orbit: 45].
     #[arg(long, allow_hyphen_values = true)]
     pub yaw: Option<f64>,
@@ -77,7 +80,7 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
 }
 
 /// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`].
-pub fn load_terrain(path: &Path, out: Output) -> Result<Terrain> {
+pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Terrain> {
     let is_tch = path
         .extension()
         .and_then(|e| e.to_str())
@@ -86,17 +89,8 @@ pub fn load_terrain(path: &Path, out: Output) -> Result<Terrain> {
         let h = cull::Hierarchy::load(path).with_context(|| format!("cannot load {}", path.display()))?;
         Ok(Terrain::from_hierarchy(h)?)
     } else {
-        let (tin, _) = mesh_args(path).load(out)?;
+        let (tin, _) = import.mesh(path).load(out)?;
         Ok(Terrain::from_tin(&tin)?)
-    }
-}
-
-/// Default import options for a mesh given by path.
-pub fn mesh_args(path: &Path) -> MeshArgs {
-    MeshArgs {
-        mesh: path.to_path_buf(),
-        keep_faces: false,
-        dedupe: Default::default(),
     }
 }
 
@@ -116,7 +110,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     if args.compare && view != ViewKind::Eye {
         bail!("--compare works with --view eye");
     }
-    let terrain = load_terrain(&args.input, out)?;
+    let terrain = load_terrain(&args.input, &args.import, out)?;
     let options = RenderOptions {
         view,
         eye: args.eye,

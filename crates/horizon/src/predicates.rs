@@ -17,8 +17,8 @@ use std::cmp::Ordering;
 use glam::DVec2;
 
 /// Largest coordinate magnitude accepted by the exact predicates (2^100); smaller non-zero magnitudes than
-/// `1 / COORDINATE_LIMIT` are rejected too, so that no product underflows.
-pub const COORDINATE_LIMIT: f64 = 1.267_650_600_228_229_4e30;
+/// `1 / COORDINATE_LIMIT` are rejected too, so that no product underflows. The project's one limit, checked at import.
+pub use tin::COORDINATE_LIMIT;
 
 const EPS: f64 = f64::EPSILON * 0.5; // unit roundoff 2^-53
 const SPLITTER: f64 = 134_217_729.0; // 2^27 + 1

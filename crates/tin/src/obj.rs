@@ -109,6 +109,16 @@ pub enum ObjLineError {
         /// The value read.
         w: f64,
     },
+    /// A vertex coordinate is finite but outside the range every stage accepts ([`crate::COORDINATE_LIMIT`]).
+    #[error("vertex {vertex} has {axis} = {value:e}: coordinates must be 0 or between 2^-100 and 2^100 in magnitude")]
+    OutOfRange {
+        /// 1-based vertex number.
+        vertex: usize,
+        /// `"x"`, `"y"` or `"z"`.
+        axis: &'static str,
+        /// The value read.
+        value: f64,
+    },
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} has a non-finite coordinate ({x}, {y}, {z})")]
     NonFinite {
@@ -328,6 +338,11 @@ fn parse_lines(text: &[u8], path: &Path) -> Result<Parsed> {
                 let vertex = p.positions.len() + 1;
                 if !(x.is_finite() && y.is_finite() && z.is_finite()) {
                     return Err(line_err(line, ObjLineError::NonFinite { vertex, x, y, z }));
+                }
+                for (axis, value) in [("x", x), ("y", y), ("z", z)] {
+                    if !crate::predicates::coordinate_in_range(value) {
+                        return Err(line_err(line, ObjLineError::OutOfRange { vertex, axis, value }));
+                    }
                 }
                 if p.positions.len() >= u32::MAX as usize {
                     return Err(TinError::format(

@@ -10,6 +10,18 @@ use std::cmp::Ordering;
 
 use glam::DVec2;
 
+/// Largest coordinate magnitude any stage accepts (2^100); non-zero magnitudes below `1 / COORDINATE_LIMIT` are
+/// refused too, so that no product of the exact predicates overflows or underflows. Checked at import
+/// ([`crate::read_obj`] names the file, the line and the 1-based vertex) and again by the horizon sweep.
+pub const COORDINATE_LIMIT: f64 = 1.267_650_600_228_229_4e30;
+
+/// Whether `value` is a coordinate every stage accepts: 0, or a magnitude in `[1 / COORDINATE_LIMIT,
+/// COORDINATE_LIMIT]` (so NaN and infinities are not).
+pub fn coordinate_in_range(value: f64) -> bool {
+    let m = value.abs();
+    m == 0.0 || (1.0 / COORDINATE_LIMIT..=COORDINATE_LIMIT).contains(&m)
+}
+
 /// Orientation of `c` relative to the directed line `a → b`, in x,y: positive when `c` is on the left (`abc`
 /// counter-clockwise), negative on the right, exactly zero when collinear. The sign is exact; the magnitude is twice
 /// the triangle's signed area, to within rounding.
