@@ -7,9 +7,10 @@
 //!    directory, the target must not be a directory, and the directory must accept a new file (a temporary file
 //!    is created and removed there, which is the only reliable test; permission bits lie for root and on
 //!    read-only mounts).
-//! 2. **Symlinks are followed.** `-o link.tch` writes the file the link points to (resolved link by link, relative
-//!    to each link's directory, at most 40 links); the link itself stays a link and the target is replaced
-//!    atomically in its own directory. A dangling link creates its target.
+//! 2. **Symlinks are followed.** `-o link.tch` writes the file the link points to (an existing target as the
+//!    kernel resolves it, so `/dev/stdout -> /proc/self/fd/1 -> pipe:[..]` is seen as the pipe it is; a dangling
+//!    link link by link, relative to each link's directory, at most 40 links); the link itself stays a link and the
+//!    target is replaced atomically in its own directory. A dangling link creates its target.
 //! 3. **Only regular files are replaced.** A directory, FIFO, socket, character or block device (`/dev/full`,
 //!    `/dev/null`, a terminal) is refused with an error that names it; nothing is written. The one exception is
 //!    the path `-`, which means standard output, written directly (not atomically) where a command allows it
@@ -195,18 +196,25 @@ pub fn check(path: &Path) -> Result<Target> {
     if path.file_name().is_none() {
         return Err(err(path, ErrorKind::NoFileName));
     }
-    let resolved = resolve(path)?;
+    // An existing target is judged by what the kernel follows to (this also covers links such as /dev/stdout ->
+    // /proc/self/fd/1 -> pipe:[..], which no path resolution can follow); a missing one by resolving the link chain.
+    let (resolved, exists) = match fs::metadata(path) {
+        Ok(m) => {
+            if let Some(what) = non_regular(&m) {
+                return Err(err(path, ErrorKind::NotRegular(what)));
+            }
+            (fs::canonicalize(path).map_err(|e| err(path, ErrorKind::Io(e)))?, true)
+        }
+        Err(e) if e.kind() == io::ErrorKind::NotFound => (resolve(path)?, false),
+        // A link chain that cannot be followed (a loop): say so.
+        Err(e) => match resolve(path) {
+            Err(loop_error) => return Err(loop_error),
+            Ok(_) => return Err(err(path, ErrorKind::Io(e))),
+        },
+    };
     if resolved.file_name().is_none() {
         return Err(err(path, ErrorKind::NoFileName));
     }
-    let exists = match fs::metadata(&resolved) {
-        Ok(m) => match non_regular(&m) {
-            None => true,
-            Some(what) => return Err(err(path, ErrorKind::NotRegular(what))),
-        },
-        Err(e) if e.kind() == io::ErrorKind::NotFound => false,
-        Err(e) => return Err(err(path, ErrorKind::Io(e))),
-    };
     let dir = dir_of(&resolved);
     match fs::metadata(dir) {
         Ok(m) if m.is_dir() => {}
