@@ -292,6 +292,22 @@ fn asc_corner_and_centre_conventions() {
 }
 
 #[test]
+fn heights_out_of_range_are_refused_naming_file_row_and_column() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("huge.asc");
+    std::fs::write(
+        &path,
+        "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5 1e300\n",
+    )
+    .expect("write");
+    let e = read_dem(&path, &opts()).expect_err("refused").to_string();
+    assert!(
+        e.contains("huge.asc") && e.contains("row 2, column 3") && e.contains("1e300"),
+        "{e}"
+    );
+}
+
+#[test]
 fn asc_malformed_files() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("bad.asc");
