@@ -69,6 +69,9 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !(args.fov > 0.0 && args.fov <= 360.0) {
         bail!("--fov must be in (0, 360], got {}", args.fov);
     }
+    if !args.yaw.is_finite() {
+        bail!("--yaw must be finite, got {}", args.yaw);
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
     let culler = AnyCuller::with_params(&h, args.method, args.safe.params()?);
     let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {

@@ -16,7 +16,7 @@ pub mod sector;
 
 pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
-pub use file::{FORMAT_VERSION, MAGIC, write_atomically};
+pub use file::{FORMAT_VERSION, MAGIC};
 pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
 pub use method::{AnyCuller, CullMethod};
 pub use safe::{SafeCuller, SafeParams};

@@ -125,6 +125,9 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     let vertex_regions = RegionTable::from_field(tin.positions(), &field);
     drop(field);
     let regions_seconds = start.elapsed().as_secs_f64();
+    if let Some(p) = &progress {
+        p("regions", 1, 1);
+    }
 
     if let Some(p) = &progress {
         p("grouping", 0, 1);
@@ -132,6 +135,9 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     let start = Instant::now();
     let crystal = crystal::build(tin, &vertex_regions, &params.crystal)?;
     let grouping_seconds = start.elapsed().as_secs_f64();
+    if let Some(p) = &progress {
+        p("grouping", 1, 1);
+    }
 
     let hierarchy = export_hierarchy(tin, &crystal, params);
     let s = &crystal.stats;

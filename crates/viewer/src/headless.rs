@@ -145,6 +145,15 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
     if o.pitch_deg.is_some_and(|p| p.abs() >= 89.0) {
         return bad(format!("--pitch must be within ±89°, got {:?}", o.pitch_deg));
     }
+    if let (Some(level), Some(h)) = (o.level, &terrain.hierarchy) {
+        let top = h.nodes.iter().map(|n| n.level).max().unwrap_or(0);
+        if level > top {
+            return bad(format!("--level {level}: the hierarchy's levels are 0 to {top}"));
+        }
+    }
+    if o.level.is_some() && terrain.hierarchy.is_none() {
+        return bad("--level needs a hierarchy (.tch), not a plain mesh".into());
+    }
     if o.eye.is_some_and(|e| !e.iter().all(|c| c.is_finite())) {
         return bad("--eye must be finite".into());
     }
