@@ -3,14 +3,14 @@
 //! that they only shrink). Per-triangle regions are only made for the per-triangle evaluation method
 //! ([`triangle_regions`]).
 //!
-//! Where it sits (data flows one way, left to right; nothing here depends on the evaluation, the viewer or the CLI):
+//! Where it sits: the data of a build flows `tin → horizon → occlusion → crystal → cull::Hierarchy`, and this crate
+//! drives that flow. Crate dependencies point one way, down: this crate uses `tin`, `horizon`, `occlusion`,
+//! `crystal` and `cull` (the run-time format and sector geometry, which `occlusion` and `crystal` share so that
+//! precomputation and run time agree); `eval`, `viewer` and the `tincull` command line use it, never the other way
+//! round. It writes no files (see [`export`]) and compiles no GPU code: `cargo tree -e normal -p pipeline` lists 54
+//! crates.
 //!
-//! ```text
-//! tin ──► horizon ──► occlusion ──► crystal ──► cull
-//!  └─────────┴────────────┴─────────────┴─────────┴──► pipeline ──► eval ──► viewer ──► tincull (CLI)
-//! ```
-//!
-//! Besides [`build`] it owns the writers for people and other tools ([`export`]: the grouped OBJ + MTL and the
+//! Besides [`build`] it owns the content for people and other tools ([`export`]: the grouped OBJ + MTL and the
 //! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
 #![warn(missing_docs)]
 
