@@ -130,7 +130,7 @@ fn sweep_writes_every_combination_and_resumes() {
     assert_eq!(v["ran"], 2);
     assert_eq!(v["skipped"], 4);
     let wider = std::fs::read_to_string(&small).expect("csv");
-    assert_eq!(wider.lines().count(), 1 + 6 * 12);
+    assert_eq!(wider.lines().count(), 1 + 6 * 15);
     let old: Vec<&str> = text.lines().collect();
     assert!(
         old.iter().all(|l| wider.lines().any(|w| w == *l)),
