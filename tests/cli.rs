@@ -263,7 +263,14 @@ fn build_cull_export_eval_round_trip() {
     ]);
     let csv = std::fs::read_to_string(&csv).expect("csv");
     assert!(csv.starts_with("method,class,viewpoints,"));
-    for method in ["hierarchy,ground", "per_triangle,sky", "frustum_only,all", "none,all"] {
+    for method in [
+        "safe,ground",
+        "safe_regions,sky",
+        "thesis,ground",
+        "per_triangle,sky",
+        "frustum_only,all",
+        "none,all",
+    ] {
         assert!(csv.contains(method), "csv lacks {method}");
     }
 
