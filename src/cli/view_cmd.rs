@@ -16,6 +16,9 @@ use super::cull_cmd::parse_point;
 pub struct ViewArgs {
     /// A hierarchy (.tch) or a terrain mesh (.obj).
     pub input: PathBuf,
+    /// Culling method at start (switchable in the side panel): `safe` or `thesis`.
+    #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
+    pub method: cull::CullMethod,
     /// Initial viewpoint `x,y,z` in world coordinates (m) [default: the centre, 20 m above the ground].
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
@@ -93,6 +96,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             after_frames: args.screenshot_after,
         }),
         window_size: [args.size[0] as f32, args.size[1] as f32],
+        method: args.method,
         startup: Startup {
             rebuild: args.rebuild,
             ground_truth: args.truth,

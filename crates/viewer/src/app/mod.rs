@@ -115,6 +115,8 @@ pub struct ViewerOptions {
     pub window_size: [f32; 2],
     /// Actions to take by itself.
     pub startup: Startup,
+    /// The culling method (the safe culler by default; switchable in the side panel).
+    pub method: CullMethod,
 }
 
 impl std::fmt::Debug for ViewerOptions {
@@ -135,28 +137,32 @@ struct Model {
     tin: Arc<Tin>,
     terrain: Terrain,
     culler: Option<AnyCuller>,
+    /// The culling method (kept across rebuilds).
+    method: CullMethod,
 }
 
 impl Model {
-    fn new(source: Source) -> Result<Model> {
+    fn new(source: Source, method: CullMethod) -> Result<Model> {
         match source {
             Source::Mesh(tin) => Ok(Model {
                 terrain: Terrain::from_tin(&tin)?,
                 tin: Arc::new(tin),
                 culler: None,
+                method,
             }),
-            Source::Hierarchy(h) => Model::from_hierarchy(h),
+            Source::Hierarchy(h) => Model::from_hierarchy(h, method),
         }
     }
 
-    fn from_hierarchy(h: Hierarchy) -> Result<Model> {
+    fn from_hierarchy(h: Hierarchy, method: CullMethod) -> Result<Model> {
         let positions = h.mesh.positions.iter().map(|p| DVec3::from_array(*p)).collect();
         let tin = Tin::from_parts(positions, h.mesh.triangles.clone())?;
-        let culler = AnyCuller::new(&h, CullMethod::Safe);
+        let culler = AnyCuller::new(&h, method);
         Ok(Model {
             tin: Arc::new(tin),
             terrain: Terrain::from_hierarchy(h)?,
             culler: Some(culler),
+            method,
         })
     }
 }
@@ -173,10 +179,11 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         screenshot,
         window_size,
         startup,
+        method,
     } = options;
     let rebuild = rebuild.unwrap_or_else(pipeline_rebuild);
     let summary = Arc::new(Mutex::new(RunSummary::default()));
-    let model = Model::new(source)?;
+    let model = Model::new(source, method)?;
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title(title.clone())
@@ -409,6 +416,7 @@ impl ViewerApp {
 
     /// Switches the culling method (the safe culler by default; the thesis' test for comparison).
     fn set_method(&mut self, method: CullMethod) {
+        self.model.method = method;
         if let Some(h) = &self.terrain().hierarchy {
             self.model.culler = Some(AnyCuller::new(h, method));
         }
