@@ -16,8 +16,8 @@ pub mod sector;
 
 pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
-pub use file::{FORMAT_VERSION, MAGIC, write_atomically};
-pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
+pub use file::{FORMAT_VERSION, MAGIC, OLDEST_READABLE_VERSION, write_atomically};
+pub use hierarchy::{BuildInfo, Grouping, Hierarchy, Mesh, Node, StoredRegion};
 pub use method::{AnyCuller, CullMethod};
 pub use safe::{SafeCuller, SafeParams};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};

@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use crystal::{Crystal, CrystalParams};
-use cull::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
+use cull::{BuildInfo, Grouping, Hierarchy, Mesh, Node, StoredRegion};
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::{Region, RegionTable, plane_t};
 use serde::{Deserialize, Serialize};
@@ -247,6 +247,7 @@ pub fn export_hierarchy(tin: &Tin, crystal: &Crystal, params: &BuildParams) -> H
             max_expanse: params.crystal.max_expanse,
             rng_seed: params.crystal.rng_seed,
             undersampling: params.undersampling,
+            grouping: Grouping::Crystal,
         },
     }
 }
