@@ -27,8 +27,8 @@ pub struct CullArgs {
     /// Horizontal field of view in degrees (360 = no frustum restriction).
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
-    /// Culling method: `safe` (never culls a visible triangle) or `thesis` (the thesis' region test, not
-    /// conservative).
+    /// Culling method: `safe` (never culls a visible triangle), `thesis` (the thesis' region test over a crystal
+    /// hierarchy, not conservative) or `stewart` (the same test over a quadtree hierarchy, Stewart 1997).
     #[arg(long, default_value = "safe", value_parser = parse_method)]
     pub method: CullMethod,
     /// Output flags.
@@ -66,7 +66,8 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         bail!("--fov must be in (0, 360], got {}", args.fov);
     }
     let h = Hierarchy::load(&args.hierarchy)?;
-    let culler = AnyCuller::new(&h, args.method);
+    let culler = AnyCuller::checked(&h, args.method)
+        .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
     let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
         (Some(e), _) => vec![*e],
         (None, Some(path)) => {
