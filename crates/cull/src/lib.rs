@@ -1,5 +1,6 @@
 //! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the recursive
-//! culler.
+//! culler (the thesis' region test over crystal hierarchies, the same test as Stewart's 1997 baseline over quadtree
+//! hierarchies, and the safe culler; see [`method`]).
 //!
 //! Light on dependencies (serde, postcard, crc32fast) so that a renderer can embed it: load a file with
 //! [`Hierarchy::load`], make a [`Culler`], and call [`Culler::cull_into`] once per frame.

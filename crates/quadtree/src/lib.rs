@@ -40,7 +40,8 @@
 //!
 //! The bytes counted are those of `cull::Hierarchy::visibility_bytes` for the exported nodes (24 bytes per node for
 //! circle, range and level, 4 per child link and per root, and `2 + 4 + 8·points` per non-empty region); the export
-//! rounds regions to f32 and may only drop boundary points, so the exported hierarchy never exceeds the count here.
+//! rounds regions to f32 and may only drop boundary points (on the 100k-vertex Cascades mesh at 64 sectors about 3%
+//! of the bytes), so the exported hierarchy never exceeds the count here.
 //!
 //! The run-time test (§5.3, §5.4) lives in the `cull` crate (`CullMethod::Stewart`).
 #![warn(missing_docs)]
