@@ -18,6 +18,30 @@ pub enum DedupeArg {
     KeepHighest,
 }
 
+/// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
+/// `--keep-faces` and `--dedupe` as every command that reads a mesh.
+#[derive(Clone, Copy, Debug, Default, Args)]
+pub struct ImportArgs {
+    /// For a mesh input: use the file's own triangles (checked to form a height field) instead of
+    /// re-triangulating its vertices.
+    #[arg(long)]
+    pub keep_faces: bool,
+    /// For a mesh input: what to do with vertices that share x,y but differ in z.
+    #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
+    pub dedupe: DedupeArg,
+}
+
+impl ImportArgs {
+    /// The mesh arguments for `path` with these import options.
+    pub fn mesh(&self, path: &std::path::Path) -> MeshArgs {
+        MeshArgs {
+            mesh: path.to_path_buf(),
+            keep_faces: self.keep_faces,
+            dedupe: self.dedupe,
+        }
+    }
+}
+
 /// Arguments naming a terrain mesh and how to import it.
 #[derive(Debug, Args)]
 pub struct MeshArgs {

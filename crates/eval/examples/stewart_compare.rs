@@ -10,12 +10,16 @@
 //! the same vertex regions. Prints CSV on stdout, one line per (hierarchy, method, class): build seconds (horizons +
 //! regions + grouping), visibility bytes, nodes, the method's false culls, occlusion captured, the leaf limit and the
 //! median cull time; then, per sector configuration, the bytes of every quadtree level (`# levels` lines, JSON).
+//! Methods: `safe` (run-time conservative horizon), the region test (`thesis` over crystals, `stewart` over the
+//! quadtree), and `safe_regions` (the same region test over conservative regions of the same nodes,
+//! `pipeline::conservative_hierarchy`).
 
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use eval::evaluate::{EvalOptions, GroundTruthSet, Leaves, score, standard_methods};
+use cull::{AnyCuller, CullMethod};
+use eval::evaluate::{EvalOptions, GroundTruthSet, Leaves, Method, score, standard_methods};
 use pipeline::{BuildParams, QuadtreeParams, build, export_quadtree};
 
 fn main() -> Result<()> {
@@ -81,7 +85,19 @@ fn main() -> Result<()> {
             hierarchies.push(("quadtree".into(), d, shared + seconds, seconds, h, q.order.clone()));
         }
         for (grouping, depth, build_s, grouping_s, h, order) in &hierarchies {
-            let methods = standard_methods(h, None, Some(order));
+            let mut methods = standard_methods(h, None, Some(order), Default::default());
+            // The thesis' test over conservative regions of the same nodes (crystal groups or quadtree cells).
+            let start = Instant::now();
+            let conservative = pipeline::conservative_hierarchy(h);
+            eprintln!(
+                "{s}x{k} {grouping} depth {depth}: conservative regions {:.1} s",
+                start.elapsed().as_secs_f64()
+            );
+            methods.push(Method {
+                name: "safe_regions",
+                culler: Some(AnyCuller::new(&conservative, CullMethod::Thesis)),
+                order: Some(order),
+            });
             let ranges = h.leaf_ranges();
             let leaves = Leaves {
                 ranges: &ranges,
