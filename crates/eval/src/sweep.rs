@@ -33,7 +33,7 @@ use pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hier
 pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
 regions_seconds,grouping_seconds,visibility_bytes,groups,orphans,orphan_passes,nodes,levels,top_level,method,class,\
 views,false_culls_mean,false_culls_max,viewpoints_with_false_culls,false_cull_area_mean,occlusion_captured_mean,\
-occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns";
+occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns,visible_fraction,drawn_fraction,leaf_limit";
 
 /// What identifies a combination in a sweep file; ordered as the file's lines are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -157,7 +157,7 @@ pub fn csv_lines(key: &SweepKey, report: &BuildReport, e: &Evaluation) -> Vec<St
             let mut line = String::new();
             let _ = write!(
                 line,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 key.sectors,
                 key.subsectors,
                 key.seeds,
@@ -186,7 +186,10 @@ pub fn csv_lines(key: &SweepKey, report: &BuildReport, e: &Evaluation) -> Vec<St
                 f(m.occlusion_captured.map(|x| x.p50)),
                 f(m.overdraw.map(|x| x.mean)),
                 f(m.triangles_drawn.map(|x| x.mean)),
-                r.cull_ns
+                r.cull_ns,
+                r.visible_fraction,
+                r.drawn_fraction,
+                f(r.leaf_limit)
             );
             line
         })
@@ -462,6 +465,7 @@ mod tests {
         );
         // evaluate() still runs end to end on the exported hierarchy.
         let e = evaluate(&b.hierarchy, &htin, &opts, &|_, _| {}).unwrap();
-        assert_eq!(e.rows.len(), 5 * 3);
+        // safe, safe_regions, thesis, per_triangle, frustum_only, none.
+        assert_eq!(e.rows.len(), 6 * 3);
     }
 }
