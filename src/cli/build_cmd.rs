@@ -1,4 +1,5 @@
-//! `tincull build`: horizons, regions, crystal grouping and the merge hierarchy, written as a `.tch` file.
+//! `tincull build`: horizons, regions, crystal grouping and the merge hierarchy (or Stewart's quadtree with
+//! `--grouping quadtree`), written as a `.tch` file.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -13,7 +14,7 @@ use super::{Output, OutputArgs};
 use pipeline::export::to_json;
 
 use super::files::Outputs;
-use pipeline::{BuildParams, BuildReport, build};
+use pipeline::{BuildParams, BuildReport, Grouping, QuadtreeParams, build};
 
 /// Parameters that may also come from a TOML file (`--config`); the command line wins.
 #[derive(Debug, Default, Clone, Args, Deserialize)]
@@ -43,6 +44,20 @@ pub struct ParamArgs {
     /// Radius (m) of the horizon undersampling fix [default: off].
     #[arg(long, value_name = "RADIUS")]
     pub undersampling: Option<f64>,
+    /// How triangles are grouped into nodes: `crystal` (the thesis) or `quadtree` (Stewart's 1997 baseline: square
+    /// cells over the footprint) [default: crystal].
+    #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
+    pub grouping: Option<String>,
+    /// Quadtree: finest depth (root = 0) [default: cells of about 128 triangles].
+    #[arg(long, value_name = "D", conflicts_with = "cell")]
+    pub depth: Option<u32>,
+    /// Quadtree: finest cell side in metres, instead of --depth.
+    #[arg(long, value_name = "M")]
+    pub cell: Option<f64>,
+    /// Quadtree: byte budget of the visibility data; the finest levels are dropped until it fits (Stewart's memory
+    /// levels).
+    #[arg(long, value_name = "N")]
+    pub max_bytes: Option<u64>,
 }
 
 impl ParamArgs {
@@ -75,6 +90,23 @@ impl ParamArgs {
             && !(r.is_finite() && r > 0.0)
         {
             anyhow::bail!("the undersampling radius must be positive and finite, got {r}");
+        }
+        let quadtree = QuadtreeParams {
+            depth: self.depth.or(from_file.depth),
+            cell: self.cell.or(from_file.cell),
+            max_bytes: self.max_bytes.or(from_file.max_bytes),
+        };
+        match self.grouping.as_deref().or(from_file.grouping.as_deref()) {
+            None | Some("crystal") => {
+                if quadtree != QuadtreeParams::default() {
+                    anyhow::bail!("--depth, --cell and --max-bytes need --grouping quadtree");
+                }
+            }
+            Some("quadtree") => {
+                quadtree.validate()?;
+                p.grouping = Grouping::Quadtree(quadtree);
+            }
+            Some(other) => anyhow::bail!("unknown grouping {other:?}; expected crystal or quadtree"),
         }
         Ok(p)
     }
@@ -126,8 +158,37 @@ pub fn stage_progress(out: Output) -> pipeline::BuildProgress {
     })
 }
 
-/// Prints the thesis-style table of a build.
+/// Prints the thesis-style table of a build (for a quadtree, its levels).
 pub fn print_report(r: &BuildReport, out: Output) {
+    if !r.quadtree_levels.is_empty() {
+        out.say(format!(
+            "{} vertices, {} triangles; {} sectors x {} subsectors, quadtree",
+            r.vertices, r.triangles, r.sectors, r.subsectors
+        ));
+        out.say(format!(
+            "  horizons {:.3} s, regions {:.3} s, quadtree {:.3} s",
+            r.horizon_seconds, r.regions_seconds, r.grouping_seconds
+        ));
+        out.say("  depth  cell (m)  cells  triangles/cell  regions  points  bytes  stored");
+        for l in &r.quadtree_levels {
+            out.say(format!(
+                "  {:>5}  {:>8.1}  {:>5}  {:>14.1}  {:>7}  {:>6}  {:>5}  {}",
+                l.depth,
+                l.cell_side,
+                l.nodes,
+                l.mean_triangles,
+                l.regions,
+                l.region_points,
+                l.bytes,
+                if l.stored { "yes" } else { "dropped" }
+            ));
+        }
+        out.say(format!(
+            "  nodes {}, leaves {}, levels {}; visibility data {} bytes ({:.1} bytes per triangle)",
+            r.nodes, r.groups, r.levels, r.visibility_bytes, r.visibility_bytes_per_triangle
+        ));
+        return;
+    }
     out.say(format!(
         "{} vertices, {} triangles; {} sectors x {} subsectors, {} seeds",
         r.vertices, r.triangles, r.sectors, r.subsectors, r.seeds

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
 use serde_json::json;
@@ -28,8 +28,8 @@ pub struct CullArgs {
     /// Horizontal field of view in degrees (360 = no frustum restriction).
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
-    /// Culling method: `safe` (never culls a visible triangle) or `thesis` (the thesis' region test, not
-    /// conservative).
+    /// Culling method: `safe` (never culls a visible triangle), `thesis` (the thesis' region test over a crystal
+    /// hierarchy, not conservative) or `stewart` (the same test over a quadtree hierarchy, Stewart 1997).
     #[arg(long, default_value = "safe", value_parser = parse_method)]
     pub method: CullMethod,
     /// The safe culler's parameters.
@@ -73,6 +73,9 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         bail!("--yaw must be finite, got {}", args.yaw);
     }
     let h = Hierarchy::load(&args.hierarchy)?;
+    args.method
+        .check(&h)
+        .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
     let culler = AnyCuller::with_params(&h, args.method, args.safe.params()?);
     let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
         (Some(e), _) => vec![*e],

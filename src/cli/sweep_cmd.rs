@@ -59,6 +59,16 @@ pub struct SweepArgs {
     /// Radius (m) of the horizon undersampling fix [default: off].
     #[arg(long, value_name = "RADIUS")]
     pub undersampling: Option<f64>,
+    /// Grouping of every build: `crystal` or `quadtree` (Stewart's baseline; its region test is reported as
+    /// `stewart`). The CSV's key does not hold the grouping: write each grouping to its own file [default: crystal].
+    #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
+    pub grouping: Option<String>,
+    /// Quadtree: finest depth [default: cells of about 128 triangles].
+    #[arg(long, value_name = "D")]
+    pub depth: Option<u32>,
+    /// Quadtree: byte budget of the visibility data (memory levels).
+    #[arg(long, value_name = "N")]
+    pub max_bytes: Option<u64>,
     /// Skip the per-triangle method (its culler tests every triangle: by far the slowest part of scoring).
     #[arg(long)]
     pub no_per_triangle: bool,
@@ -84,6 +94,9 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         min_group: args.min_group,
         max_expanse: args.max_expanse,
         undersampling: args.undersampling,
+        grouping: args.grouping.clone(),
+        depth: args.depth,
+        max_bytes: args.max_bytes,
         ..ParamArgs::default()
     }
     .resolve(None)?;

@@ -18,7 +18,7 @@ pub enum HierarchyError {
     UnsupportedVersion {
         /// Version in the file.
         found: u32,
-        /// Version this build reads.
+        /// The newest version this build reads (it reads every version from 1).
         supported: u32,
     },
     /// The file ends before its declared length.
@@ -50,7 +50,7 @@ impl std::fmt::Display for HierarchyError {
             ),
             HierarchyError::UnsupportedVersion { found, supported } => write!(
                 f,
-                "unsupported hierarchy format version {found} (this build reads version {supported})"
+                "unsupported hierarchy format version {found} (this build reads versions 1 to {supported})"
             ),
             HierarchyError::Truncated { expected, found } => write!(
                 f,

@@ -11,6 +11,10 @@
 //! | 4 | CRC-32 (IEEE) of the payload |
 //! | n | the [`Hierarchy`] encoded with postcard |
 //!
+//! Version 2 added [`crate::BuildInfo::grouping`], the last field of the payload. A version-1 payload is therefore a
+//! version-2 payload without it, and reads as one with [`crate::Grouping::Crystal`] (variant 0, encoded as the single
+//! byte 0) appended; every version-1 file was crystal-grouped.
+//!
 //! Anything after the payload is rejected as foreign. This crate reads files but writes none: [`Hierarchy::to_bytes`]
 //! is the file's content, and the writer is the embedder's (tincull's is the `outfile` crate: atomic replacement,
 //! symlinks followed, non-regular targets refused).
@@ -23,7 +27,9 @@ use crate::hierarchy::Hierarchy;
 /// The magic number that starts every `.tch` file.
 pub const MAGIC: [u8; 8] = *b"TINCULL\x1a";
 /// The format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
+/// The oldest format version this build reads.
+pub const OLDEST_READABLE_VERSION: u32 = 1;
 const HEADER_LEN: usize = 8 + 4 + 8 + 4;
 
 impl Hierarchy {
@@ -52,7 +58,7 @@ impl Hierarchy {
         }
         let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
         let version = word(8);
-        if version != FORMAT_VERSION {
+        if !(OLDEST_READABLE_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(HierarchyError::UnsupportedVersion {
                 found: version,
                 supported: FORMAT_VERSION,
@@ -79,6 +85,14 @@ impl Hierarchy {
         if found != stored {
             return Err(HierarchyError::Checksum { stored, found });
         }
+        let upgraded;
+        let payload = if version == 1 {
+            // The version-2 encoding of the same hierarchy: `BuildInfo::grouping = Grouping::Crystal` appended.
+            upgraded = [payload, &[0u8]].concat();
+            &upgraded[..]
+        } else {
+            payload
+        };
         let h: Hierarchy = postcard::from_bytes(payload).map_err(|e| HierarchyError::Decode(e.to_string()))?;
         h.check_invariants()?;
         Ok(h)

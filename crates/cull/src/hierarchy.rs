@@ -137,6 +137,42 @@ pub struct BuildInfo {
     pub rng_seed: u64,
     /// Undersampling-fix radius used for the horizons, if any.
     pub undersampling: Option<f64>,
+    /// How the triangles were grouped into nodes (format version 2; version-1 files read as [`Grouping::Crystal`]).
+    /// It must stay the last field of the file: see [`crate::file`].
+    #[serde(default)]
+    pub grouping: Grouping,
+}
+
+/// How a hierarchy's nodes were formed; it decides which region test the nodes are meant for
+/// ([`crate::CullMethod::Thesis`] or [`crate::CullMethod::Stewart`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Grouping {
+    /// Crystal groups and their merge hierarchy (the thesis, 5.2.3 and 6.3). Must stay variant 0: see
+    /// [`crate::file`].
+    #[default]
+    Crystal,
+    /// Stewart's (1997) quadtree over the footprint (crate `quadtree`): every node a non-empty square cell.
+    Quadtree {
+        /// The finest depth built (the root is depth 0).
+        built_depth: u32,
+        /// The finest depth stored, after memory levels were dropped to fit a byte budget; its cells are the leaves.
+        stored_depth: u32,
+    },
+}
+
+impl Grouping {
+    /// The grouping's name in reports and on the command line (`crystal`, `quadtree`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Grouping::Crystal => "crystal",
+            Grouping::Quadtree { .. } => "quadtree",
+        }
+    }
+
+    /// Whether this is a quadtree.
+    pub fn is_quadtree(self) -> bool {
+        matches!(self, Grouping::Quadtree { .. })
+    }
 }
 
 /// The exported hierarchy: sector count, local origin, nodes, top-level nodes, the always-visible range, and the

@@ -1,4 +1,5 @@
-//! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the cullers.
+//! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the cullers
+//! (the thesis' region test, named `stewart` over Stewart's 1997 quadtree hierarchies; see [`method`]).
 //!
 //! Light on dependencies (serde, postcard, crc32fast) so that a renderer can embed it: load a file with
 //! [`Hierarchy::load`], make an [`AnyCuller`] (or a [`SafeCuller`] directly), and call `cull_into` once per frame
@@ -21,8 +22,8 @@ pub mod sector;
 
 pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
-pub use file::{FORMAT_VERSION, MAGIC};
-pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
+pub use file::{FORMAT_VERSION, MAGIC, OLDEST_READABLE_VERSION};
+pub use hierarchy::{BuildInfo, Grouping, Hierarchy, Mesh, Node, StoredRegion};
 pub use method::{AnyCuller, CullMethod};
 pub use safe::{SafeCuller, SafeParams};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};

@@ -1,7 +1,20 @@
 //! The run-time culling methods behind one interface, chosen by name (`--method` on the command line).
+//!
+//! `thesis` and `stewart` are the same test — one region test per node, over the sectors that the node's bounding
+//! circle spans from the camera ([`Culler`]) — meant for different groupings: `thesis` for crystal hierarchies,
+//! `stewart` for quadtree ones (Stewart 1997, §5.3 and §5.4; [`Grouping`]). [`CullMethod::check`] refuses the
+//! other pairing, so that a report's method name always says which hierarchy was culled. `safe` works on both.
+//!
+//! Stewart takes the sector range from the four corners of the quad (§5.3): the directions from the quad's points to
+//! the camera lie between those from its corners. A node's triangles are those whose centroid lies in the cell, so
+//! they stick out of it; the bounding circle of all their vertices contains them, and the azimuth interval it spans
+//! (`± asin(radius / distance)`) contains every direction from them to the camera. It touches at least the sectors
+//! that the corners of the triangles' bounding box would give, so it may test more sectors (cull less), never fewer;
+//! a camera inside the circle sees the node, where Stewart's rule would still test a camera just outside the quad.
 
 use crate::culler::{Camera, Culler, DrawList};
-use crate::hierarchy::Hierarchy;
+use crate::error::HierarchyError;
+use crate::hierarchy::{Grouping, Hierarchy};
 use crate::safe::{SafeCuller, SafeParams};
 
 /// A run-time culling method over a [`Hierarchy`].
@@ -10,19 +23,54 @@ pub enum CullMethod {
     /// [`SafeCuller`]: front to back against a conservative horizon; never culls a visible triangle (the default).
     #[default]
     Safe,
-    /// [`Culler`]: the thesis' test of the camera against each node's precomputed sector regions (not conservative).
+    /// [`Culler`]: the thesis' test of the camera against each node's precomputed sector regions (not conservative),
+    /// over a crystal hierarchy.
     Thesis,
+    /// [`Culler`] over a quadtree hierarchy: Stewart's hierarchical visibility (1997, §5.3–5.4), one region test per
+    /// cell, cells without stored regions visible (not conservative either).
+    Stewart,
 }
 
 impl CullMethod {
     /// Every method, the default first.
-    pub const ALL: [CullMethod; 2] = [CullMethod::Safe, CullMethod::Thesis];
+    pub const ALL: [CullMethod; 3] = [CullMethod::Safe, CullMethod::Thesis, CullMethod::Stewart];
 
     /// The method's name on the command line and in reports.
     pub fn name(self) -> &'static str {
         match self {
             CullMethod::Safe => "safe",
             CullMethod::Thesis => "thesis",
+            CullMethod::Stewart => "stewart",
+        }
+    }
+
+    /// Whether the method applies to `h`: `thesis` needs a crystal hierarchy and `stewart` a quadtree one (see the
+    /// module documentation); `safe` takes both.
+    pub fn check(self, h: &Hierarchy) -> Result<(), HierarchyError> {
+        let grouping = h.build.grouping;
+        let wrong = |needs: &str, build: &str| {
+            Err(HierarchyError::Invalid(format!(
+                "method `{}` needs a {needs} hierarchy, but this one is {}-grouped (build one with `tincull build \
+                 --grouping {build}`, or use method `{}`)",
+                self.name(),
+                grouping.name(),
+                if grouping.is_quadtree() { "stewart" } else { "thesis" },
+            )))
+        };
+        match (self, grouping) {
+            (CullMethod::Thesis, Grouping::Quadtree { .. }) => wrong("crystal", "crystal"),
+            (CullMethod::Stewart, Grouping::Crystal) => wrong("quadtree", "quadtree"),
+            _ => Ok(()),
+        }
+    }
+
+    /// The region method meant for `h`'s grouping: [`CullMethod::Stewart`] for a quadtree, else
+    /// [`CullMethod::Thesis`].
+    pub fn regions_for(h: &Hierarchy) -> CullMethod {
+        if h.build.grouping.is_quadtree() {
+            CullMethod::Stewart
+        } else {
+            CullMethod::Thesis
         }
     }
 
@@ -45,10 +93,13 @@ pub enum AnyCuller {
     Safe(SafeCuller),
     /// The thesis' region culler.
     Thesis(Culler),
+    /// The region culler over a quadtree (Stewart's method).
+    Stewart(Culler),
 }
 
 impl AnyCuller {
-    /// Prepares `method` over `h` (the safe culler with [`SafeParams::default`]).
+    /// Prepares `method` over `h` (the safe culler with [`SafeParams::default`]), whatever the grouping; see
+    /// [`AnyCuller::checked`] for the check of [`CullMethod::check`].
     pub fn new(h: &Hierarchy, method: CullMethod) -> AnyCuller {
         AnyCuller::with_params(h, method, SafeParams::default())
     }
@@ -58,7 +109,14 @@ impl AnyCuller {
         match method {
             CullMethod::Safe => AnyCuller::Safe(SafeCuller::new(h, safe)),
             CullMethod::Thesis => AnyCuller::Thesis(Culler::new(h)),
+            CullMethod::Stewart => AnyCuller::Stewart(Culler::new(h)),
         }
+    }
+
+    /// Prepares `method` over `h` after [`CullMethod::check`].
+    pub fn checked(h: &Hierarchy, method: CullMethod) -> Result<AnyCuller, HierarchyError> {
+        method.check(h)?;
+        Ok(AnyCuller::new(h, method))
     }
 
     /// The method of this culler.
@@ -66,6 +124,7 @@ impl AnyCuller {
         match self {
             AnyCuller::Safe(_) => CullMethod::Safe,
             AnyCuller::Thesis(_) => CullMethod::Thesis,
+            AnyCuller::Stewart(_) => CullMethod::Stewart,
         }
     }
 
@@ -73,7 +132,7 @@ impl AnyCuller {
     pub fn cull_into(&self, camera: &Camera, out: &mut DrawList) {
         match self {
             AnyCuller::Safe(c) => c.cull_into(camera, out),
-            AnyCuller::Thesis(c) => c.cull_into(camera, out),
+            AnyCuller::Thesis(c) | AnyCuller::Stewart(c) => c.cull_into(camera, out),
         }
     }
 

@@ -85,10 +85,10 @@ fn corruption_is_a_clear_error() {
         );
     }
     let mut v = bytes.clone();
-    v[8] = 2;
+    v[8] = 3;
     assert!(matches!(
         Hierarchy::from_bytes(&v),
-        Err(HierarchyError::UnsupportedVersion { found: 2, supported: 1 })
+        Err(HierarchyError::UnsupportedVersion { found: 3, supported: 2 })
     ));
     for at in [24, 30, bytes.len() - 1] {
         let mut v = bytes.clone();
@@ -276,4 +276,58 @@ proptest! {
             }
         }
     }
+}
+
+/// Re-frames `h`'s payload as a version-1 file: the version-2 payload without its last byte (`Grouping::Crystal`).
+fn as_version_1(h: &Hierarchy) -> Vec<u8> {
+    let bytes = h.to_bytes().expect("encode");
+    let payload = &bytes[24..bytes.len() - 1];
+    let mut out = cull::MAGIC.to_vec();
+    out.extend_from_slice(&1u32.to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    out.extend_from_slice(payload);
+    out
+}
+
+#[test]
+fn version_1_files_read_as_crystal_grouped() {
+    let h = tiny();
+    assert_eq!(h.build.grouping, cull::Grouping::Crystal);
+    let back = Hierarchy::from_bytes(&as_version_1(&h)).expect("version 1 reads");
+    assert_eq!(back, h);
+    let mut q = tiny();
+    q.build.grouping = cull::Grouping::Quadtree {
+        built_depth: 3,
+        stored_depth: 2,
+    };
+    let bytes = q.to_bytes().expect("encode");
+    assert_eq!(bytes[8], 2);
+    assert_eq!(Hierarchy::from_bytes(&bytes).expect("decode"), q);
+}
+
+#[test]
+fn region_methods_refuse_the_other_grouping() {
+    use cull::{AnyCuller, CullMethod};
+    let crystal = tiny();
+    let mut quad = tiny();
+    quad.build.grouping = cull::Grouping::Quadtree {
+        built_depth: 1,
+        stored_depth: 1,
+    };
+    assert!(CullMethod::Thesis.check(&crystal).is_ok());
+    assert!(CullMethod::Safe.check(&quad).is_ok());
+    let err = CullMethod::Stewart.check(&crystal).expect_err("stewart on crystals");
+    assert!(err.to_string().contains("--grouping quadtree"), "{err}");
+    let err = CullMethod::Thesis.check(&quad).expect_err("thesis on a quadtree");
+    assert!(err.to_string().contains("method `stewart`"), "{err}");
+    assert_eq!(CullMethod::regions_for(&quad), CullMethod::Stewart);
+    assert_eq!(CullMethod::from_name("stewart"), Some(CullMethod::Stewart));
+    // The same test as the thesis' culler.
+    let eye = Camera::all_around([5.0, 100.0, 1.0]);
+    let a = AnyCuller::checked(&quad, CullMethod::Stewart)
+        .expect("quadtree")
+        .cull(&eye);
+    let b = AnyCuller::new(&crystal, CullMethod::Thesis).cull(&eye);
+    assert_eq!(a.ranges, b.ranges);
 }

@@ -37,8 +37,17 @@ use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_m
 
 use pipeline::{per_triangle_hierarchy, triangle_regions};
 
-/// The methods an evaluation compares, in report order.
-pub const METHODS: [&str; 6] = ["safe", "safe_regions", "thesis", "per_triangle", "frustum_only", "none"];
+/// The methods an evaluation compares, in report order. The region test of a hierarchy is named `thesis` over crystal
+/// groups and `stewart` over a quadtree ([`CullMethod::regions_for`]).
+pub const METHODS: [&str; 7] = [
+    "safe",
+    "safe_regions",
+    "thesis",
+    "stewart",
+    "per_triangle",
+    "frustum_only",
+    "none",
+];
 
 /// What to evaluate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -318,8 +327,8 @@ pub fn standard_methods<'a>(
             order,
         },
         Method {
-            name: "thesis",
-            culler: Some(AnyCuller::new(h, CullMethod::Thesis)),
+            name: CullMethod::regions_for(h).name(),
+            culler: Some(AnyCuller::new(h, CullMethod::regions_for(h))),
             order,
         },
         Method {

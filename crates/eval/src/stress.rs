@@ -220,7 +220,7 @@ fn build_case(tin: &Tin, params: &BuildParams) -> Result<Built> {
     Ok(Built {
         groups: b.report.groups,
         orphans: b.report.orphans,
-        order: b.crystal.order.clone(),
+        order: b.order.clone(),
         hierarchy: b.hierarchy,
         seconds,
         invariants,

@@ -299,16 +299,11 @@ pub fn run_combo(
 ) -> Result<ComboResult> {
     let b = build(tin, &combo.params, progress)?;
     let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &triangle_regions(tin, &b.vertex_regions)));
-    let methods = standard_methods(
-        &b.hierarchy,
-        per_triangle.as_ref(),
-        Some(&b.crystal.order),
-        truth.options.safe,
-    );
+    let methods = standard_methods(&b.hierarchy, per_triangle.as_ref(), Some(&b.order), truth.options.safe);
     let ranges = b.hierarchy.leaf_ranges();
     let leaves = Leaves {
         ranges: &ranges,
-        order: Some(&b.crystal.order),
+        order: Some(&b.order),
     };
     let evaluation = score(tin, truth, &methods, Some(leaves))?;
     let lines = csv_lines(&combo.key, &b.report, &evaluation);

@@ -1,6 +1,6 @@
-//! The preprocessing pipeline of tincull, as a library: horizons → vertex regions → crystal grouping (groups'
-//! regions intersected from their vertices' regions) → the exported [`cull::Hierarchy`] (regions rounded to f32 so
-//! that they only shrink). Per-triangle regions are only made for the per-triangle evaluation method
+//! The preprocessing pipeline of tincull, as a library: horizons → vertex regions → grouping (crystals, or the
+//! quadtree of Stewart's baseline, [`Grouping`]; nodes' regions intersected from their vertices' regions) → the
+//! exported [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink). Per-triangle regions are only made for the per-triangle evaluation method
 //! ([`triangle_regions`]).
 //!
 //! Where it sits: the data of a build flows `tin → horizon → occlusion → crystal → cull::Hierarchy`, and this crate
@@ -25,6 +25,8 @@ use crystal::{Crystal, CrystalParams};
 use cull::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::{Region, RegionTable, plane_t};
+pub use quadtree::QuadtreeParams;
+use quadtree::{LevelStats, Quadtree};
 use serde::{Deserialize, Serialize};
 use tin::{Circle, Tin};
 
@@ -37,8 +39,32 @@ pub struct BuildParams {
     pub subsectors: u32,
     /// Radius of the horizon undersampling fix (m), off when `None`.
     pub undersampling: Option<f64>,
-    /// Crystal grouping parameters.
+    /// Crystal grouping parameters (used when `grouping` is [`Grouping::Crystal`]).
     pub crystal: CrystalParams,
+    /// How triangles are grouped into hierarchy nodes.
+    #[serde(default)]
+    pub grouping: Grouping,
+}
+
+/// The grouping of a build.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Grouping {
+    /// Crystal groups and their merge hierarchy (the thesis), with [`BuildParams::crystal`].
+    #[default]
+    Crystal,
+    /// Stewart's quadtree over the footprint (crate `quadtree`) with its parameters.
+    Quadtree(QuadtreeParams),
+}
+
+impl Grouping {
+    /// The grouping's name (`crystal`, `quadtree`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Grouping::Crystal => "crystal",
+            Grouping::Quadtree(_) => "quadtree",
+        }
+    }
 }
 
 impl Default for BuildParams {
@@ -48,6 +74,7 @@ impl Default for BuildParams {
             subsectors: 4,
             undersampling: None,
             crystal: CrystalParams::default(),
+            grouping: Grouping::Crystal,
         }
     }
 }
@@ -87,6 +114,12 @@ pub struct BuildReport {
     pub visibility_bytes: usize,
     /// Visibility bytes per triangle.
     pub visibility_bytes_per_triangle: f64,
+    /// The grouping (`crystal` or `quadtree`).
+    #[serde(default)]
+    pub grouping: String,
+    /// For a quadtree: every depth built, root first, with its bytes and whether it is stored (memory levels).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub quadtree_levels: Vec<LevelStats>,
 }
 
 /// The result of [`build`]: the exported hierarchy, the figures, and the intermediate data that evaluation reuses.
@@ -97,8 +130,12 @@ pub struct Build {
     pub report: BuildReport,
     /// Per-vertex regions (the grouping's input); [`triangle_regions`] derives the per-triangle ones from them.
     pub vertex_regions: RegionTable,
-    /// The grouping.
-    pub crystal: Crystal,
+    /// The new triangle order: `order[k]` is the original index of the hierarchy's triangle `k`.
+    pub order: Vec<u32>,
+    /// The crystal grouping, for [`Grouping::Crystal`].
+    pub crystal: Option<Crystal>,
+    /// The quadtree, for [`Grouping::Quadtree`].
+    pub quadtree: Option<Quadtree>,
 }
 
 /// Progress callback of [`build`]: `(stage name, done, total)`.
@@ -107,7 +144,10 @@ pub type BuildProgress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
 /// Runs the whole pipeline on `tin`.
 pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -> Result<Build> {
     let config = SectorConfig::new(params.sectors, params.subsectors)?;
-    params.crystal.validate()?;
+    match &params.grouping {
+        Grouping::Crystal => params.crystal.validate()?,
+        Grouping::Quadtree(q) => q.validate()?,
+    }
     let report_progress = progress.clone();
     let opts = HorizonOptions {
         undersampling_radius: params.undersampling,
@@ -133,6 +173,41 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
         p("grouping", 0, 1);
     }
     let start = Instant::now();
+    if let Grouping::Quadtree(qp) = &params.grouping {
+        let quadtree = quadtree::build(tin, &vertex_regions, qp)?;
+        let grouping_seconds = start.elapsed().as_secs_f64();
+        let hierarchy = export_quadtree(tin, &quadtree, params);
+        let visibility_bytes = hierarchy.visibility_bytes();
+        let leaves = hierarchy.nodes.iter().filter(|n| n.children.is_empty()).count();
+        let report = BuildReport {
+            vertices: tin.num_vertices(),
+            triangles: tin.num_triangles(),
+            sectors: params.sectors,
+            subsectors: params.subsectors,
+            seeds: 0,
+            horizon_seconds,
+            regions_seconds,
+            grouping_seconds,
+            orphan_passes: 0,
+            orphans: 0,
+            groups: leaves,
+            nodes: hierarchy.nodes.len(),
+            levels: quadtree.stored_depth + 1,
+            top_level: hierarchy.roots.len(),
+            visibility_bytes,
+            visibility_bytes_per_triangle: visibility_bytes as f64 / tin.num_triangles().max(1) as f64,
+            grouping: "quadtree".into(),
+            quadtree_levels: quadtree.levels.clone(),
+        };
+        return Ok(Build {
+            hierarchy,
+            report,
+            vertex_regions,
+            order: quadtree.order.clone(),
+            crystal: None,
+            quadtree: Some(quadtree),
+        });
+    }
     let crystal = crystal::build(tin, &vertex_regions, &params.crystal)?;
     let grouping_seconds = start.elapsed().as_secs_f64();
     if let Some(p) = &progress {
@@ -159,12 +234,16 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
         top_level: s.top_level,
         visibility_bytes,
         visibility_bytes_per_triangle: visibility_bytes as f64 / tin.num_triangles().max(1) as f64,
+        grouping: "crystal".into(),
+        quadtree_levels: Vec::new(),
     };
     Ok(Build {
         hierarchy,
         report,
         vertex_regions,
-        crystal,
+        order: crystal.order.clone(),
+        crystal: Some(crystal),
+        quadtree: None,
     })
 }
 
@@ -253,6 +332,50 @@ pub fn export_hierarchy(tin: &Tin, crystal: &Crystal, params: &BuildParams) -> H
             max_expanse: params.crystal.max_expanse,
             rng_seed: params.crystal.rng_seed,
             undersampling: params.undersampling,
+            grouping: cull::Grouping::Crystal,
+        },
+    }
+}
+
+/// The exported hierarchy of a quadtree (Stewart's baseline): one root, nodes with f32 circles and regions, the
+/// mesh in the quadtree's triangle order, nothing always visible, [`cull::Grouping::Quadtree`] recorded.
+pub fn export_quadtree(tin: &Tin, q: &Quadtree, params: &BuildParams) -> Hierarchy {
+    let origin = tin.origin().to_array();
+    let nodes = q
+        .nodes
+        .iter()
+        .map(|n| {
+            let (centre, radius) = stored_circle(&n.circle, origin);
+            Node {
+                centre,
+                radius,
+                children: n.children.clone(),
+                triangles: [n.range.start, n.range.end],
+                level: q.level(n),
+                regions: stored_regions(&n.regions, q.sectors, q.region_origin, origin),
+            }
+        })
+        .collect();
+    let triangles: Vec<[u32; 3]> = q.order.iter().map(|&t| tin.triangles()[t as usize]).collect();
+    let n = triangles.len() as u32;
+    Hierarchy {
+        sectors: q.sectors,
+        origin,
+        nodes,
+        roots: vec![0],
+        always_visible: [n, n],
+        mesh: Mesh {
+            positions: tin.positions().iter().map(|p| p.to_array()).collect(),
+            triangles,
+        },
+        build: BuildInfo {
+            subsectors: params.subsectors,
+            undersampling: params.undersampling,
+            grouping: cull::Grouping::Quadtree {
+                built_depth: q.built_depth,
+                stored_depth: q.stored_depth,
+            },
+            ..BuildInfo::default()
         },
     }
 }

@@ -64,6 +64,60 @@ fn grouped_obj_has_one_group_and_material_per_leaf() {
 }
 
 #[test]
+fn quadtree_build_exports_a_valid_quadtree_hierarchy() {
+    let tin = synth_tin(&SynthOptions::new(600, 3)).expect("synthetic terrain");
+    let mut params = BuildParams {
+        sectors: 8,
+        subsectors: 2,
+        grouping: pipeline::Grouping::Quadtree(pipeline::QuadtreeParams {
+            depth: Some(3),
+            ..Default::default()
+        }),
+        ..BuildParams::default()
+    };
+    let b = build(&tin, &params, None).expect("builds");
+    let h = &b.hierarchy;
+    h.check_invariants().expect("invariants");
+    let q = b.quadtree.as_ref().expect("a quadtree");
+    q.check_invariants(&tin).expect("quadtree invariants");
+    assert!(b.crystal.is_none());
+    assert_eq!(
+        h.build.grouping,
+        cull::Grouping::Quadtree {
+            built_depth: 3,
+            stored_depth: 3
+        }
+    );
+    assert_eq!(b.report.grouping, "quadtree");
+    assert_eq!(b.report.quadtree_levels.len(), 4);
+    assert_eq!(h.roots, vec![0]);
+    assert_eq!(h.always_visible, [h.num_triangles() as u32; 2]);
+    assert!(
+        h.visibility_bytes() as u64 <= q.stored_bytes(),
+        "f32 storage can only drop points"
+    );
+    assert_eq!(
+        cull::Hierarchy::from_bytes(&h.to_bytes().expect("encode")).expect("decode"),
+        *h
+    );
+    // The mesh is the TIN's triangles in the quadtree's order.
+    for (k, &t) in b.order.iter().enumerate() {
+        assert_eq!(h.mesh.triangles[k], tin.triangles()[t as usize]);
+    }
+    // A byte budget drops the finest level.
+    let budget = q.stored_bytes() - 1;
+    params.grouping = pipeline::Grouping::Quadtree(pipeline::QuadtreeParams {
+        depth: Some(3),
+        max_bytes: Some(budget),
+        ..Default::default()
+    });
+    let small = build(&tin, &params, None).expect("builds");
+    assert!(small.hierarchy.visibility_bytes() as u64 <= budget);
+    assert!(small.hierarchy.nodes.len() < h.nodes.len());
+    small.hierarchy.check_invariants().expect("invariants");
+}
+
+#[test]
 fn an_obj_named_like_its_materials_is_refused() {
     let e = mtl_path(Path::new("same.mtl")).expect_err("would overwrite its own materials");
     assert!(e.to_string().contains("same.mtl"), "{e}");

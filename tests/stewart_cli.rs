@@ -1,0 +1,159 @@
+//! End-to-end: Stewart's quadtree baseline through the CLI (`build --grouping quadtree`, `eval`, `cull --method
+//! stewart`), and the pairing of region methods with groupings.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mesh(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "tincull {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn fails_with(args: &[&str], needle: &str) {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "tincull {args:?} should fail");
+    assert!(!stderr.contains("panicked"), "tincull {args:?} panicked:\n{stderr}");
+    assert!(
+        stderr.contains(needle),
+        "error for {args:?} does not mention {needle:?}:\n{stderr}"
+    );
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+#[test]
+fn quadtree_build_eval_and_cull() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (quad, crystal) = (dir.path().join("q.tch"), dir.path().join("c.tch"));
+    let m = mesh("jacksboro-2k.obj");
+    let out = ok(&[
+        "build",
+        s(&m),
+        "-o",
+        s(&quad),
+        "--grouping",
+        "quadtree",
+        "--depth",
+        "3",
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--json",
+        "-q",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    assert_eq!(report["grouping"], "quadtree");
+    let levels = report["quadtree_levels"].as_array().expect("levels");
+    assert_eq!(levels.len(), 4);
+    let total: u64 = levels.iter().map(|l| l["bytes"].as_u64().expect("bytes")).sum();
+    assert!(report["visibility_bytes"].as_u64().expect("bytes") <= total);
+
+    // A budget below the full tree drops the finest level.
+    let small = dir.path().join("small.tch");
+    let budget = (total - 1).to_string();
+    let out = ok(&[
+        "build",
+        s(&m),
+        "-o",
+        s(&small),
+        "--grouping",
+        "quadtree",
+        "--depth",
+        "3",
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--max-bytes",
+        &budget,
+        "--json",
+        "-q",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    assert_eq!(report["levels"], 3);
+    assert_eq!(report["quadtree_levels"][3]["stored"], false);
+    assert!(report["visibility_bytes"].as_u64().expect("bytes") < total);
+    fails_with(
+        &[
+            "build",
+            s(&m),
+            "-o",
+            s(&small),
+            "--grouping",
+            "quadtree",
+            "--max-bytes",
+            "5",
+        ],
+        "byte budget",
+    );
+    fails_with(
+        &["build", s(&m), "-o", s(&small), "--depth", "3"],
+        "--grouping quadtree",
+    );
+
+    let csv = dir.path().join("e.csv");
+    ok(&[
+        "eval",
+        s(&quad),
+        "--viewpoints",
+        "2",
+        "--classes",
+        "ground,low",
+        "--no-per-triangle",
+        "--csv",
+        s(&csv),
+        "-q",
+    ]);
+    let csv = std::fs::read_to_string(&csv).expect("csv");
+    assert!(csv.contains("\nstewart,ground,"), "{csv}");
+    assert!(csv.contains("\nsafe,ground,"), "{csv}");
+    assert!(!csv.contains("\nthesis,"), "{csv}");
+
+    let eye = "0,0,100000";
+    let out = ok(&["cull", s(&quad), "--method", "stewart", "--eye", eye, "--json"]);
+    let c: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(c["method"], "stewart");
+    ok(&["cull", s(&quad), "--method", "safe", "--eye", eye]);
+    fails_with(
+        &["cull", s(&quad), "--method", "thesis", "--eye", eye],
+        "method `stewart`",
+    );
+
+    ok(&[
+        "build",
+        s(&m),
+        "-o",
+        s(&crystal),
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--seeds",
+        "20",
+        "-q",
+    ]);
+    fails_with(
+        &["cull", s(&crystal), "--method", "stewart", "--eye", eye],
+        "--grouping quadtree",
+    );
+}
