@@ -1,7 +1,7 @@
 //! The bodies of the fuzz targets: each takes arbitrary bytes and must never panic (errors are fine).
 //!
 //! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies.
-//! - `dem_readers`: the `.npy`, `.asc`, `.hgt` and `.png` parsers of `tin::dem`.
+//! - `dem_readers`: the `.npy`, `.asc`, `.hgt`, `.png` and GeoTIFF parsers of `tin::dem`.
 //! - `tch_load`: [`cull::Hierarchy::from_bytes`]; a file that loads is culled from a few cameras, degenerate ones
 //!   included (inside a node, far away, non-finite).
 
@@ -31,7 +31,7 @@ pub fn obj_import(data: &[u8]) {
     }
 }
 
-/// The four DEM parsers on `data`.
+/// The five DEM parsers on `data` (GeoTIFF also with band 2 chosen).
 pub fn dem_readers(data: &[u8]) {
     let data = &data[..data.len().min(MAX_INPUT)];
     let _ = tin::dem::npy::parse_npy(data, Path::new("fuzz.npy"));
@@ -42,9 +42,16 @@ pub fn dem_readers(data: &[u8]) {
     let png_opts = DemOptions {
         spacing: Some((10.0, 10.0)),
         z_scale: 1.0,
+        band: None,
     };
     if let Ok(grid) = tin::dem::png::parse_png(data, Path::new("fuzz.png"), &png_opts) {
         let _ = grid.points();
+    }
+    for band in [None, Some(2)] {
+        let tif_opts = DemOptions { band, ..opts };
+        if let Ok((grid, _)) = tin::dem::geotiff::parse_geotiff(data, Path::new("fuzz.tif"), &tif_opts) {
+            let _ = grid.points();
+        }
     }
 }
 

@@ -41,6 +41,8 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
         mesh: mesh.clone(),
         keep_faces: false,
         dedupe: Default::default(),
+        dem_vertices: super::mesh_input::DEFAULT_DEM_VERTICES,
+        band: None,
     };
     let (tin, _) = mesh_args.load(out)?;
     let params = BuildParams::default();

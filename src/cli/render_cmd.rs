@@ -96,6 +96,8 @@ pub fn mesh_args(path: &Path) -> MeshArgs {
         mesh: path.to_path_buf(),
         keep_faces: false,
         dedupe: Default::default(),
+        dem_vertices: super::mesh_input::DEFAULT_DEM_VERTICES,
+        band: None,
     }
 }
 
