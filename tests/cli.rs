@@ -412,3 +412,20 @@ fn geotiff_input_in_tin_info_and_mesh_commands() {
     std::fs::write(&bad, b"II*\0\x08\0\0\0garbage").expect("write");
     fails_with(&["tin", s(&bad), "-o", s(&obj), "--vertices", "10"], "bad.tif");
 }
+
+#[test]
+fn export_gltf_writes_glb_and_gltf_with_bin() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let tch = tmp.path().join("j2k.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "--quiet"]);
+    let glb = tmp.path().join("j2k.glb");
+    let gltf = tmp.path().join("j2k.gltf");
+    ok(&["export", s(&tch), "--gltf", s(&glb), "--quiet"]);
+    ok(&["export", s(&tch), "--gltf", s(&gltf), "--quiet"]);
+    let bytes = std::fs::read(&glb).expect("glb");
+    assert_eq!(&bytes[..4], b"glTF");
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&gltf).expect("gltf")).expect("JSON");
+    assert_eq!(doc["buffers"][0]["uri"], "j2k.bin");
+    assert!(tmp.path().join("j2k.bin").is_file());
+    assert_eq!(doc["scenes"][0]["extras"]["tincull"]["version"], 1);
+}

@@ -1,4 +1,4 @@
-//! `tincull export`: a `.tch` hierarchy as JSON or as a grouped OBJ.
+//! `tincull export`: a `.tch` hierarchy as JSON, as a grouped OBJ, or as glTF 2.0 (`.glb`, or `.gltf` + `.bin`).
 
 use std::path::PathBuf;
 
@@ -8,10 +8,11 @@ use cull::Hierarchy;
 
 use super::Output;
 use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::gltf::write_gltf;
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]
-#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["json", "obj"])))]
+#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["json", "obj", "gltf"])))]
 pub struct ExportArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
@@ -21,6 +22,10 @@ pub struct ExportArgs {
     /// Write the mesh as OBJ with one group per leaf and the orphans (and a .mtl beside it).
     #[arg(long, value_name = "FILE")]
     pub obj: Option<PathBuf>,
+    /// Write the mesh as glTF 2.0: one primitive per leaf group and one for the always-visible set, nodes mirroring
+    /// the hierarchy, regions and ranges in `extras.tincull`; `.glb` for binary, else `.gltf` with a `.bin` beside it.
+    #[arg(long, value_name = "FILE")]
+    pub gltf: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
@@ -36,6 +41,11 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     if let Some(path) = &args.obj {
         write_grouped_obj(&h, path)?;
         out.say(format!("wrote {} and its .mtl", path.display()));
+    }
+    if let Some(path) = &args.gltf {
+        let written = write_gltf(&h, path)?;
+        let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+        out.say(format!("wrote {}", names.join(" and ")));
     }
     Ok(())
 }
