@@ -171,7 +171,8 @@ fn horizon_sweep_matches_the_oracle() {
     ]);
     assert_eq!(v["mismatches"], 0);
     assert_eq!(v["vertices"], 2000);
-    assert_eq!(v["subsectors"], 16);
+    assert_eq!(v["subsectors"], 2, "per sector, as everywhere");
+    assert_eq!(v["total_subsectors"], 16);
 }
 
 #[test]
@@ -229,7 +230,14 @@ fn build_cull_export_eval_round_trip() {
     assert_eq!(String::from_utf8_lossy(&lines).lines().count(), 2);
 
     let (json_out, obj_out) = (dir.path().join("h.json"), dir.path().join("h.obj"));
-    ok(&["export", s(&tch), "--json", s(&json_out), "--obj", s(&obj_out)]);
+    ok(&[
+        "export",
+        s(&tch),
+        "--export-json",
+        s(&json_out),
+        "--export-obj",
+        s(&obj_out),
+    ]);
     let obj = std::fs::read_to_string(&obj_out).expect("obj");
     assert_eq!(obj.matches("\ng group_").count() as u64, groups);
     assert!(obj.contains("\ng orphans\n"));
@@ -267,7 +275,7 @@ fn build_cull_export_eval_round_trip() {
     std::fs::write(&bad, &bytes).expect("bad");
     fails_with(&["cull", s(&bad), "--eye", &eye], "checksum");
     std::fs::write(&bad, &bytes[..bytes.len() / 2]).expect("bad");
-    fails_with(&["export", s(&bad), "--json", s(&json_out)], "truncated");
+    fails_with(&["export", s(&bad), "--export-json", s(&json_out)], "truncated");
 }
 
 #[test]

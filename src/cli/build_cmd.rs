@@ -10,7 +10,9 @@ use serde_json::json;
 
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
-use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::export::to_json;
+
+use super::files::Outputs;
 use pipeline::{BuildParams, BuildReport, build};
 
 /// Parameters that may also come from a TOML file (`--config`); the command line wins.
@@ -107,11 +109,18 @@ pub struct BuildArgs {
 /// A progress bar per pipeline stage.
 pub fn stage_progress(out: Output) -> pipeline::BuildProgress {
     let bar = out.progress(1, "horizons");
+    // Threads report out of order: within a stage the bar only moves forward.
+    let high = std::sync::Mutex::new(0u64);
     Arc::new(move |stage: &str, done: u64, total: u64| {
+        let Ok(mut high) = high.lock() else { return };
         if bar.message() != stage {
             bar.set_message(stage.to_string());
             bar.reset();
+            *high = 0;
+        } else if done < *high {
+            return;
         }
+        *high = done;
         bar.set_length(total);
         bar.set_position(done);
     })
@@ -139,10 +148,26 @@ pub fn print_report(r: &BuildReport, out: Output) {
 
 /// Runs `tincull build`.
 pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
+    let mut out = out;
     let params = args.params.resolve(args.config.as_deref())?;
+    let mut files = Outputs::new();
+    files.check_or_stdout(&args.out, &mut out)?;
+    if let Some(path) = &args.export_json {
+        files.check(path)?;
+    }
+    if let Some(path) = &args.export_obj {
+        files.check_grouped_obj(path)?;
+    }
     let (tin, _) = args.mesh.load(out)?;
     let result = build(&tin, &params, Some(stage_progress(out)))?;
-    result.hierarchy.save(&args.out)?;
+    files.add_bytes(&args.out, &result.hierarchy.to_bytes()?)?;
+    if let Some(path) = &args.export_json {
+        files.add_bytes(path, to_json(&result.hierarchy)?.as_bytes())?;
+    }
+    if let Some(path) = &args.export_obj {
+        files.add_grouped_obj(&result.hierarchy, path)?;
+    }
+    files.commit()?;
     print_report(&result.report, out);
     let peak = peak_memory_bytes();
     if let Some(bytes) = peak {
@@ -153,11 +178,9 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     }
     out.say(format!("wrote {}", args.out.display()));
     if let Some(path) = &args.export_json {
-        write_json(&result.hierarchy, path)?;
         out.say(format!("wrote {}", path.display()));
     }
     if let Some(path) = &args.export_obj {
-        write_grouped_obj(&result.hierarchy, path)?;
         out.say(format!("wrote {} and its .mtl", path.display()));
     }
     let mut j = serde_json::to_value(&result.report)?;

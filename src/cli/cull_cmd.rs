@@ -2,11 +2,12 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
 use serde_json::json;
 
+use super::culling_args::{SafeArgs, read_eyes};
 use super::{Output, OutputArgs};
 use eval::evaluate::timed_cull;
 
@@ -31,6 +32,9 @@ pub struct CullArgs {
     /// conservative).
     #[arg(long, default_value = "safe", value_parser = parse_method)]
     pub method: CullMethod,
+    /// The safe culler's parameters.
+    #[command(flatten)]
+    pub safe: SafeArgs,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -65,18 +69,14 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !(args.fov > 0.0 && args.fov <= 360.0) {
         bail!("--fov must be in (0, 360], got {}", args.fov);
     }
+    if !args.yaw.is_finite() {
+        bail!("--yaw must be finite, got {}", args.yaw);
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
-    let culler = AnyCuller::new(&h, args.method);
+    let culler = AnyCuller::with_params(&h, args.method, args.safe.params()?);
     let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
         (Some(e), _) => vec![*e],
-        (None, Some(path)) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            text.lines()
-                .enumerate()
-                .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-                .map(|(i, l)| parse_point(l).map_err(|e| anyhow::anyhow!("{}:{}: {e}", path.display(), i + 1)))
-                .collect::<Result<_>>()?
-        }
+        (None, Some(path)) => read_eyes(path)?,
         (None, None) => bail!("give --eye x,y,z or --eyes FILE"),
     };
     let mut list = DrawList::default();

@@ -6,12 +6,13 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use super::build_cmd::{print_report, stage_progress};
-use super::eval_cmd::write_outputs;
-use super::mesh_input::MeshArgs;
+use super::eval_cmd::{add_outputs, check_outputs};
+use super::files::Outputs;
+use super::mesh_input::ImportArgs;
 use super::{Output, OutputArgs};
 use cull::Hierarchy;
 use eval::evaluate::{EvalOptions, evaluate, hierarchy_tin};
-use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::export::to_json;
 use pipeline::{BuildParams, build};
 use tin::Tin;
 
@@ -29,6 +30,9 @@ pub struct DemoArgs {
     /// Viewpoints per class for the evaluation.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
+    /// How to import the mesh.
+    #[command(flatten)]
+    pub import: ImportArgs,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -37,32 +41,30 @@ pub struct DemoArgs {
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
-    let mesh_args = MeshArgs {
-        mesh: mesh.clone(),
-        keep_faces: false,
-        dedupe: Default::default(),
-        dem_vertices: super::mesh_input::DEFAULT_DEM_VERTICES,
-        band: None,
-    };
-    let (tin, _) = mesh_args.load(out)?;
+    let (tin, _) = args.import.mesh(&mesh).load(out)?;
     let params = BuildParams::default();
     out.say(format!("tincull demo on {}", mesh.display()));
     out.say(format!(
         "build with defaults: {} sectors x {} subsectors, seeds one per 200 triangles, min group {}, {} orphan passes",
         params.sectors, params.subsectors, params.crystal.min_group, params.crystal.orphan_passes
     ));
-    let result = build(&tin, &params, Some(stage_progress(out)))?;
-    print_report(&result.report, out);
-
     std::fs::create_dir_all(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
     let stem = mesh
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "terrain".into());
     let path = |suffix: &str| args.out_dir.join(format!("{stem}{suffix}"));
-    result.hierarchy.save(&path(".tch"))?;
-    write_json(&result.hierarchy, &path(".json"))?;
-    write_grouped_obj(&result.hierarchy, &path("-groups.obj"))?;
+    let mut files = Outputs::new();
+    files.check(&path(".tch"))?;
+    files.check(&path(".json"))?;
+    files.check_grouped_obj(&path("-groups.obj"))?;
+    check_outputs(&mut files, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
+
+    let result = build(&tin, &params, Some(stage_progress(out)))?;
+    print_report(&result.report, out);
+    files.add_bytes(&path(".tch"), &result.hierarchy.to_bytes()?)?;
+    files.add_bytes(&path(".json"), to_json(&result.hierarchy)?.as_bytes())?;
+    files.add_grouped_obj(&result.hierarchy, &path("-groups.obj"))?;
 
     let h = &result.hierarchy;
     let htin = hierarchy_tin(h)?;
@@ -79,7 +81,8 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
         opts.viewpoints
     ));
     out.say(e.table());
-    write_outputs(&e, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
+    add_outputs(&mut files, &e, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
+    files.commit()?;
     let renders = match write_renders(h, &htin, &path("-map.png"), &path("-culling.png")) {
         Ok(eye) => format!(
             ", {stem}-map.png (groups, orphans grey) and {stem}-culling.png (valley eye at {:.0}, {:.0}, {:.0}: \

@@ -2,12 +2,14 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Result, ensure};
 use clap::Args;
 use cull::Hierarchy;
 use truth::ViewpointClass;
 
-use super::Output;
+use super::culling_args::{SafeArgs, read_eyes};
+use super::files::Outputs;
+use super::{Output, OutputArgs};
 use eval::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
 
 /// Arguments of `tincull eval`.
@@ -21,55 +23,84 @@ pub struct EvalArgs {
     /// Viewpoint classes, comma-separated: ground, low, high, valley, ridge, sky.
     #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
     pub classes: Vec<ViewpointClass>,
-    /// Seed of the viewpoint generator.
+    /// Seed of the viewpoint generator (`--view-seed` everywhere; `--rng-seed` seeds the grouping).
     #[arg(long, default_value_t = 1)]
-    pub rng_seed: u64,
+    pub view_seed: u64,
     /// Horizontal field of view in degrees (360 = all around); below 360 each viewpoint gets a seeded yaw.
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
     /// Skip the per-triangle method (it recomputes the horizons of the mesh).
     #[arg(long)]
     pub no_per_triangle: bool,
+    /// Skip the conservative precomputed regions (method `safe_regions`; computing them takes a few seconds).
+    #[arg(long)]
+    pub no_safe_regions: bool,
+    /// Score your own camera path: a file of eye positions, one `x,y,z` per line (class `path`; replaces
+    /// `--classes` and `--viewpoints`).
+    #[arg(long, value_name = "FILE")]
+    pub eyes: Option<PathBuf>,
+    /// The safe culler's parameters.
+    #[command(flatten)]
+    pub safe: SafeArgs,
     /// Write the whole evaluation (rows and every viewpoint) as JSON here.
     #[arg(long, value_name = "FILE")]
-    pub json: Option<PathBuf>,
+    pub export_json: Option<PathBuf>,
     /// Write one CSV line per method and class here.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
-    /// No progress bar and no table (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
-/// Writes an evaluation's JSON and CSV files where asked.
-pub fn write_outputs(e: &Evaluation, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
+/// Checks the evaluation's outputs (before the work).
+pub fn check_outputs(files: &mut Outputs, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
+    for path in json.into_iter().chain(csv) {
+        files.check(path)?;
+    }
+    Ok(())
+}
+
+/// Adds an evaluation's JSON and CSV files where asked.
+pub fn add_outputs(
+    files: &mut Outputs,
+    e: &Evaluation,
+    json: Option<&std::path::Path>,
+    csv: Option<&std::path::Path>,
+) -> Result<()> {
     if let Some(path) = json {
-        let text = serde_json::to_string_pretty(e)?;
-        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        files.add_bytes(path, serde_json::to_string_pretty(e)?.as_bytes())?;
     }
     if let Some(path) = csv {
-        let text = e.to_csv();
-        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        files.add_bytes(path, e.to_csv().as_bytes())?;
     }
     Ok(())
 }
 
 /// Runs `tincull eval`.
-pub fn run(args: &EvalArgs) -> Result<()> {
-    let out = Output {
-        json: false,
-        quiet: args.quiet,
-    };
+pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
+    ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    let safe = args.safe.params()?;
+    let eyes = args.eyes.as_deref().map(read_eyes).transpose()?;
+    let mut files = Outputs::new();
+    check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref())?;
     let h = Hierarchy::load(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
         viewpoints: args.viewpoints,
         classes: args.classes.clone(),
-        rng_seed: args.rng_seed,
+        rng_seed: args.view_seed,
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
+        safe,
+        safe_regions: !args.no_safe_regions,
+        eyes,
     };
-    let bar = out.progress((opts.viewpoints * opts.classes.len()) as u64, "viewpoints");
+    let total = opts
+        .eyes
+        .as_ref()
+        .map_or(opts.viewpoints * opts.classes.len(), Vec::len);
+    let bar = out.progress(total as u64, "viewpoints");
     let e = evaluate(&h, &tin, &opts, &|done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     out.say(e.table());
@@ -77,5 +108,15 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         "ground truth: {:.3} s per viewpoint ({} triangles; a lower bound of the visible set)",
         e.ground_truth_seconds_per_viewpoint, e.triangles
     ));
-    write_outputs(&e, args.json.as_deref(), args.csv.as_deref())
+    add_outputs(&mut files, &e, args.export_json.as_deref(), args.csv.as_deref())?;
+    files.commit()?;
+    out.json(&serde_json::json!({
+        "hierarchy": args.hierarchy,
+        "triangles": e.triangles,
+        "viewpoints_per_class": opts.viewpoints,
+        "view_seed": opts.rng_seed,
+        "fov_deg": opts.fov_deg,
+        "ground_truth_seconds_per_viewpoint": e.ground_truth_seconds_per_viewpoint,
+        "rows": e.rows,
+    }))
 }

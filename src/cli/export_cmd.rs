@@ -6,46 +6,78 @@ use anyhow::Result;
 use clap::Args;
 use cull::Hierarchy;
 
-use super::Output;
-use pipeline::export::{write_grouped_obj, write_json};
-use pipeline::gltf::write_gltf;
+use super::{Output, OutputArgs};
+use pipeline::export::to_json;
+use pipeline::gltf::{bin_path, gltf_files, is_glb};
+
+use super::files::Outputs;
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]
-#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["json", "obj", "gltf"])))]
+#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["export_json", "export_obj", "export_gltf"])))]
 pub struct ExportArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
-    /// Write the hierarchy's JSON form here.
+    /// Write the hierarchy's JSON form here (`-` for standard output).
     #[arg(long, value_name = "FILE")]
-    pub json: Option<PathBuf>,
+    pub export_json: Option<PathBuf>,
     /// Write the mesh as OBJ with one group per leaf and the orphans (and a .mtl beside it).
     #[arg(long, value_name = "FILE")]
-    pub obj: Option<PathBuf>,
+    pub export_obj: Option<PathBuf>,
     /// Write the mesh as glTF 2.0: one primitive per leaf group and one for the always-visible set, nodes mirroring
     /// the hierarchy, regions and ranges in `extras.tincull`; `.glb` for binary, else `.gltf` with a `.bin` beside it.
-    #[arg(long, value_name = "FILE")]
-    pub gltf: Option<PathBuf>,
-    /// Print nothing but errors.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[arg(long, visible_alias = "gltf", value_name = "FILE")]
+    pub export_gltf: Option<PathBuf>,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// Runs `tincull export`.
 pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
+    let mut out = out;
+    let mut files = Outputs::new();
+    if let Some(path) = &args.export_json {
+        files.check_or_stdout(path, &mut out)?;
+    }
+    if let Some(path) = &args.export_obj {
+        files.check_grouped_obj(path)?;
+    }
+    if let Some(path) = &args.export_gltf {
+        files.check(path)?;
+        if !is_glb(path) {
+            files.check(&bin_path(path)?.0)?;
+        }
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
-    if let Some(path) = &args.json {
-        write_json(&h, path)?;
-        out.say(format!("wrote {}", path.display()));
+    if let Some(path) = &args.export_json {
+        files.add_bytes(path, to_json(&h)?.as_bytes())?;
     }
-    if let Some(path) = &args.obj {
-        write_grouped_obj(&h, path)?;
-        out.say(format!("wrote {} and its .mtl", path.display()));
+    if let Some(path) = &args.export_obj {
+        files.add_grouped_obj(&h, path)?;
     }
-    if let Some(path) = &args.gltf {
-        let written = write_gltf(&h, path)?;
-        let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    let mut gltf_written = Vec::new();
+    if let Some(path) = &args.export_gltf {
+        for (p, bytes) in gltf_files(&h, path)? {
+            files.add_bytes(&p, &bytes)?;
+            gltf_written.push(p);
+        }
+    }
+    files.commit()?;
+    if !gltf_written.is_empty() {
+        let names: Vec<String> = gltf_written.iter().map(|p| p.display().to_string()).collect();
         out.say(format!("wrote {}", names.join(" and ")));
     }
-    Ok(())
+    if let Some(path) = &args.export_json {
+        out.say(format!("wrote {}", path.display()));
+    }
+    if let Some(path) = &args.export_obj {
+        out.say(format!("wrote {} and its .mtl", path.display()));
+    }
+    out.json(&serde_json::json!({
+        "hierarchy": args.hierarchy,
+        "json": args.export_json,
+        "obj": args.export_obj,
+        "gltf": gltf_written,
+    }))
 }

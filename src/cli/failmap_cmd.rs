@@ -10,12 +10,16 @@ use eval::evaluate::hierarchy_tin;
 use eval::failmap;
 
 use super::Output;
+use super::files::Outputs;
 
 /// Arguments of `tincull failmap`.
 #[derive(Debug, Args)]
 pub struct FailmapArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
+    /// Culling method to map: `safe` (never culls a visible triangle) or `thesis` (where its false culls are).
+    #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
+    pub method: cull::CullMethod,
     /// Eye height above the ground at each cell centre (m).
     #[arg(long, default_value_t = 2.0)]
     pub eye_height: f64,
@@ -24,7 +28,7 @@ pub struct FailmapArgs {
     pub cell: f64,
     /// The PNG image to write.
     #[arg(long, short = 'o', value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    pub out: Option<PathBuf>,
     /// The CSV to write: x, y, eye_z, false_culls, false_cull_area, occlusion_captured, triangles_drawn.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -38,6 +42,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     let out = Output {
         json: false,
         quiet: args.quiet,
+        quiet_text: false,
     };
     ensure!(
         args.cell.is_finite() && args.cell > 0.0,
@@ -50,9 +55,13 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         args.eye_height
     );
     ensure!(
-        args.output.is_some() || args.csv.is_some(),
+        args.out.is_some() || args.csv.is_some(),
         "nothing to write: give -o MAP.png and/or --csv MAP.csv"
     );
+    let mut files = Outputs::new();
+    for path in args.out.iter().chain(&args.csv) {
+        files.check(path)?;
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;
     ensure!(
@@ -62,10 +71,11 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     );
     let (cols, rows) = failmap::grid_size(&tin, args.cell)?;
     let bar = out.progress((cols * rows) as u64, "cells");
-    let map = failmap::compute(&h, &tin, args.eye_height, args.cell, &|done| bar.set_position(done))?;
+    let advance = Output::monotone(&bar);
+    let map = failmap::compute(&h, args.method, &tin, args.eye_height, args.cell, &advance)?;
     bar.finish_and_clear();
     let worst = map.worst();
-    if let Some(path) = &args.output {
+    if let Some(path) = &args.out {
         let rgba = map.to_rgba();
         let mut png_bytes = Vec::new();
         {
@@ -76,12 +86,12 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
             w.write_image_data(&rgba)?;
             w.finish()?;
         }
-        tin::write_atomic(path, |w| w.write_all(&png_bytes))?;
+        files.add_bytes(path, &png_bytes)?;
     }
     if let Some(path) = &args.csv {
-        let text = map.to_csv();
-        tin::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        files.add_bytes(path, map.to_csv().as_bytes())?;
     }
+    files.commit()?;
     let scored: Vec<&failmap::Cell> = map.scored().collect();
     let with_fc = scored.iter().filter(|c| c.metrics.false_culls > 0).count();
     let occ: Vec<f64> = scored.iter().filter_map(|c| c.metrics.occlusion_captured).collect();

@@ -11,6 +11,7 @@ use horizon::{HorizonField, HorizonOptions, HorizonPoint, SectorConfig};
 use serde_json::json;
 use tin::Tin;
 
+use super::files::Outputs;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 
@@ -49,10 +50,10 @@ pub fn compute_with_progress(
     out: Output,
 ) -> Result<(HorizonField, f64)> {
     let bar = out.progress(u64::from(config.total_subsectors()), "horizons");
-    let progress_bar = bar.clone();
+    let advance = Output::monotone(&bar);
     let opts = HorizonOptions {
         undersampling_radius: undersampling,
-        progress: Some(Arc::new(move |done, _| progress_bar.set_position(done as u64))),
+        progress: Some(Arc::new(move |done, _| advance(done as u64))),
     };
     let start = Instant::now();
     let field = horizon::compute(tin, config, &opts)?;
@@ -69,6 +70,10 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
     {
         anyhow::bail!("--undersampling radius must be positive and finite, got {r}");
     }
+    let mut files = Outputs::new();
+    if let Some(path) = &args.export_json {
+        files.check(path)?;
+    }
     let (tin, _) = args.mesh.load(out)?;
     let (field, seconds) = compute_with_progress(&tin, &config, args.undersampling, out)?;
     let n = tin.num_vertices();
@@ -77,8 +82,8 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         "mesh": args.mesh.mesh,
         "vertices": n,
         "sectors": config.sectors(),
-        "subsectors": config.total_subsectors(),
-        "subsectors_per_sector": config.subsectors(),
+        "subsectors": config.subsectors(),
+        "total_subsectors": config.total_subsectors(),
         "undersampling": args.undersampling,
         "seconds": seconds,
         "vertex_subsectors_per_second": pairs / seconds.max(1e-9),
@@ -120,14 +125,15 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         }
     }
     if let Some(path) = &args.export_json {
-        export_json(&tin, &field, path)?;
+        export_json(&tin, &field, path, &mut files)?;
+        files.commit()?;
         out.say(format!("wrote {}", path.display()));
     }
     out.json(&report)
 }
 
 /// Writes per vertex: the horizon per subsector (vertex index, an edge point, or null) and the sector summaries.
-fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path) -> Result<()> {
+fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path, files: &mut Outputs) -> Result<()> {
     let config = *field.config();
     let write = |w: &mut dyn Write| -> std::io::Result<()> {
         write!(
@@ -158,5 +164,5 @@ fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path) -> Resul
         }
         w.write_all(b"]}\n")
     };
-    Ok(tin::write_atomic(path, write)?)
+    files.add(path, write)
 }

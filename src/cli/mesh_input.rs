@@ -22,6 +22,49 @@ pub enum DedupeArg {
     KeepHighest,
 }
 
+/// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
+/// `--keep-faces` and `--dedupe` as every command that reads a mesh.
+#[derive(Clone, Copy, Debug, Args)]
+pub struct ImportArgs {
+    /// For a mesh input: use the file's own triangles (checked to form a height field) instead of
+    /// re-triangulating its vertices.
+    #[arg(long)]
+    pub keep_faces: bool,
+    /// For a mesh input: what to do with vertices that share x,y but differ in z.
+    #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
+    pub dedupe: DedupeArg,
+    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
+    #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
+    pub dem_vertices: usize,
+    /// For a multi-band GeoTIFF: the elevation band (1-based).
+    #[arg(long)]
+    pub band: Option<u16>,
+}
+
+impl Default for ImportArgs {
+    fn default() -> Self {
+        ImportArgs {
+            keep_faces: false,
+            dedupe: DedupeArg::Reject,
+            dem_vertices: DEFAULT_DEM_VERTICES,
+            band: None,
+        }
+    }
+}
+
+impl ImportArgs {
+    /// The mesh arguments for `path` with these import options.
+    pub fn mesh(&self, path: &std::path::Path) -> MeshArgs {
+        MeshArgs {
+            mesh: path.to_path_buf(),
+            keep_faces: self.keep_faces,
+            dedupe: self.dedupe,
+            dem_vertices: self.dem_vertices,
+            band: self.band,
+        }
+    }
+}
+
 /// Arguments naming a terrain mesh and how to import it.
 #[derive(Debug, Args)]
 pub struct MeshArgs {

@@ -2,10 +2,12 @@
 
 mod build_cmd;
 pub mod cull_cmd;
+pub mod culling_args;
 mod demo_cmd;
 mod eval_cmd;
 mod export_cmd;
 mod failmap_cmd;
+mod files;
 mod horizon_cmd;
 
 mod info;
@@ -105,15 +107,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Horizon(args) => horizon_cmd::run(&args, args.output.into()),
         Command::Build(args) => build_cmd::run(&args, args.output.into()),
         Command::Cull(args) => cull_cmd::run(&args, args.output.into()),
-        Command::Eval(args) => eval_cmd::run(&args),
+        Command::Eval(args) => eval_cmd::run(&args, args.output.into()),
         Command::Sweep(args) => sweep_cmd::run(&args, args.output.into()),
-        Command::Export(args) => export_cmd::run(
-            &args,
-            Output {
-                json: false,
-                quiet: args.quiet,
-            },
-        ),
+        Command::Export(args) => export_cmd::run(&args, args.output.into()),
         Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
         Command::Failmap(args) => failmap_cmd::run(&args),
         #[cfg(feature = "viewer")]
@@ -124,6 +120,7 @@ pub fn run(cli: Cli) -> Result<()> {
             Output {
                 json: false,
                 quiet: args.quiet,
+                quiet_text: false,
             },
         ),
         #[cfg(not(feature = "viewer"))]

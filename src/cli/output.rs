@@ -1,4 +1,4 @@
-//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars, atomic file writes.
+//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars (files: [`super::files`]).
 
 use std::io::Write;
 use std::time::Duration;
@@ -22,6 +22,7 @@ impl From<OutputArgs> for Output {
         Output {
             json: a.json,
             quiet: a.quiet,
+            quiet_text: false,
         }
     }
 }
@@ -33,12 +34,14 @@ pub struct Output {
     pub json: bool,
     /// No progress bars and no human text.
     pub quiet: bool,
+    /// No human text on stdout (an output goes there: `-o -`); progress bars stay on stderr.
+    pub quiet_text: bool,
 }
 
 impl Output {
     /// Prints a line of human-readable text on stdout (not with `--json` or `--quiet`).
     pub fn say(&self, text: impl AsRef<str>) {
-        if !self.quiet && !self.json {
+        if !self.quiet && !self.json && !self.quiet_text {
             println!("{}", text.as_ref());
         }
     }
@@ -73,6 +76,21 @@ impl Output {
         );
         bar.set_message(message.to_string());
         bar
+    }
+
+    /// A progress report for `bar` that never moves it backwards, for work whose threads report out of order
+    /// (the horizon sweep's subsectors, the failure map's cells).
+    pub fn monotone(bar: &ProgressBar) -> impl Fn(u64) + Send + Sync + 'static {
+        let bar = bar.clone();
+        let high = std::sync::Mutex::new(0u64);
+        move |done: u64| {
+            if let Ok(mut h) = high.lock()
+                && done > *h
+            {
+                *h = done;
+                bar.set_position(done);
+            }
+        }
     }
 
     /// A spinner on stderr for work of unknown length.

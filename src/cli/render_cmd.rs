@@ -9,7 +9,8 @@ use serde_json::json;
 use viewer::{ColourMode, Gpu, RenderOptions, Terrain, ViewKind};
 
 use super::cull_cmd::parse_point;
-use super::mesh_input::MeshArgs;
+use super::files::Outputs;
+use super::mesh_input::ImportArgs;
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull render`.
@@ -17,6 +18,9 @@ use super::{Output, OutputArgs};
 pub struct RenderArgs {
     /// A hierarchy (.tch) or a terrain mesh (.obj; coloured by height, no culling).
     pub input: PathBuf,
+    /// Culling method for a viewpoint: `safe` (never culls a visible triangle) or `thesis` (not conservative).
+    #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
+    pub method: cull::CullMethod,
     /// The PNG to write.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -26,6 +30,9 @@ pub struct RenderArgs {
     /// Viewpoint `x,y,z` in world coordinates (m): the camera of the eye view, the culled viewpoint of the orbit.
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
+    /// How to import a mesh input.
+    #[command(flatten)]
+    pub import: ImportArgs,
     /// View direction in degrees, counter-clockwise from east [eye: 0, orbit: 45].
     #[arg(long, allow_hyphen_values = true)]
     pub yaw: Option<f64>,
@@ -76,7 +83,7 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
 }
 
 /// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`].
-pub fn load_terrain(path: &Path, out: Output) -> Result<Terrain> {
+pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Terrain> {
     let is_tch = path
         .extension()
         .and_then(|e| e.to_str())
@@ -85,19 +92,8 @@ pub fn load_terrain(path: &Path, out: Output) -> Result<Terrain> {
         let h = cull::Hierarchy::load(path).with_context(|| format!("cannot load {}", path.display()))?;
         Ok(Terrain::from_hierarchy(h)?)
     } else {
-        let (tin, _) = mesh_args(path).load(out)?;
+        let (tin, _) = import.mesh(path).load(out)?;
         Ok(Terrain::from_tin(&tin)?)
-    }
-}
-
-/// Default import options for a mesh given by path.
-pub fn mesh_args(path: &Path) -> MeshArgs {
-    MeshArgs {
-        mesh: path.to_path_buf(),
-        keep_faces: false,
-        dedupe: Default::default(),
-        dem_vertices: super::mesh_input::DEFAULT_DEM_VERTICES,
-        band: None,
     }
 }
 
@@ -117,7 +113,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     if args.compare && view != ViewKind::Eye {
         bail!("--compare works with --view eye");
     }
-    let terrain = load_terrain(&args.input, out)?;
+    let terrain = load_terrain(&args.input, &args.import, out)?;
     let options = RenderOptions {
         view,
         eye: args.eye,
@@ -130,11 +126,24 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         level: args.level,
         compare: args.compare,
         timing_runs: args.runs,
+        method: args.method,
     };
     viewer::validate(&terrain, &options)?;
+    let mut files = Outputs::new();
+    files.check(&args.out)?;
+    if args.compare {
+        files.check(&diff_path(&args.out))?;
+    }
     let gpu = Gpu::headless()?;
     let result = viewer::render(&gpu, &terrain, &options)?;
-    viewer::write_png(&args.out, &result.image)?;
+    let png = |image: &viewer::RgbaImage| {
+        viewer::png_out::encode_png(image).map_err(|e| anyhow::anyhow!("{}: {e}", args.out.display()))
+    };
+    files.add_bytes(&args.out, &png(&result.image)?)?;
+    if let Some(c) = &result.compare {
+        files.add_bytes(&diff_path(&args.out), &png(&c.difference)?)?;
+    }
+    files.commit()?;
     out.say(format!(
         "wrote {} ({}x{}, {} draws of {} triangles, on {})",
         args.out.display(),
@@ -168,7 +177,6 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     });
     if let Some(c) = &result.compare {
         let diff = diff_path(&args.out);
-        viewer::write_png(&diff, &c.difference)?;
         out.say(format!(
             "{} differing pixels (false culls on screen); wrote {}",
             c.differing_pixels,

@@ -22,9 +22,10 @@ pub struct StressArgs {
     /// Smaller synthetic terrains, 5 crystal seeds instead of 20, a smaller Crater Lake.
     #[arg(long)]
     pub quick: bool,
-    /// Directory holding `crater_lake.npy` (the flat-lake case is skipped with a notice when it is missing).
-    #[arg(long, value_name = "DIR", default_value = "../shared/dem")]
-    pub dem_dir: PathBuf,
+    /// Directory holding `crater_lake.npy`, for the flat-lake case (run only when given; an error when the file
+    /// is missing).
+    #[arg(long, value_name = "DIR")]
+    pub dem_dir: Option<PathBuf>,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -33,16 +34,18 @@ pub struct StressArgs {
 /// Runs `tincull stress`.
 pub fn run(args: &StressArgs, out: Output) -> Result<()> {
     let (tin, _) = args.mesh.load(out)?;
-    if !args.dem_dir.join("crater_lake.npy").exists() {
-        out.warn(format!(
-            "{} not found: the Crater Lake case is skipped",
-            args.dem_dir.join("crater_lake.npy").display()
-        ));
+    if let Some(dir) = &args.dem_dir
+        && !dir.join("crater_lake.npy").exists()
+    {
+        anyhow::bail!(
+            "{}: not found (given by --dem-dir)",
+            dir.join("crater_lake.npy").display()
+        );
     }
     let opts = StressOptions {
         viewpoints: args.viewpoints,
         quick: args.quick,
-        dem_dir: Some(args.dem_dir.clone()),
+        dem_dir: args.dem_dir.clone(),
     };
     let spinner = out.spinner("stress");
     let report = run_suite(&tin, &args.mesh.mesh.display().to_string(), &opts, &|name| {

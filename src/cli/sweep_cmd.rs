@@ -11,6 +11,7 @@ use serde_json::json;
 use truth::ViewpointClass;
 
 use super::build_cmd::ParamArgs;
+use super::files::write_one;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 use eval::evaluate::{EvalOptions, GroundTruthSet};
@@ -111,6 +112,9 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         rng_seed: args.view_seed,
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
+        safe: cull::SafeParams::default(),
+        safe_regions: false,
+        eyes: None,
     };
     anyhow::ensure!(
         eval.fov_deg > 0.0 && eval.fov_deg <= 360.0,
@@ -119,6 +123,8 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     );
     anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
 
+    // Refuse an output that cannot be written before any work (it is rewritten after each combination).
+    outfile::check_file(&args.out)?;
     let mut table = match std::fs::read_to_string(&args.out) {
         Ok(text) => SweepTable::parse(&text).with_context(|| format!("{}", args.out.display()))?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => SweepTable::default(),
@@ -163,7 +169,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
                 .with_context(|| format!("sectors {} x subsectors {}", k.sectors, k.subsectors))?;
             table.insert(combo.key, r.lines);
             let text = table.to_csv();
-            tin::write_atomic(&args.out, |w| w.write_all(text.as_bytes()))?;
+            write_one(&args.out, |w| w.write_all(text.as_bytes()))?;
             bar.inc(1);
             let h = r
                 .evaluation

@@ -8,6 +8,7 @@ use clap::Args;
 use serde_json::json;
 use tin::SynthOptions;
 
+use super::files::Outputs;
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull synth`.
@@ -35,6 +36,8 @@ pub struct SynthArgs {
 
 /// Runs `tincull synth`.
 pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
+    let mut files = Outputs::new();
+    files.check(&args.out)?;
     let start = Instant::now();
     let mut opts = SynthOptions::new(args.vertices, args.rng_seed);
     if let Some(e) = args.extent {
@@ -47,7 +50,8 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
     let spinner = out.spinner("synthesising");
     let tin = tin::synth_tin(&opts)?;
     spinner.set_message("writing");
-    tin::write_obj(&tin, &args.out)?;
+    files.add(&args.out, |w| tin::write_obj_to(&tin, w))?;
+    files.commit()?;
     spinner.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
     out.say(format!(

@@ -8,6 +8,7 @@ use clap::Args;
 use serde_json::json;
 use tin::{DemOptions, SimplifyOptions};
 
+use super::files::Outputs;
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tin`.
@@ -52,6 +53,8 @@ fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
 
 /// Runs `tincull tin`.
 pub fn run(args: &TinArgs, out: Output) -> Result<()> {
+    let mut files = Outputs::new();
+    files.check(&args.out)?;
     let start = Instant::now();
     let dem_opts = DemOptions {
         spacing: args.spacing,
@@ -70,7 +73,8 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let progress = |v: usize| bar.set_position(v as u64);
     let (tin, report) = tin::simplify(&grid, &opts, Some(&progress))?;
     bar.finish_and_clear();
-    tin::write_obj(&tin, &args.out)?;
+    files.add(&args.out, |w| tin::write_obj_to(&tin, w))?;
+    files.commit()?;
     let seconds = start.elapsed().as_secs_f64();
     out.say(format!(
         "{} ({} x {} samples, {} voids) -> {}: {} vertices, {} triangles, max error {:.3} m, rms {:.3} m; \

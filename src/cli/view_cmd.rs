@@ -10,7 +10,6 @@ use viewer::app::{ScreenshotRequest, Source, Startup, ViewerOptions};
 use super::Output;
 use super::build_cmd::ParamArgs;
 use super::cull_cmd::parse_point;
-use super::render_cmd::mesh_args;
 
 /// Arguments of `tincull view`.
 #[derive(Debug, Args)]
@@ -20,6 +19,9 @@ pub struct ViewArgs {
     /// Initial viewpoint `x,y,z` in world coordinates (m) [default: the centre, 20 m above the ground].
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
+    /// How to import a mesh input.
+    #[command(flatten)]
+    pub import: super::mesh_input::ImportArgs,
     /// Initial build parameters of the side panel (the hierarchy's own, when it records them).
     #[command(flatten)]
     pub params: ParamArgs,
@@ -69,7 +71,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         }
         Source::Hierarchy(h)
     } else {
-        let (tin, _) = mesh_args(&args.input).load(out)?;
+        let (tin, _) = args.import.mesh(&args.input).load(out)?;
         Source::Mesh(tin)
     };
     let title = format!(

@@ -123,7 +123,7 @@ fn c_example_prints_the_rust_ranges() {
     let h = bundled_hierarchy();
     let dir = tempfile::tempdir().expect("tempdir");
     let tch = dir.path().join("jacksboro-2k.tch");
-    h.save(&tch).expect("save");
+    std::fs::write(&tch, h.to_bytes().expect("to_bytes")).expect("write the .tch");
     let exe = dir.path().join("cull");
     let cc = Command::new("cc")
         .arg(workspace().join("examples/cull.c"))

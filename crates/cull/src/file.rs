@@ -11,10 +11,10 @@
 //! | 4 | CRC-32 (IEEE) of the payload |
 //! | n | the [`Hierarchy`] encoded with postcard |
 //!
-//! Files are written to a temporary file beside the target and renamed, so a failed write never leaves a half-written
-//! file. Anything after the payload is rejected as foreign.
+//! Anything after the payload is rejected as foreign. This crate reads files but writes none: [`Hierarchy::to_bytes`]
+//! is the file's content, and the writer is the embedder's (tincull's is the `outfile` crate: atomic replacement,
+//! symlinks followed, non-regular targets refused).
 
-use std::io::Write;
 use std::path::Path;
 
 use crate::error::HierarchyError;
@@ -92,37 +92,4 @@ impl Hierarchy {
         })?;
         Hierarchy::from_bytes(&bytes)
     }
-
-    /// Writes a `.tch` file atomically.
-    pub fn save(&self, path: &Path) -> Result<(), HierarchyError> {
-        let bytes = self.to_bytes()?;
-        write_atomically(path, &bytes)
-    }
-}
-
-/// Writes `bytes` to a temporary file beside `path`, then renames it over `path`.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), HierarchyError> {
-    let io = |source| HierarchyError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
 }

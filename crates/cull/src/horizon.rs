@@ -85,6 +85,9 @@
 //!   square root and a division, each correctly rounded, and moved outward by `1e-9 (1 + |u|)` (also covering the
 //!   cancellation in `m_f² − r²`, which is why a disk with `m_f < (1 + 1e-6) r` takes the whole face).
 
+// Comparisons are written so that a NaN anywhere answers "not hidden" (`!(a < b)`), on purpose.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 /// Relative margin applied to every rounded quantity (see the module documentation).
 pub(crate) const REL: f64 = 1e-12;
 
@@ -271,6 +274,9 @@ pub struct Horizon {
     step: f64,
     h: Vec<f64>,
     partial: Vec<Partial>,
+    /// Per column, an upper bound of what the occluders not yet written could raise it to (`max(H, P)` is what
+    /// flushing them could achieve at best; see [`crate::safe`]).
+    potential: Vec<f64>,
 }
 
 impl Horizon {
@@ -283,6 +289,7 @@ impl Horizon {
             step: 2.0 / w as f64,
             h: vec![f64::NEG_INFINITY; FACES * w],
             partial: vec![NO_PARTIAL; FACES * w],
+            potential: vec![f64::NEG_INFINITY; FACES * w],
         }
     }
 
@@ -300,6 +307,43 @@ impl Horizon {
     pub fn clear(&mut self) {
         self.h.fill(f64::NEG_INFINITY);
         self.partial.fill(NO_PARTIAL);
+        self.potential.fill(f64::NEG_INFINITY);
+    }
+
+    /// The value an occludee must stay below in column `col`: `H`, or `max(H, P)` when asking whether writing the
+    /// waiting occluders could hide it.
+    #[inline(always)]
+    fn bar(&self, col: usize, with_potential: bool) -> f64 {
+        if with_potential {
+            self.h[col].max(self.potential[col])
+        } else {
+            self.h[col]
+        }
+    }
+
+    /// Raises the potential of the columns that the projected vertices `verts` span in each face to their highest
+    /// lowered `v` there: no triangle over these vertices can write more (its writes are lower bounds of its top,
+    /// whose highest point is a vertex).
+    pub(crate) fn raise_potential(&mut self, verts: &[Projected]) {
+        for k in 0..FACES {
+            let (mut u_min, mut u_max, mut v_max) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+            for p in verts.iter().filter(|p| p.mask & (1 << k) != 0) {
+                let q = p.face[k];
+                u_min = u_min.min(q.u);
+                u_max = u_max.max(q.u);
+                v_max = v_max.max(q.lo);
+            }
+            if !(u_min <= u_max) || u_max <= -1.0 || u_min >= 1.0 {
+                continue;
+            }
+            let last = self.w as isize - 1;
+            let j0 = floor(self.column_of(u_min)).clamp(0, last) as usize;
+            let j1 = floor(self.column_of(u_max)).clamp(0, last) as usize;
+            let base = k * self.w;
+            for p in &mut self.potential[base + j0..=base + j1] {
+                *p = p.max(v_max);
+            }
+        }
     }
 
     /// Left boundary `a_j` of column `j` (exact).
@@ -436,7 +480,7 @@ impl Horizon {
 
     /// Whether the raised triangle `tri` is strictly below the horizon in every column it touches. A triangle that
     /// touches a face in which it cannot be projected is not hidden.
-    pub(crate) fn triangle_hidden(&self, tri: [&Projected; 3]) -> bool {
+    pub(crate) fn triangle_hidden(&self, tri: [&Projected; 3], with_potential: bool) -> bool {
         let faces = tri[0].mask & tri[1].mask & tri[2].mask;
         if faces == 0 {
             return false;
@@ -469,14 +513,14 @@ impl Horizon {
             ]) else {
                 return false;
             };
-            if !self.top_hidden(k, &top) {
+            if !self.top_hidden(k, &top, with_potential) {
                 return false;
             }
         }
         true
     }
 
-    fn top_hidden(&self, k: usize, top: &Top) -> bool {
+    fn top_hidden(&self, k: usize, top: &Top, with_potential: bool) -> bool {
         let lo_u = top.ua - REL * (1.0 + top.ua.abs());
         let hi_u = top.uc + REL * (1.0 + top.uc.abs());
         if hi_u < -1.0 || lo_u > 1.0 {
@@ -487,7 +531,7 @@ impl Horizon {
         let j1 = floor(self.column_of(hi_u)).clamp(0, last) as usize;
         let base = k * self.w;
         for j in j0..=j1 {
-            let h = self.h[base + j];
+            let h = self.bar(base + j, with_potential);
             if h == f64::NEG_INFINITY {
                 return false;
             }
@@ -511,7 +555,7 @@ impl Horizon {
     /// Whether a disk (centre offset `m = centre − c` in x,y, radius `r`, `m` farther than `r`) whose points are all at
     /// most `dz_max` above the camera (already raised by the height margin) is strictly below the horizon in every
     /// column it touches.
-    pub(crate) fn disk_hidden(&self, m: [f64; 2], r: f64, dz_max: f64) -> bool {
+    pub(crate) fn disk_hidden(&self, m: [f64; 2], r: f64, dz_max: f64, with_potential: bool) -> bool {
         let dist = (m[0] * m[0] + m[1] * m[1]).sqrt();
         // The offset m carries a rounding error below ε |m|: grow the disk by more.
         let r = r + 1e-15 * dist;
@@ -547,7 +591,7 @@ impl Horizon {
             let j0 = floor(self.column_of(u_lo.max(-1.0))).clamp(0, last) as usize;
             let j1 = floor(self.column_of(u_hi.min(1.0))).clamp(0, last) as usize;
             let base = k * self.w;
-            if !self.h[base + j0..=base + j1].iter().all(|&h| v < h) {
+            if !(base + j0..=base + j1).all(|c| v < self.bar(c, with_potential)) {
                 return false;
             }
         }
@@ -639,18 +683,18 @@ mod tests {
         // Behind it at x = 20..30 and below the sight line (z < 10 at x = 20).
         let behind = [[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
         let q: Vec<Projected> = behind.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
-        assert!(h.triangle_hidden([&q[0], &q[1], &q[2]]));
+        assert!(h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         // Above the sight line: visible.
         let above = [[20.0, -1.0, 10.5], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
         let q: Vec<Projected> = above.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
-        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]]));
+        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         // Beyond the wall's lateral extent: visible.
         let aside = [[20.0, 45.0, 0.0], [30.0, 70.0, 0.0], [25.0, 60.0, 0.0]];
         let q: Vec<Projected> = aside.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
-        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]]));
+        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
-        assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu));
-        assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0));
+        assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu, false));
+        assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0, false));
     }
 
     #[test]

@@ -1,8 +1,13 @@
-//! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the recursive
-//! culler.
+//! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the cullers.
 //!
 //! Light on dependencies (serde, postcard, crc32fast) so that a renderer can embed it: load a file with
-//! [`Hierarchy::load`], make a [`Culler`], and call [`Culler::cull_into`] once per frame.
+//! [`Hierarchy::load`], make an [`AnyCuller`] (or a [`SafeCuller`] directly), and call `cull_into` once per frame
+//! with a reused [`DrawList`].
+//!
+//! | culler | module | verdict "hidden" |
+//! | --- | --- | --- |
+//! | [`SafeCuller`] (the default) | [`safe`], over the conservative horizon of [`horizon`] | a theorem: every point of the culled triangles is below the terrain's horizon seen from the camera (proof in the modules' docs) |
+//! | [`Culler`] (`thesis`) | [`culler`] | the thesis' test of the camera against the precomputed sector regions; not conservative unless the regions are (see `occlusion::conservative`) |
 #![warn(missing_docs)]
 
 pub mod culler;
@@ -16,7 +21,7 @@ pub mod sector;
 
 pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
-pub use file::{FORMAT_VERSION, MAGIC, write_atomically};
+pub use file::{FORMAT_VERSION, MAGIC};
 pub use hierarchy::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
 pub use method::{AnyCuller, CullMethod};
 pub use safe::{SafeCuller, SafeParams};

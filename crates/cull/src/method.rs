@@ -50,8 +50,13 @@ pub enum AnyCuller {
 impl AnyCuller {
     /// Prepares `method` over `h` (the safe culler with [`SafeParams::default`]).
     pub fn new(h: &Hierarchy, method: CullMethod) -> AnyCuller {
+        AnyCuller::with_params(h, method, SafeParams::default())
+    }
+
+    /// Prepares `method` over `h`; `safe` are the safe culler's parameters (the other methods have none).
+    pub fn with_params(h: &Hierarchy, method: CullMethod, safe: SafeParams) -> AnyCuller {
         match method {
-            CullMethod::Safe => AnyCuller::Safe(SafeCuller::new(h, SafeParams::default())),
+            CullMethod::Safe => AnyCuller::Safe(SafeCuller::new(h, safe)),
             CullMethod::Thesis => AnyCuller::Thesis(Culler::new(h)),
         }
     }

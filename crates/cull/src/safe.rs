@@ -33,6 +33,9 @@
 //! lowest corner and `h` its largest `|z|`: more than 100 times the exact checker's tolerance (`truth::walk`), so a
 //! sight line called blocked here is blocked there, and far above every rounding error of the arithmetic.
 
+// Comparisons are written so that a NaN anywhere answers "not hidden" (`!(a < b)`), on purpose.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::f64::consts::{PI, TAU};
@@ -43,7 +46,7 @@ use crate::horizon::{Horizon, Projected, project};
 use crate::sector::azimuth;
 
 /// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SafeParams {
     /// Horizon columns per 90° face (rounded up to a power of two).
     pub columns_per_face: usize,
@@ -86,6 +89,8 @@ pub struct SafeScratch {
     pending: BinaryHeap<Reverse<(u64, u32, u32)>>,
     projected: Vec<Projected>,
     drawn: Vec<[u32; 2]>,
+    /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected)`.
+    eligible: Vec<(u32, u32)>,
 }
 
 impl PartialEq for SafeScratch {
@@ -277,6 +282,32 @@ impl SafeCuller {
         }
     }
 
+    /// Writes every eligible occluder patch into the horizon (within the budget) and forgets them.
+    fn flush(
+        &self,
+        horizon: &mut Horizon,
+        eligible: &mut Vec<(u32, u32)>,
+        projected: &[Projected],
+        written: &mut usize,
+    ) {
+        for &(patch, at) in eligible.iter() {
+            let p = &self.nodes[patch as usize];
+            let base = at as usize;
+            for t in &self.tris[p.tris[0] as usize..p.tris[1] as usize] {
+                if *written >= self.params.occluder_budget {
+                    break;
+                }
+                *written += 1;
+                horizon.write_triangle([
+                    &projected[base + t[0] as usize],
+                    &projected[base + t[1] as usize],
+                    &projected[base + t[2] as usize],
+                ]);
+            }
+        }
+        eligible.clear();
+    }
+
     /// The parameters in use.
     pub fn params(&self) -> SafeParams {
         self.params
@@ -306,17 +337,17 @@ impl SafeCuller {
             out.scratch = scratch;
             return;
         }
-        let horizon = scratch
-            .horizon
-            .get_or_insert_with(|| Horizon::new(self.params.columns_per_face));
-        if horizon.columns_per_face() != self.params.columns_per_face {
-            *horizon = Horizon::new(self.params.columns_per_face);
-        }
+        let mut owned = match scratch.horizon.take() {
+            Some(h) if h.columns_per_face() == self.params.columns_per_face => h,
+            _ => Horizon::new(self.params.columns_per_face),
+        };
+        let horizon = &mut owned;
         horizon.clear();
         scratch.queue.clear();
         scratch.pending.clear();
         scratch.projected.clear();
         scratch.drawn.clear();
+        scratch.eligible.clear();
         let mu = 1e-7
             * (1.0
                 + self.extent
@@ -341,24 +372,17 @@ impl SafeCuller {
             // Occluders strictly nearer than every point of this node (rounding: the distances carry relative
             // errors below 1e-15, so compare with a relative gap far larger).
             let dmin = (dist - node.radius) * (1.0 - 1e-12);
+            // Drawn patches entirely nearer than this node become eligible occluders; they are written only when
+            // a test could use them (below), which saves most of the work in views that see much terrain.
             while let Some(&Reverse((dmax_key, patch, at))) = scratch.pending.peek() {
                 if !(f64::from_bits(dmax_key) < dmin) {
                     break;
                 }
                 scratch.pending.pop();
                 let p = &self.nodes[patch as usize];
-                let base = at as usize;
-                for t in &self.tris[p.tris[0] as usize..p.tris[1] as usize] {
-                    if written >= self.params.occluder_budget {
-                        break;
-                    }
-                    written += 1;
-                    horizon.write_triangle([
-                        &scratch.projected[base + t[0] as usize],
-                        &scratch.projected[base + t[1] as usize],
-                        &scratch.projected[base + t[2] as usize],
-                    ]);
-                }
+                let n = (p.verts[1] - p.verts[0]) as usize;
+                horizon.raise_potential(&scratch.projected[at as usize..at as usize + n]);
+                scratch.eligible.push((patch, at));
             }
             let _ = dmin_key;
             tested += 1;
@@ -371,7 +395,13 @@ impl SafeCuller {
             let inside = dist <= node.radius;
             if !inside {
                 let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
-                if horizon.disk_hidden(m, node.radius, node.zmax - eye[2] + mu) {
+                let dz = node.zmax - eye[2] + mu;
+                let mut hidden = horizon.disk_hidden(m, node.radius, dz, false);
+                if !hidden && !scratch.eligible.is_empty() && horizon.disk_hidden(m, node.radius, dz, true) {
+                    self.flush(horizon, &mut scratch.eligible, &scratch.projected, &mut written);
+                    hidden = horizon.disk_hidden(m, node.radius, dz, false);
+                }
+                if hidden {
                     out.stats.culled_by_occlusion += 1;
                     continue;
                 }
@@ -392,14 +422,24 @@ impl SafeCuller {
                     .push(project([p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]], mu, v));
             }
             let tris = &self.tris[node.tris[0] as usize..node.tris[1] as usize];
-            let all_hidden = !inside
-                && tris.iter().all(|t| {
-                    horizon.triangle_hidden([
-                        &scratch.projected[at + t[0] as usize],
-                        &scratch.projected[at + t[1] as usize],
-                        &scratch.projected[at + t[2] as usize],
-                    ])
-                });
+            let all_hidden = |horizon: &Horizon, projected: &[Projected], with_potential: bool| {
+                tris.iter().all(|t| {
+                    horizon.triangle_hidden(
+                        [
+                            &projected[at + t[0] as usize],
+                            &projected[at + t[1] as usize],
+                            &projected[at + t[2] as usize],
+                        ],
+                        with_potential,
+                    )
+                })
+            };
+            let mut hidden = !inside && all_hidden(horizon, &scratch.projected, false);
+            if !inside && !hidden && !scratch.eligible.is_empty() && all_hidden(horizon, &scratch.projected, true) {
+                self.flush(horizon, &mut scratch.eligible, &scratch.projected, &mut written);
+                hidden = all_hidden(horizon, &scratch.projected, false);
+            }
+            let all_hidden = hidden;
             if all_hidden {
                 scratch.projected.truncate(at);
                 out.stats.culled_by_occlusion += 1;
@@ -416,6 +456,7 @@ impl SafeCuller {
         out.stats.nodes_tested = tested;
         out.stats.nodes_skipped = self.nodes.len() as u32 - tested;
         out.stats.triangles_culled = self.triangles - out.stats.triangles_drawn;
+        scratch.horizon = Some(owned);
         out.scratch = scratch;
     }
 }

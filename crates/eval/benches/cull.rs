@@ -1,8 +1,13 @@
 //! Run-time culling cost per viewpoint, per method, on the bundled default terrain.
 //!
 //! `cargo bench -p eval --bench cull`. Builds `meshes/jacksboro-10k.obj` with default parameters (16 × 4 sectors), draws 20
-//! `ground` and 20 `high` viewpoints (seed 1), and times one cull per viewpoint for the hierarchy and for the
-//! per-triangle method. With `TINCULL_BENCH_MESH=path.obj` another mesh is used instead.
+//! `ground` and 20 `high` viewpoints (seed 1), and times one cull per viewpoint (cycling over the 40, 360° view) for
+//! the safe culler (the default), the thesis' region test over the hierarchy and the per-triangle method; the safe
+//! culler also on the ground and the high viewpoints apart. With `TINCULL_BENCH_MESH=path.obj` another mesh is used
+//! instead (its build uses 500 seeds when it has more than 50,000 vertices, like the thesis' 100k set).
+//!
+//! Before timing the safe culler, its draw lists from the 40 viewpoints are checked against ground truth: not one
+//! visible triangle may be culled.
 //!
 //! Before timing, each culler's draw lists are checked against the straightforward reference culler of the `cull`
 //! crate's tests, for 20 viewpoints of every class, with and without a frustum (this also runs under
@@ -15,10 +20,10 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use cull::{Camera, Culler, DrawList, Hierarchy};
+use cull::{Camera, Culler, DrawList, Hierarchy, SafeCuller, SafeParams};
 use eval::evaluate::{hierarchy_tin, per_triangle_of};
 use pipeline::{BuildParams, build};
-use truth::{ViewpointClass, viewpoints};
+use truth::{GroundTruth, ViewpointClass, viewpoints};
 
 /// Panics unless `culler` gives the reference's draw list for every camera.
 fn check_against_reference(method: &str, h: &Hierarchy, culler: &Culler, cameras: &[Camera]) {
@@ -37,7 +42,11 @@ fn bench(c: &mut Criterion) {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../meshes/jacksboro-10k.obj"));
     let (tin, _) = tin::read_obj(&path, &Default::default()).expect("bench mesh");
-    let built = build(&tin, &BuildParams::default(), None).expect("build");
+    let mut params = BuildParams::default();
+    if tin.num_vertices() > 50_000 {
+        params.crystal.seeds = Some(500);
+    }
+    let built = build(&tin, &params, None).expect("build");
     let h = built.hierarchy;
     let htin = hierarchy_tin(&h).expect("mesh");
     let per_triangle = per_triangle_of(&h, &htin).expect("per-triangle regions");
@@ -60,7 +69,37 @@ fn bench(c: &mut Criterion) {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let mut group = c.benchmark_group(format!("cull/{name}"));
-    for (method, hierarchy) in [("hierarchy", &h), ("per_triangle", &per_triangle)] {
+    let safe = SafeCuller::new(&h, SafeParams::default());
+    let truth = GroundTruth::new(&htin);
+    let mut list = DrawList::default();
+    let mut saved = 0u64;
+    for (camera, eye) in cameras.iter().zip(&eyes) {
+        safe.cull_into(camera, &mut list);
+        let drawn = list.mask(htin.num_triangles());
+        let visible = truth.visible_triangles(*eye);
+        assert!(
+            visible.iter().zip(&drawn).all(|(&v, &d)| d || !v),
+            "safe culler: a visible triangle culled from {eye}"
+        );
+        saved += u64::from(list.stats.triangles_culled);
+    }
+    println!(
+        "cull/{name}/safe: {} tree nodes; {:.0} triangles culled per view on average, none visible",
+        safe.tree_nodes(),
+        saved as f64 / cameras.len() as f64
+    );
+    for (label, range) in [("safe", 0..40), ("safe_ground", 0..20), ("safe_high", 20..40)] {
+        let cams = &cameras[range];
+        let mut i = 0;
+        group.bench_function(label, |b| {
+            b.iter(|| {
+                safe.cull_into(black_box(&cams[i % cams.len()]), &mut list);
+                i += 1;
+                black_box(list.stats.triangles_drawn)
+            })
+        });
+    }
+    for (method, hierarchy) in [("thesis", &h), ("per_triangle", &per_triangle)] {
         let culler = Culler::new(hierarchy);
         check_against_reference(method, hierarchy, &culler, &checks);
         let mut list = DrawList::default();

@@ -7,6 +7,7 @@
 //! | method | what it draws |
 //! | --- | --- |
 //! | `safe` | the safe culler over the `.tch` hierarchy (`cull::SafeCuller`; never culls a visible triangle) |
+//! | `safe_regions` | the thesis' run-time test over conservative precomputed regions (`pipeline::conservative_hierarchy`; never culls a visible triangle) |
 //! | `thesis` | the thesis' recursive region test over the `.tch` hierarchy (`cull::Culler`; not conservative) |
 //! | `per_triangle` | each triangle tested against its own regions (thesis 5.1.1) |
 //! | `frustum_only` | the hierarchy's frustum test alone (everything at a 360° field of view) |
@@ -24,7 +25,7 @@ use std::f64::consts::TAU;
 use std::time::Instant;
 
 use anyhow::Result;
-use cull::{AnyCuller, Camera, CullMethod, Culler, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, Culler, DrawList, Hierarchy, SafeParams};
 use glam::DVec3;
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::RegionTable;
@@ -37,7 +38,7 @@ use truth::{GroundTruth, Summary, ViewMetrics, ViewpointClass, summarize, view_m
 use pipeline::{per_triangle_hierarchy, triangle_regions};
 
 /// The methods an evaluation compares, in report order.
-pub const METHODS: [&str; 5] = ["safe", "thesis", "per_triangle", "frustum_only", "none"];
+pub const METHODS: [&str; 6] = ["safe", "safe_regions", "thesis", "per_triangle", "frustum_only", "none"];
 
 /// What to evaluate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -52,6 +53,12 @@ pub struct EvalOptions {
     pub fov_deg: f64,
     /// Also evaluate the per-triangle method (needs the horizons of the mesh again).
     pub per_triangle: bool,
+    /// Parameters of the safe culler.
+    pub safe: SafeParams,
+    /// Also evaluate the thesis' test over conservative precomputed regions (computes them first).
+    pub safe_regions: bool,
+    /// Score these eyes (class `path`, a user's camera path) instead of drawing viewpoints from `classes`.
+    pub eyes: Option<Vec<[f64; 3]>>,
 }
 
 impl Default for EvalOptions {
@@ -62,6 +69,9 @@ impl Default for EvalOptions {
             rng_seed: 1,
             fov_deg: 360.0,
             per_triangle: true,
+            safe: SafeParams::default(),
+            safe_regions: true,
+            eyes: None,
         }
     }
 }
@@ -118,6 +128,8 @@ pub struct Evaluation {
     pub ground_truth_seconds_per_viewpoint: f64,
     /// Seconds to prepare the per-triangle regions (0 when not evaluated).
     pub per_triangle_setup_seconds: f64,
+    /// Seconds to compute the conservative regions of `safe_regions` (0 when not evaluated).
+    pub safe_regions_setup_seconds: f64,
 }
 
 /// Times `cull_into` for one camera: the median of 15 runs after a warm-up, in nanoseconds. The result is left in
@@ -213,15 +225,32 @@ impl GroundTruthSet {
         anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
         let truth = GroundTruth::new(tin);
         let all_around = opts.fov_deg >= 360.0;
-        let total = opts.viewpoints * opts.classes.len();
+        let groups: Vec<(ViewpointClass, Vec<DVec3>, u64)> = match &opts.eyes {
+            Some(eyes) => {
+                anyhow::ensure!(!eyes.is_empty(), "no eyes to score");
+                vec![(
+                    ViewpointClass::Path,
+                    eyes.iter().map(|&e| DVec3::from_array(e)).collect(),
+                    opts.rng_seed,
+                )]
+            }
+            None => opts
+                .classes
+                .iter()
+                .enumerate()
+                .map(|(ci, &class)| {
+                    let seed = opts
+                        .rng_seed
+                        .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                        .wrapping_add(ci as u64);
+                    (class, truth::viewpoints(tin, class, opts.viewpoints, seed), seed)
+                })
+                .collect(),
+        };
+        let total: usize = groups.iter().map(|g| g.1.len()).sum();
         let mut views = Vec::with_capacity(total);
         let mut truth_seconds = 0.0;
-        for (ci, &class) in opts.classes.iter().enumerate() {
-            let seed = opts
-                .rng_seed
-                .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-                .wrapping_add(ci as u64);
-            let eyes = truth::viewpoints(tin, class, opts.viewpoints, seed);
+        for (class, eyes, seed) in groups {
             let mut yaw_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
             for eye in eyes {
                 let yaw = if all_around {
@@ -280,11 +309,12 @@ pub fn standard_methods<'a>(
     h: &Hierarchy,
     per_triangle: Option<&Hierarchy>,
     order: Option<&'a [u32]>,
+    safe: SafeParams,
 ) -> Vec<Method<'a>> {
     vec![
         Method {
             name: "safe",
-            culler: Some(AnyCuller::new(h, CullMethod::Safe)),
+            culler: Some(AnyCuller::with_params(h, CullMethod::Safe, safe)),
             order,
         },
         Method {
@@ -400,12 +430,15 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
         });
     }
     let mut rows = Vec::new();
-    let classes: Vec<String> = opts
-        .classes
-        .iter()
-        .map(|c| c.name().to_string())
-        .chain(["all".into()])
-        .collect();
+    let classes: Vec<String> = match opts.eyes {
+        Some(_) => vec![ViewpointClass::Path.name().to_string()],
+        None => opts
+            .classes
+            .iter()
+            .map(|c| c.name().to_string())
+            .chain(["all".into()])
+            .collect(),
+    };
     for name in METHODS {
         for class in &classes {
             let views: Vec<&ViewpointResult> = results
@@ -452,6 +485,7 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
         ground_truth_seconds_per_viewpoint: truth.seconds_per_viewpoint,
         viewpoints: results,
         per_triangle_setup_seconds: 0.0,
+        safe_regions_setup_seconds: 0.0,
     })
 }
 
@@ -478,7 +512,16 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     };
     let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
     let truth = GroundTruthSet::compute(tin, opts, progress)?;
-    let methods = standard_methods(h, per_triangle.as_ref(), None);
+    let mut methods = standard_methods(h, per_triangle.as_ref(), None, opts.safe);
+    let start = Instant::now();
+    if opts.safe_regions {
+        methods.push(Method {
+            name: "safe_regions",
+            culler: Some(AnyCuller::Thesis(Culler::new(&pipeline::conservative_hierarchy(h)))),
+            order: None,
+        });
+    }
+    let safe_regions_setup_seconds = start.elapsed().as_secs_f64();
     let ranges = h.leaf_ranges();
     let leaves = Leaves {
         ranges: &ranges,
@@ -486,6 +529,7 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     };
     let mut e = score(tin, &truth, &methods, Some(leaves))?;
     e.per_triangle_setup_seconds = per_triangle_setup_seconds;
+    e.safe_regions_setup_seconds = safe_regions_setup_seconds;
     Ok(e)
 }
 

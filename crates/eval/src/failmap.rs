@@ -11,7 +11,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{Result, ensure};
-use cull::{Camera, Culler, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use tin::Tin;
@@ -60,9 +60,11 @@ pub fn grid_size(tin: &Tin, cell: f64) -> Result<(usize, usize)> {
     Ok((cols as usize, rows as usize))
 }
 
-/// Scores the culler of `h` (whose mesh is `tin`) from every cell. `progress` gets the number of cells done.
+/// Scores the culler `method` over `h` (whose mesh is `tin`) from every cell. `progress` gets the number of cells
+/// done.
 pub fn compute(
     h: &Hierarchy,
+    method: CullMethod,
     tin: &Tin,
     eye_height: f64,
     cell: f64,
@@ -73,7 +75,7 @@ pub fn compute(
     let (cols, rows) = grid_size(tin, cell)?;
     let b = tin.bbox();
     let truth = GroundTruth::new(tin);
-    let culler = Culler::new(h);
+    let culler = AnyCuller::new(h, method);
     let n = tin.num_triangles();
     let done = AtomicU64::new(0);
     // Row 0 is the northern edge, as in the image.

@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use cull::{Camera, Culler, Hierarchy};
+use cull::{Camera, Culler, DrawList, Hierarchy, SafeCuller, SafeParams};
 use glam::{DVec2, DVec3};
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::RegionTable;
@@ -108,6 +108,11 @@ pub struct CaseResult {
     pub culled_mean: f64,
     /// Mean ground-truth visible triangles per viewpoint.
     pub visible_mean: f64,
+    /// The safe culler (`cull::SafeCuller`) on the same hierarchy and viewpoints: largest false culls of one
+    /// viewpoint (0 is its theorem).
+    pub safe_false_culls_max: usize,
+    /// The safe culler's mean occlusion captured (`None`: nothing hidden anywhere).
+    pub safe_occlusion_captured_mean: Option<f64>,
     /// For cases compared with a reference (offsets): (viewpoint, triangle) pairs whose drawn flag differs.
     pub drawn_diff: Option<usize>,
     /// For cases compared with a reference: difference in leaf groups.
@@ -203,6 +208,8 @@ struct Built {
 struct Scores {
     metrics: Vec<truth::ViewMetrics>,
     masks: Vec<Vec<bool>>,
+    /// The safe culler's metrics from the same viewpoints.
+    safe: Vec<truth::ViewMetrics>,
 }
 
 fn build_case(tin: &Tin, params: &BuildParams) -> Result<Built> {
@@ -234,23 +241,36 @@ fn check(h: &Hierarchy) -> Result<(), String> {
 /// Scores the hierarchy culler of `b` against ground truth on `tin` (original order) from `eyes`.
 fn score(tin: &Tin, truth: &GroundTruth, b: &Built, eyes: &[Eye]) -> Result<Scores> {
     let culler = Culler::new(&b.hierarchy);
+    let safe = SafeCuller::new(&b.hierarchy, SafeParams::default());
     let n = tin.num_triangles();
     let mut metrics = Vec::with_capacity(eyes.len());
+    let mut safe_metrics = Vec::with_capacity(eyes.len());
     let mut masks = Vec::with_capacity(eyes.len());
-    for (_, eye) in eyes {
-        let visible = truth.visible_triangles(*eye);
-        let list = culler.cull(&Camera::all_around(eye.to_array()));
-        let in_order = list.mask(n);
+    let mut list = DrawList::default();
+    // The culler's mask in the TIN's original triangle order.
+    let in_tin_order = |in_order: Vec<bool>| {
         let mut drawn = vec![false; n];
         for (pos, &t) in b.order.iter().enumerate() {
             if let (Some(d), Some(&m)) = (drawn.get_mut(t as usize), in_order.get(pos)) {
                 *d = m;
             }
         }
+        drawn
+    };
+    for (_, eye) in eyes {
+        let visible = truth.visible_triangles(*eye);
+        let camera = Camera::all_around(eye.to_array());
+        let drawn = in_tin_order(culler.cull(&camera).mask(n));
         metrics.push(view_metrics(tin, &visible, &drawn)?);
         masks.push(drawn);
+        safe.cull_into(&camera, &mut list);
+        safe_metrics.push(view_metrics(tin, &visible, &in_tin_order(list.mask(n)))?);
     }
-    Ok(Scores { metrics, masks })
+    Ok(Scores {
+        metrics,
+        masks,
+        safe: safe_metrics,
+    })
 }
 
 fn fill(case: &mut CaseResult, tin: &Tin, params: &BuildParams, b: &Built, s: &Scores) {
@@ -276,6 +296,9 @@ fn fill(case: &mut CaseResult, tin: &Tin, params: &BuildParams, b: &Built, s: &S
     case.occlusion_captured_mean = (!occ.is_empty()).then(|| occ.iter().sum::<f64>() / occ.len() as f64);
     case.culled_mean = m.iter().map(|v| v.culled as f64).sum::<f64>() / k;
     case.visible_mean = m.iter().map(|v| v.visible as f64).sum::<f64>() / k;
+    case.safe_false_culls_max = s.safe.iter().map(|v| v.false_culls).max().unwrap_or(0);
+    let occ: Vec<f64> = s.safe.iter().filter_map(|v| v.occlusion_captured).collect();
+    case.safe_occlusion_captured_mean = (!occ.is_empty()).then(|| occ.iter().sum::<f64>() / occ.len() as f64);
     case.status = "ok".into();
 }
 
@@ -771,7 +794,7 @@ impl StressReport {
     /// A readable table: one line per case, then the seed spread.
     pub fn table(&self) -> String {
         let mut s = format!(
-            "{:<24} {:<10} {:>6} {:>6} {:>8} {:>6} {:>6} {:>4} {:>5} {:>8} {:>6} {:>6} {:>9} {:>8}  note\n",
+            "{:<24} {:<10} {:>6} {:>6} {:>8} {:>6} {:>6} {:>4} {:>5} {:>8} {:>6} {:>6} {:>9} {:>8} {:>7} {:>9}  note\n",
             "case",
             "category",
             "V",
@@ -785,7 +808,9 @@ impl StressReport {
             "fc_max",
             "fc_vw",
             "occl_capt",
-            "culled"
+            "culled",
+            "safe_fc",
+            "safe_occl"
         );
         for c in &self.cases {
             if c.status != "ok" {
@@ -806,7 +831,7 @@ impl StressReport {
                 );
             }
             s += &format!(
-                "{:<24} {:<10} {:>6} {:>6} {:>8.2} {:>6} {:>6} {:>4} {:>5} {:>8.2} {:>6} {:>6} {:>9} {:>8.1}  {}\n",
+                "{:<24} {:<10} {:>6} {:>6} {:>8.2} {:>6} {:>6} {:>4} {:>5} {:>8.2} {:>6} {:>6} {:>9} {:>8.1} {:>7} {:>9}  {}\n",
                 c.name,
                 c.category,
                 c.vertices,
@@ -821,6 +846,8 @@ impl StressReport {
                 c.viewpoints_with_false_culls,
                 c.occlusion_captured_mean.map_or("-".into(), |x| format!("{x:.3}")),
                 c.culled_mean,
+                c.safe_false_culls_max,
+                c.safe_occlusion_captured_mean.map_or("-".into(), |x| format!("{x:.3}")),
                 note
             );
         }

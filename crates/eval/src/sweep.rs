@@ -296,7 +296,12 @@ pub fn run_combo(
 ) -> Result<ComboResult> {
     let b = build(tin, &combo.params, progress)?;
     let per_triangle = per_triangle.then(|| per_triangle_hierarchy(tin, &triangle_regions(tin, &b.vertex_regions)));
-    let methods = standard_methods(&b.hierarchy, per_triangle.as_ref(), Some(&b.crystal.order));
+    let methods = standard_methods(
+        &b.hierarchy,
+        per_triangle.as_ref(),
+        Some(&b.crystal.order),
+        truth.options.safe,
+    );
     let ranges = b.hierarchy.leaf_ranges();
     let leaves = Leaves {
         ranges: &ranges,
@@ -428,7 +433,7 @@ mod tests {
         let direct = score(
             &htin,
             &direct_truth,
-            &standard_methods(&b.hierarchy, Some(&pt), None),
+            &standard_methods(&b.hierarchy, Some(&pt), None, Default::default()),
             None,
         )
         .unwrap();

@@ -1,5 +1,6 @@
-//! The safe culler on the bundled terrains: zero false culls in every viewpoint of every class, over several build
-//! configurations, and the occlusion it captures pinned from below (seeded viewpoints, deterministic culls).
+//! The safe culler and the conservative precomputed regions on the bundled terrains: zero false culls in every
+//! viewpoint of every class, over several build configurations, and the occlusion the safe culler captures pinned
+//! from below (seeded viewpoints, deterministic culls).
 
 use std::path::Path;
 

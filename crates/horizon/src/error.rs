@@ -31,9 +31,9 @@ pub enum HorizonError {
         radius: f64,
     },
     /// A vertex coordinate is outside the range the exact predicates support.
-    #[error("vertex {vertex} has {axis} = {value}: coordinates must be 0 or between 2^-100 and 2^100 in magnitude")]
+    #[error("vertex {vertex} has {axis} = {value:e}: coordinates must be 0 or between 2^-100 and 2^100 in magnitude")]
     CoordinateOutOfRange {
-        /// Index of the offending vertex.
+        /// 1-based number of the offending vertex (as in an OBJ file).
         vertex: usize,
         /// `"x"`, `"y"` or `"z"`.
         axis: &'static str,

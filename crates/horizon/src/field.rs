@@ -19,7 +19,6 @@ use serde::{Deserialize, Serialize};
 use tin::Tin;
 
 use crate::error::HorizonError;
-use crate::predicates::COORDINATE_LIMIT;
 use crate::sector::{SectorConfig, SectorGeometry};
 use crate::{NO_HORIZON, oracle, sweep, undersampling};
 
@@ -327,9 +326,12 @@ fn validate(tin: &Tin, opts: &HorizonOptions) -> Result<(), HorizonError> {
     }
     for (vertex, p) in tin.positions().iter().enumerate() {
         for (axis, value) in [("x", p.x), ("y", p.y), ("z", p.z)] {
-            let m = value.abs();
-            if !(m == 0.0 || (1.0 / COORDINATE_LIMIT..=COORDINATE_LIMIT).contains(&m)) {
-                return Err(HorizonError::CoordinateOutOfRange { vertex, axis, value });
+            if !tin::coordinate_in_range(value) {
+                return Err(HorizonError::CoordinateOutOfRange {
+                    vertex: vertex + 1,
+                    axis,
+                    value,
+                });
             }
         }
     }

@@ -6,7 +6,8 @@
 //! almost every call; the rare near-degenerate case falls back to exact expansion arithmetic (Shewchuk, *Adaptive
 //! Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates*, 1997: `two_sum`, `two_product` with
 //! Dekker's split, zero-eliminating grow-expansion). Because the sweep and the oracle call the same functions on the
-//! same f64 values, they cannot disagree because of rounding.
+//! same f64 values, they cannot disagree because of rounding. Orientation itself is not implemented here: it is the
+//! project's one exact predicate, [`tin::predicates`], re-exported as [`orient2d`].
 //!
 //! Exactness needs the products to stay inside the normal f64 range; [`crate::compute`] rejects coordinates outside
 //! `0 ∪ [2^-100, 2^100]` in magnitude (see [`COORDINATE_LIMIT`]).
@@ -16,13 +17,11 @@ use std::cmp::Ordering;
 use glam::DVec2;
 
 /// Largest coordinate magnitude accepted by the exact predicates (2^100); smaller non-zero magnitudes than
-/// `1 / COORDINATE_LIMIT` are rejected too, so that no product underflows.
-pub const COORDINATE_LIMIT: f64 = 1.267_650_600_228_229_4e30;
+/// `1 / COORDINATE_LIMIT` are rejected too, so that no product underflows. The project's one limit, checked at import.
+pub use tin::COORDINATE_LIMIT;
 
 const EPS: f64 = f64::EPSILON * 0.5; // unit roundoff 2^-53
 const SPLITTER: f64 = 134_217_729.0; // 2^27 + 1
-/// Shewchuk's `ccwerrboundA`.
-const CCW_ERR_BOUND: f64 = (3.0 + 16.0 * EPS) * EPS;
 /// Bound on the error of a difference of two [`LineKey`] values, relative to the sum of their magnitudes
 /// (each key is within `2u(1+u)` of exact relative to its magnitude; generous margin).
 const KEY_ERR_BOUND: f64 = 8.0 * EPS;
@@ -53,15 +52,6 @@ fn two_product(a: f64, b: f64) -> (f64, f64) {
     let err2 = err1 - alo * bhi;
     let err3 = err2 - ahi * blo;
     (x, alo * blo - err3)
-}
-
-/// `a - b = x + y` exactly.
-#[inline]
-fn two_diff(a: f64, b: f64) -> (f64, f64) {
-    let x = a - b;
-    let bv = a - x;
-    let av = x + bv;
-    (x, (a - av) + (bv - b))
 }
 
 /// The exact sign of a sum of at most 32 doubles.
@@ -109,60 +99,9 @@ fn exact_sign_of_products(pairs: &[(f64, f64)]) -> Ordering {
 }
 
 /// The sign of the orientation of the triangle `a, b, c`: `Greater` when counter-clockwise (c left of a→b),
-/// `Less` when clockwise, `Equal` when collinear. Exact for finite inputs in the accepted range.
-#[inline]
-pub fn orient2d(a: DVec2, b: DVec2, c: DVec2) -> Ordering {
-    let detleft = (a.x - c.x) * (b.y - c.y);
-    let detright = (a.y - c.y) * (b.x - c.x);
-    let det = detleft - detright;
-    let detsum = if detleft > 0.0 {
-        if detright <= 0.0 {
-            return sign(det);
-        }
-        detleft + detright
-    } else if detleft < 0.0 {
-        if detright >= 0.0 {
-            return sign(det);
-        }
-        -detleft - detright
-    } else {
-        return sign(det);
-    };
-    if det.abs() >= CCW_ERR_BOUND * detsum {
-        return sign(det);
-    }
-    orient2d_exact(a, b, c)
-}
-
-#[cold]
-fn orient2d_exact(a: DVec2, b: DVec2, c: DVec2) -> Ordering {
-    // (a - c) x (b - c) with every difference split into an exact two-term expansion.
-    let (acx1, acx0) = two_diff(a.x, c.x);
-    let (bcy1, bcy0) = two_diff(b.y, c.y);
-    let (acy1, acy0) = two_diff(a.y, c.y);
-    let (bcx1, bcx0) = two_diff(b.x, c.x);
-    exact_sign_of_products(&[
-        (acx1, bcy1),
-        (acx1, bcy0),
-        (acx0, bcy1),
-        (acx0, bcy0),
-        (-acy1, bcx1),
-        (-acy1, bcx0),
-        (-acy0, bcx1),
-        (-acy0, bcx0),
-    ])
-}
-
-#[inline]
-fn sign(x: f64) -> Ordering {
-    if x > 0.0 {
-        Ordering::Greater
-    } else if x < 0.0 {
-        Ordering::Less
-    } else {
-        Ordering::Equal
-    }
-}
+/// `Less` when clockwise, `Equal` when collinear; exact. The project's one orientation predicate,
+/// [`tin::predicates::orientation`].
+pub use tin::predicates::orientation as orient2d;
 
 /// A point's position across a line direction `e`: the value `cross(e, x) = e.x·x.y − e.y·x.x`, in f64, with the
 /// magnitude needed to bound its rounding error.
@@ -278,7 +217,6 @@ mod tests {
             let (a, b, c) = (DVec2::new(ax, ay), DVec2::new(bx, by), DVec2::new(cx, cy));
             let expect = orient_int((to_int(ax), to_int(ay)), (to_int(bx), to_int(by)), (to_int(cx), to_int(cy)));
             prop_assert_eq!(orient2d(a, b, c), expect);
-            prop_assert_eq!(orient2d_exact(a, b, c), expect);
         }
 
         #[test]

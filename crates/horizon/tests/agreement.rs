@@ -168,7 +168,7 @@ fn rejects_bad_options_and_coordinates() {
     assert!(matches!(
         compute(&huge, &cfg, &HorizonOptions::default()),
         Err(horizon::HorizonError::CoordinateOutOfRange {
-            vertex: 1,
+            vertex: 2,
             axis: "x",
             ..
         })

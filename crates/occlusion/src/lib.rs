@@ -5,9 +5,11 @@
 //! regions; a [`RegionTable`] holds them for many elements and all sectors.
 #![warn(missing_docs)]
 
+pub mod conservative;
 pub mod region;
 pub mod table;
 
+pub use conservative::{NodeShape, Polyline, conservative_regions};
 pub use horizon::SectorHorizon;
 pub use region::{Region, intersect_all};
 pub use table::{RegionTable, plane_t};

@@ -22,14 +22,13 @@
 //!     fields and values as the `.tch` file (and its JSON form), so a loader can rebuild the [`cull::Hierarchy`]
 //!     without the `.tch` ([`hierarchy_from_gltf_json`] does exactly that, positions from the f32 buffer).
 //!
-//! Output files are written atomically ([`tin::write_atomic`]).
+//! [`gltf_files`] returns the bytes of the files; the caller writes them (the CLI through its one writer).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, bail, ensure};
 use cull::{Hierarchy, Mesh, Node};
 use serde_json::{Value, json};
-use tin::write_atomic;
 
 use crate::palette::{ORPHAN_COLOUR, group_colour};
 
@@ -220,25 +219,37 @@ pub fn to_glb(h: &Hierarchy) -> Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Writes `h` as glTF: a `.glb` when `path` ends in `.glb`, else `.gltf` JSON with the buffer in a `.bin` beside it
-/// (same stem). Returns the paths written.
-pub fn write_gltf(h: &Hierarchy, path: &Path) -> Result<Vec<std::path::PathBuf>> {
-    let glb = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    if glb {
-        let bytes = to_glb(h)?;
-        write_atomic(path, |w| w.write_all(&bytes))?;
-        return Ok(vec![path.to_path_buf()]);
+/// The files of `h` as glTF for `path`: the `.glb` alone when `path` ends in `.glb` (any case), else the `.gltf`
+/// JSON and the `.bin` buffer beside it (same stem; the JSON names it by its file name). The caller writes them (the
+/// CLI through its one output writer, all or none).
+pub fn gltf_files(h: &Hierarchy, path: &Path) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    if is_glb(path) {
+        return Ok(vec![(path.to_path_buf(), to_glb(h)?)]);
     }
-    let bin_path = path.with_extension("bin");
-    let uri = bin_path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .context("the glTF path has no file name")?;
+    let (bin_path, uri) = bin_path(path)?;
     let (doc, bin) = to_gltf(h, Some(&uri))?;
     let text = serde_json::to_string_pretty(&doc)?;
-    write_atomic(&bin_path, |w| w.write_all(&bin))?;
-    write_atomic(path, |w| w.write_all(text.as_bytes()))?;
-    Ok(vec![path.to_path_buf(), bin_path])
+    Ok(vec![(path.to_path_buf(), text.into_bytes()), (bin_path, bin)])
+}
+
+/// Whether `path` asks for binary glTF (`.glb`, any case).
+pub fn is_glb(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+}
+
+/// The `.bin` beside a `.gltf` file and the `uri` that names it; refused when `path` itself ends in `.bin`.
+pub fn bin_path(path: &Path) -> Result<(PathBuf, String)> {
+    ensure!(
+        !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("bin")),
+        "{}: a .gltf output cannot end in .bin, which is its buffer's name",
+        path.display()
+    );
+    let bin = path.with_extension("bin");
+    let uri = bin
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .with_context(|| format!("{}: the glTF path has no file name", path.display()))?;
+    Ok((bin, uri))
 }
 
 /// Rebuilds the hierarchy from a glTF document written by [`to_gltf`] and its binary buffer: nodes, roots, regions

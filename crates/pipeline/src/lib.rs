@@ -3,14 +3,14 @@
 //! that they only shrink). Per-triangle regions are only made for the per-triangle evaluation method
 //! ([`triangle_regions`]).
 //!
-//! Where it sits (data flows one way, left to right; nothing here depends on the evaluation, the viewer or the CLI):
+//! Where it sits: the data of a build flows `tin → horizon → occlusion → crystal → cull::Hierarchy`, and this crate
+//! drives that flow. Crate dependencies point one way, down: this crate uses `tin`, `horizon`, `occlusion`,
+//! `crystal` and `cull` (the run-time format and sector geometry, which `occlusion` and `crystal` share so that
+//! precomputation and run time agree); `eval`, `viewer` and the `tincull` command line use it, never the other way
+//! round. It writes no files (see [`export`]) and compiles no GPU code: `cargo tree -e normal -p pipeline` lists 54
+//! crates.
 //!
-//! ```text
-//! tin ──► horizon ──► occlusion ──► crystal ──► cull
-//!  └─────────┴────────────┴─────────────┴─────────┴──► pipeline ──► eval ──► viewer ──► tincull (CLI)
-//! ```
-//!
-//! Besides [`build`] it owns the writers for people and other tools ([`export`]: the grouped OBJ + MTL and the
+//! Besides [`build`] it owns the content for people and other tools ([`export`]: the grouped OBJ + MTL and the
 //! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
 #![warn(missing_docs)]
 
@@ -126,6 +126,9 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     let vertex_regions = RegionTable::from_field(tin.positions(), &field);
     drop(field);
     let regions_seconds = start.elapsed().as_secs_f64();
+    if let Some(p) = &progress {
+        p("regions", 1, 1);
+    }
 
     if let Some(p) = &progress {
         p("grouping", 0, 1);
@@ -133,6 +136,9 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     let start = Instant::now();
     let crystal = crystal::build(tin, &vertex_regions, &params.crystal)?;
     let grouping_seconds = start.elapsed().as_secs_f64();
+    if let Some(p) = &progress {
+        p("grouping", 1, 1);
+    }
 
     let hierarchy = export_hierarchy(tin, &crystal, params);
     let s = &crystal.stats;
@@ -287,4 +293,41 @@ pub fn per_triangle_hierarchy(tin: &Tin, triangle_regions: &RegionTable) -> Hier
         },
         build: BuildInfo::default(),
     }
+}
+
+/// `h` with every node's regions replaced by conservative ones ([`occlusion::conservative`]): the thesis' run-time
+/// test over them never culls a visible triangle. Computed from the hierarchy's own mesh and circles (widened to
+/// cover their f32 storage), so it applies to any hierarchy, crystal or not.
+pub fn conservative_hierarchy(h: &Hierarchy) -> Hierarchy {
+    let positions: Vec<glam::DVec3> = h.mesh.positions.iter().map(|&p| glam::DVec3::from_array(p)).collect();
+    let order: Vec<u32> = (0..h.mesh.triangles.len() as u32).collect();
+    let [ox, oy, oz] = h.origin;
+    let shapes: Vec<occlusion::NodeShape> = h
+        .nodes
+        .iter()
+        .map(|n| {
+            let centre = glam::DVec2::new(ox + f64::from(n.centre[0]), oy + f64::from(n.centre[1]));
+            // The world centre is rounded once (relative error ε): grow the radius by far more.
+            let slack = 1e-12 * (centre.x.abs() + centre.y.abs()) + 1e-9;
+            occlusion::NodeShape {
+                triangles: &order[n.triangles[0] as usize..n.triangles[1] as usize],
+                centre,
+                radius: f64::from(n.radius) + slack,
+            }
+        })
+        .collect();
+    let regions = occlusion::conservative_regions(&positions, &h.mesh.triangles, &shapes, h.sectors);
+    let mut out = h.clone();
+    for (node, rows) in out.nodes.iter_mut().zip(regions) {
+        node.regions = rows
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, r)| {
+                let (points, tail) = r?;
+                let origin_t = occlusion::plane_t(h.sectors, i as u32, glam::DVec2::new(ox, oy));
+                StoredRegion::from_f64(i as u16, &points, tail, origin_t, oz)
+            })
+            .collect();
+    }
+    out
 }

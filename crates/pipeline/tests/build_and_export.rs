@@ -1,7 +1,9 @@
 //! The pipeline on a small synthetic terrain: the build's figures agree with its hierarchy, the JSON form round
 //! trips, and the grouped OBJ has one group per leaf with its own material.
 
-use pipeline::export::{from_json, to_json, write_grouped_obj, write_json};
+use std::path::Path;
+
+use pipeline::export::{from_json, mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
 use pipeline::{BuildParams, build};
 use tin::{SynthOptions, synth_tin};
 
@@ -26,11 +28,6 @@ fn build_report_matches_the_hierarchy() {
 fn json_round_trip_is_identity() {
     let h = built().hierarchy;
     assert_eq!(from_json(&to_json(&h).expect("json")).expect("parses"), h);
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("h.json");
-    write_json(&h, &path).expect("writes");
-    let text = std::fs::read_to_string(&path).expect("reads");
-    assert_eq!(from_json(&text).expect("parses"), h);
     let mut broken = h.clone();
     broken.roots.push(broken.nodes.len() as u32);
     let text = to_json(&broken).expect("json");
@@ -40,11 +37,17 @@ fn json_round_trip_is_identity() {
 #[test]
 fn grouped_obj_has_one_group_and_material_per_leaf() {
     let h = built().hierarchy;
-    let dir = tempfile::tempdir().expect("tempdir");
-    let obj = dir.path().join("g.obj");
-    write_grouped_obj(&h, &obj).expect("writes");
-    let text = std::fs::read_to_string(&obj).expect("obj");
-    let mtl = std::fs::read_to_string(dir.path().join("g.mtl")).expect("mtl");
+    let (mtl_file, mtl_name) = mtl_path(Path::new("out/g.obj")).expect("an OBJ path");
+    assert_eq!(
+        (mtl_file.as_path(), mtl_name.as_str()),
+        (Path::new("out/g.mtl"), "g.mtl")
+    );
+    let mut text = Vec::new();
+    write_grouped_obj_to(&h, &mtl_name, &mut text).expect("writes");
+    let text = String::from_utf8(text).expect("text");
+    let mut mtl = Vec::new();
+    write_mtl_to(&h, &mut mtl).expect("writes");
+    let mtl = String::from_utf8(mtl).expect("text");
     let leaves = h.leaf_ranges().len();
     assert_eq!(text.lines().filter(|l| l.starts_with("g group_")).count(), leaves);
     assert_eq!(mtl.lines().filter(|l| l.starts_with("newmtl group_")).count(), leaves);
@@ -58,4 +61,11 @@ fn grouped_obj_has_one_group_and_material_per_leaf() {
     );
     assert!(text.contains("mtllib g.mtl"));
     assert!(mtl.contains("newmtl orphans"));
+}
+
+#[test]
+fn an_obj_named_like_its_materials_is_refused() {
+    let e = mtl_path(Path::new("same.mtl")).expect_err("would overwrite its own materials");
+    assert!(e.to_string().contains("same.mtl"), "{e}");
+    assert!(mtl_path(Path::new("noext")).is_ok());
 }

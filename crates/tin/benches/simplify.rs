@@ -14,45 +14,13 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use glam::DVec2;
-use tin::{Grid, SimplifyOptions, SynthOptions, simplify, synth_grid, synth_tin};
+use tin::{DemOptions, Grid, SimplifyOptions, SynthOptions, simplify, synth_grid, synth_tin};
 
 const DEM_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/dem");
 
-/// A little-endian int16 `.npy` of the given shape (bench-only reader).
-fn read_npy_i16(path: &str, rows: usize, cols: usize, dx: f64, dy: f64) -> Option<Grid> {
-    let bytes = std::fs::read(path).ok()?;
-    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return None;
-    }
-    let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    let header = std::str::from_utf8(bytes.get(10..10 + header_len)?).ok()?;
-    if !header.contains("'<i2'") || !header.contains(&format!("({rows}, {cols})")) {
-        return None;
-    }
-    let z = bytes[10 + header_len..]
-        .chunks_exact(2)
-        .map(|b| f64::from(i16::from_le_bytes([b[0], b[1]])))
-        .collect();
-    Grid::new(rows, cols, dx, dy, DVec2::ZERO, z).ok()
-}
-
-/// An SRTM3 `.hgt` tile (1201 x 1201 big-endian int16, -32768 = void) at latitude `lat` (bench-only reader).
-fn read_hgt(path: &str, lat: f64) -> Option<Grid> {
-    let bytes = std::fs::read(path).ok()?;
-    if bytes.len() != 1201 * 1201 * 2 {
-        return None;
-    }
-    let z = bytes
-        .chunks_exact(2)
-        .map(|b| match i16::from_be_bytes([b[0], b[1]]) {
-            -32768 => f64::NAN,
-            h => f64::from(h),
-        })
-        .collect();
-    let dy = 3.0 / 3600.0 * 111_320.0;
-    let dx = dy * lat.to_radians().cos();
-    Grid::new(1201, 1201, dx, dy, DVec2::ZERO, z).ok()
+/// A DEM of `../shared/dem` through the crate's own readers (`.npy` with its sidecar, SRTM `.hgt`).
+fn read(name: &str) -> tin::Result<Grid> {
+    tin::read_dem(&std::path::Path::new(DEM_DIR).join(name), &DemOptions::default())
 }
 
 fn bench_grid(c: &mut Criterion, name: &str, grid: &Grid, vertices: usize) {
@@ -88,17 +56,15 @@ fn simplification(c: &mut Criterion) {
         }
     };
     bench_grid(c, "simplify/synthetic_1201/100k", &grid, 100_000);
-    match read_npy_i16(&format!("{DEM_DIR}/jacksboro_fault.npy"), 344, 403, 74.485, 92.767) {
-        Some(g) => bench_grid(c, "simplify/jacksboro_fault/10k", &g, 10_000),
-        None => eprintln!("skipping jacksboro_fault: {DEM_DIR}/jacksboro_fault.npy not found or not 344 x 403 int16"),
-    }
-    match read_hgt(&format!("{DEM_DIR}/N43W123.hgt"), 43.5) {
-        Some(g) => bench_grid(c, "simplify/N43W123/100k", &g, 100_000),
-        None => eprintln!("skipping N43W123: {DEM_DIR}/N43W123.hgt not found"),
-    }
-    match read_hgt(&format!("{DEM_DIR}/N50E008.hgt"), 50.5) {
-        Some(g) => bench_grid(c, "simplify/N50E008/100k", &g, 100_000),
-        None => eprintln!("skipping N50E008: {DEM_DIR}/N50E008.hgt not found"),
+    for (file, name, vertices) in [
+        ("jacksboro_fault.npy", "simplify/jacksboro_fault/10k", 10_000),
+        ("N43W123.hgt", "simplify/N43W123/100k", 100_000),
+        ("N50E008.hgt", "simplify/N50E008/100k", 100_000),
+    ] {
+        match read(file) {
+            Ok(g) => bench_grid(c, name, &g, vertices),
+            Err(e) => eprintln!("skipping {name}: {e}"),
+        }
     }
 }
 

@@ -170,7 +170,7 @@ fn dedupe(points: &[DVec3], policy: DedupePolicy) -> Result<(Vec<usize>, Delauna
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::orient2d;
+    use crate::predicates::orient2d;
     use proptest::prelude::*;
 
     fn in_circumcircle(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {

@@ -4,24 +4,24 @@
 //! local origin for f32 conversion. It is built by Delaunay triangulation ([`triangulate`]) of points that come
 //! from OBJ files or DEM grids, or from the simplification of a grid.
 
-pub mod atomic;
 pub mod delaunay;
 pub mod dem;
 pub mod error;
 pub mod grid;
 pub mod mesh;
 pub mod obj;
+pub mod predicates;
 pub mod simplify;
 pub mod synth;
 pub mod validate;
 
-pub use atomic::write_atomic;
 pub use delaunay::{DedupePolicy, DelaunayReport, triangulate};
 pub use dem::{DemOptions, read_dem};
 pub use error::{Result, TinError};
 pub use grid::Grid;
-pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points, orient2d};
-pub use obj::{ObjImportOptions, ObjImportReport, ObjLineError, parse_obj, read_obj, write_obj, write_obj_to};
+pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points};
+pub use obj::{ObjImportOptions, ObjImportReport, ObjLineError, parse_obj, read_obj, write_obj_to};
+pub use predicates::{COORDINATE_LIMIT, coordinate_in_range, orient2d, orientation};
 pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify};
 pub use synth::{SynthOptions, synth_grid, synth_tin};
 pub use validate::{MeshStats, PrecisionReport, ValidationReport, find_overlaps, mesh_stats, validate, validate_parts};

@@ -3,6 +3,7 @@
 use glam::{DVec2, DVec3};
 
 use crate::error::{Result, TinError};
+use crate::predicates::orient2d;
 
 /// Marks a triangle edge with no neighbour (a boundary edge) in [`Tin::neighbours`].
 pub const NO_NEIGHBOUR: u32 = u32::MAX;
@@ -241,11 +242,6 @@ impl VertexTriangles {
         let v = v as usize;
         &self.indices[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
-}
-
-/// Twice the signed area of triangle `abc` in x,y: positive when counter-clockwise.
-pub fn orient2d(a: DVec2, b: DVec2, c: DVec2) -> f64 {
-    (b - a).perp_dot(c - a)
 }
 
 /// A circle enclosing all `points` (Ritter's bounding circle, then grown to cover every point exactly).

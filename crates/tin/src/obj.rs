@@ -27,8 +27,8 @@
 //! lines. Vertex numbers in messages are the file's own 1-based numbers.
 //!
 //! Export writes `v` lines with Rust's shortest round-trip formatting of f64 (`{}`), so positions survive export and
-//! import bit for bit, and `f` lines with the TIN's triangles in order; writing is atomic (see
-//! [`crate::atomic::write_atomic`]).
+//! import bit for bit, and `f` lines with the TIN's triangles in order ([`write_obj_to`], to any writer; tincull puts
+//! it in a file with its one output writer, the `outfile` crate).
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -36,11 +36,11 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
-use crate::atomic::write_atomic;
 use crate::delaunay::{DedupePolicy, triangulate};
 use crate::error::{Result, TinError};
 use crate::mesh::Tin;
-use crate::validate::{find_overlaps, orient_exact};
+use crate::predicates::orient2d;
+use crate::validate::find_overlaps;
 
 /// Largest polygon (number of vertices in one face) the importer triangulates.
 pub const MAX_POLYGON_VERTICES: usize = 1024;
@@ -108,6 +108,16 @@ pub enum ObjLineError {
     BadWeight {
         /// The value read.
         w: f64,
+    },
+    /// A vertex coordinate is finite but outside the range every stage accepts ([`crate::COORDINATE_LIMIT`]).
+    #[error("vertex {vertex} has {axis} = {value:e}: coordinates must be 0 or between 2^-100 and 2^100 in magnitude")]
+    OutOfRange {
+        /// 1-based vertex number.
+        vertex: usize,
+        /// `"x"`, `"y"` or `"z"`.
+        axis: &'static str,
+        /// The value read.
+        value: f64,
     },
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} has a non-finite coordinate ({x}, {y}, {z})")]
@@ -329,6 +339,11 @@ fn parse_lines(text: &[u8], path: &Path) -> Result<Parsed> {
                 if !(x.is_finite() && y.is_finite() && z.is_finite()) {
                     return Err(line_err(line, ObjLineError::NonFinite { vertex, x, y, z }));
                 }
+                for (axis, value) in [("x", x), ("y", y), ("z", z)] {
+                    if !crate::predicates::coordinate_in_range(value) {
+                        return Err(line_err(line, ObjLineError::OutOfRange { vertex, axis, value }));
+                    }
+                }
                 if p.positions.len() >= u32::MAX as usize {
                     return Err(TinError::format(
                         path,
@@ -549,11 +564,9 @@ fn ear_clip(polygon: &[u32], positions: &[DVec3]) -> Option<Vec<[u32; 3]>> {
         return None;
     }
     let sign = twice_area.signum();
-    let convex = |a: DVec2, b: DVec2, c: DVec2| orient_exact(a, b, c) * sign > 0.0;
+    let convex = |a: DVec2, b: DVec2, c: DVec2| orient2d(a, b, c) * sign > 0.0;
     let inside_closed = |a: DVec2, b: DVec2, c: DVec2, q: DVec2| {
-        orient_exact(a, b, q) * sign >= 0.0
-            && orient_exact(b, c, q) * sign >= 0.0
-            && orient_exact(c, a, q) * sign >= 0.0
+        orient2d(a, b, q) * sign >= 0.0 && orient2d(b, c, q) * sign >= 0.0 && orient2d(c, a, q) * sign >= 0.0
     };
     let mut ring = polygon.to_vec();
     let mut out = Vec::with_capacity(k - 2);
@@ -680,9 +693,4 @@ pub fn write_obj_to<W: Write + ?Sized>(tin: &Tin, out: &mut W) -> io::Result<()>
         writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
     }
     w.flush()
-}
-
-/// Writes `tin` to an OBJ file atomically (a temporary file in the same directory, renamed when complete).
-pub fn write_obj(tin: &Tin, path: &Path) -> Result<()> {
-    write_atomic(path, |w| write_obj_to(tin, w))
 }

@@ -32,6 +32,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::mesh::{Aabb, NO_NEIGHBOUR, Tin, local_origin};
+use crate::predicates::orient2d;
 
 /// A triangle whose smallest x,y angle is below this (degrees) is a sliver.
 pub const SLIVER_MIN_ANGLE_DEG: f64 = 5.0;
@@ -208,18 +209,12 @@ pub fn f32_step(m: f64) -> f64 {
     2f64.powi(exponent - 23)
 }
 
-/// Exact orientation of `abc` in x,y: positive when counter-clockwise, zero when collinear.
-pub(crate) fn orient_exact(a: DVec2, b: DVec2, c: DVec2) -> f64 {
-    let p = |v: DVec2| robust::Coord { x: v.x, y: v.y };
-    robust::orient2d(p(a), p(b), p(c))
-}
-
 /// Whether two counter-clockwise triangles have overlapping interiors (exact).
 pub(crate) fn interiors_overlap(a: &[DVec2; 3], b: &[DVec2; 3]) -> bool {
     let separates = |s: &[DVec2; 3], t: &[DVec2; 3]| {
         (0..3).any(|i| {
             let (p, q) = (s[i], s[(i + 1) % 3]);
-            t.iter().all(|&v| orient_exact(p, q, v) <= 0.0)
+            t.iter().all(|&v| orient2d(p, q, v) <= 0.0)
         })
     };
     !(separates(a, b) || separates(b, a))
@@ -248,7 +243,7 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
         if !c.iter().all(|p| p.is_finite()) {
             continue;
         }
-        let o = orient_exact(c[0], c[1], c[2]);
+        let o = orient2d(c[0], c[1], c[2]);
         if o == 0.0 {
             continue;
         }
@@ -398,7 +393,7 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
                 min_edge_xy = min_edge_xy.min(len);
             }
         }
-        let o = orient_exact(c[0], c[1], c[2]);
+        let o = orient2d(c[0], c[1], c[2]);
         if o == 0.0 || tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
             degenerate.push(t as u32);
             slivers.push(t as u32);
@@ -594,7 +589,7 @@ mod tests {
 
     fn tri(p: [(f64, f64); 3]) -> [DVec2; 3] {
         let mut t = p.map(|(x, y)| DVec2::new(x, y));
-        if orient_exact(t[0], t[1], t[2]) < 0.0 {
+        if orient2d(t[0], t[1], t[2]) < 0.0 {
             t.swap(1, 2);
         }
         t
@@ -680,7 +675,7 @@ mod tests {
         #[test]
         fn overlap_test_matches_clipping(p in prop::array::uniform3(small_point()), q in prop::array::uniform3(small_point())) {
             let (a, b) = (tri(p), tri(q));
-            prop_assume!(orient_exact(a[0], a[1], a[2]) != 0.0 && orient_exact(b[0], b[1], b[2]) != 0.0);
+            prop_assume!(orient2d(a[0], a[1], a[2]) != 0.0 && orient2d(b[0], b[1], b[2]) != 0.0);
             let area = intersection_area(&a, &b);
             // Intersection areas of triangles on a 7 x 7 integer grid are rationals far above 1e-6 when positive.
             prop_assert_eq!(interiors_overlap(&a, &b), area > 1e-6, "area {}", area);
@@ -726,7 +721,7 @@ mod tests {
             let mut expected = Vec::new();
             let ccw = |t: &[u32; 3]| {
                 let c = t.map(|v| positions[v as usize].truncate());
-                let o = orient_exact(c[0], c[1], c[2]);
+                let o = orient2d(c[0], c[1], c[2]);
                 (o != 0.0).then(|| if o < 0.0 { [c[0], c[2], c[1]] } else { c })
             };
             for i in 0..triangles.len() {

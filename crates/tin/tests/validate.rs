@@ -202,3 +202,19 @@ fn raw_parts_report_every_problem() {
     assert!(!r.is_height_field());
     assert!(r.warnings.len() >= 8, "{:?}", r.warnings);
 }
+
+/// A valid face of area 0.5 m² at UTM-sized coordinates, whose naive orientation rounds to zero: accepted, because
+/// `Tin::from_parts` decides orientation with the one exact predicate.
+#[test]
+fn from_parts_accepts_a_small_face_that_naive_orientation_calls_degenerate() {
+    let k = 134_217_728.0; // 2^27: (k + 1)(k - 1) rounds to k² in f64
+    let a = DVec3::new(500_000.0, 5_000_000.0, 10.0);
+    // Counter-clockwise: (b - a) x (c - a) = k·k - (k + 1)(k - 1) = 1.
+    let b = a + DVec3::new(k, k - 1.0, 1.0);
+    let c = a + DVec3::new(k + 1.0, k, 0.0);
+    let (ab, ac) = ((b - a).truncate(), (c - a).truncate());
+    assert_eq!(ab.perp_dot(ac), 0.0, "the naive formula rounds this face to zero area");
+    assert_eq!(tin::orient2d(a.truncate(), b.truncate(), c.truncate()), 1.0);
+    let tin = Tin::from_parts(vec![a, b, c], vec![[0, 1, 2]]).expect("a valid counter-clockwise face");
+    assert_eq!(tin.triangle_area_xy(0), 0.5);
+}

@@ -2,7 +2,7 @@
 //!
 //! A uniform grid over the TIN's x,y bounding box (about one cell per two triangles) lists in each cell the
 //! triangles whose bounding box meets it. [`Locator::locate`] tests the triangles of one cell with Shewchuk's exact
-//! orientation predicate (the `robust` crate), so a point on a shared edge or vertex is found deterministically
+//! orientation predicate ([`tin::orient2d`], through the `robust` crate), so a point on a shared edge or vertex is found deterministically
 //! (always the same one of the triangles that contain it, boundary included).
 //!
 //! For speed the walk ([`crate::walk`]) does not read the [`Tin`] directly: the locator keeps a copy of the triangles
@@ -20,17 +20,9 @@ use tin::{NO_NEIGHBOUR, Tin};
 /// Largest number of grid cells (keeps memory bounded for huge TINs).
 const MAX_CELLS: usize = 1 << 22;
 
-/// Exact orientation of `c` relative to the directed line `a -> b`: positive when `c` is on the left.
-///
-/// The sign is exact (Shewchuk's adaptive predicate); the magnitude is twice the signed area, to within rounding.
-#[inline]
-pub(crate) fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
-    robust::orient2d(
-        robust::Coord { x: a.x, y: a.y },
-        robust::Coord { x: b.x, y: b.y },
-        robust::Coord { x: c.x, y: c.y },
-    )
-}
+/// Exact orientation of `c` relative to the directed line `a -> b`: positive when `c` is on the left (the project's
+/// one predicate, [`tin::orient2d`]).
+pub(crate) use tin::orient2d as orient;
 
 /// Height at `p` of the plane through the three corners `[a, b, c]` (non-degenerate in x,y).
 #[inline]

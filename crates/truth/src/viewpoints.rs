@@ -49,6 +49,8 @@ pub enum ViewpointClass {
     Ridge,
     /// 10% of the relief above the highest point.
     Sky,
+    /// Eyes given by the user (a camera path, `eval --eyes`); not drawn by [`viewpoints()`].
+    Path,
 }
 
 impl ViewpointClass {
@@ -71,6 +73,7 @@ impl ViewpointClass {
             ViewpointClass::Valley => "valley",
             ViewpointClass::Ridge => "ridge",
             ViewpointClass::Sky => "sky",
+            ViewpointClass::Path => "path",
         }
     }
 }
@@ -115,6 +118,7 @@ pub fn viewpoints(tin: &Tin, class: ViewpointClass, n: usize, seed: u64) -> Vec<
         }
         ViewpointClass::Valley => extremum_points(tin, n, &mut rng, Extremum::Minimum),
         ViewpointClass::Ridge => extremum_points(tin, n, &mut rng, Extremum::Maximum),
+        ViewpointClass::Path => Vec::new(),
     }
 }
 
@@ -273,6 +277,7 @@ mod tests {
                     ViewpointClass::Sky => {
                         assert!((p.z - (b.max.z + 0.1 * (b.max.z - b.min.z))).abs() < 1e-9)
                     }
+                    ViewpointClass::Path => unreachable!("not in ALL"),
                 }
             }
         }
@@ -339,7 +344,7 @@ mod tests {
                         ViewpointClass::Ground | ViewpointClass::Valley | ViewpointClass::Ridge => Some(2.0),
                         ViewpointClass::Low => Some(20.0),
                         ViewpointClass::High => Some(200.0),
-                        ViewpointClass::Sky => None,
+                        ViewpointClass::Sky | ViewpointClass::Path => None,
                     };
                     match expected {
                         Some(h) => proptest::prop_assert!((above - h).abs() < 1e-9, "{} at {} m", class, above),

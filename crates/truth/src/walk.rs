@@ -8,7 +8,7 @@
 //!
 //! Choices (the design notes leave them open):
 //!
-//! - **Exact topology.** Every side-of-line decision uses Shewchuk's adaptive orientation predicate (`robust`), so
+//! - **Exact topology.** Every side-of-line decision uses Shewchuk's adaptive orientation predicate ([`tin::orient2d`]), so
 //!   the walk is consistent when the segment passes exactly through vertices or runs along edges. At a vertex the
 //!   walk continues in the incident triangle whose corner wedge strictly contains the segment's direction, or along
 //!   the incident edge that points exactly in that direction. Only heights and crossing parameters are rounded.

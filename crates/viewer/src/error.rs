@@ -36,6 +36,9 @@ pub enum ViewerError {
         /// What went wrong.
         message: String,
     },
+    /// An output could not be written (the message names the file).
+    #[error(transparent)]
+    Output(#[from] outfile::Error),
     /// The hierarchy could not be read, written or checked.
     #[error(transparent)]
     Hierarchy(#[from] cull::HierarchyError),

@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 
-use cull::{Camera, CullStats, Culler};
+use cull::{AnyCuller, Camera, CullMethod, CullStats};
 
 use crate::camera::{EyeCamera, MapView, Orbit};
 use crate::error::{Result, ViewerError};
@@ -68,6 +68,8 @@ pub struct RenderOptions {
     pub compare: bool,
     /// Repetitions of each timed render when comparing (the median is reported).
     pub timing_runs: u32,
+    /// The culling method (default: the safe culler).
+    pub method: CullMethod,
 }
 
 impl Default for RenderOptions {
@@ -84,6 +86,7 @@ impl Default for RenderOptions {
             level: None,
             compare: false,
             timing_runs: 5,
+            method: CullMethod::Safe,
         }
     }
 }
@@ -142,6 +145,15 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
     if o.pitch_deg.is_some_and(|p| p.abs() >= 89.0) {
         return bad(format!("--pitch must be within ±89°, got {:?}", o.pitch_deg));
     }
+    if let (Some(level), Some(h)) = (o.level, &terrain.hierarchy) {
+        let top = h.nodes.iter().map(|n| n.level).max().unwrap_or(0);
+        if level > top {
+            return bad(format!("--level {level}: the hierarchy's levels are 0 to {top}"));
+        }
+    }
+    if o.level.is_some() && terrain.hierarchy.is_none() {
+        return bad("--level needs a hierarchy (.tch), not a plain mesh".into());
+    }
     if o.eye.is_some_and(|e| !e.iter().all(|c| c.is_finite())) {
         return bad("--eye must be finite".into());
     }
@@ -168,7 +180,7 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
     // Cull for the viewpoint when there is one and a hierarchy to cull with.
     let culled = match (&terrain.hierarchy, options.eye) {
         (Some(h), Some(eye)) if options.view != ViewKind::Map || options.colour == Some(ColourMode::Visibility) => {
-            let culler = Culler::new(h);
+            let culler = AnyCuller::new(h, options.method);
             let camera = culling_camera(eye, options);
             Some((culler.cull(&camera), culler, camera))
         }

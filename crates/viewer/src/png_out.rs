@@ -1,5 +1,5 @@
-//! PNG files: atomic writing (a temporary file beside the target, renamed over it, so a reader never sees half an
-//! image) and reading back for tests and comparisons. Images are 8-bit RGBA.
+//! PNG files: writing with the project's output writer (the `outfile` crate: the path checked, atomic replacement,
+//! symlinks followed, non-regular targets refused) and reading back for tests and comparisons. Images are 8-bit RGBA.
 
 use std::path::Path;
 
@@ -28,19 +28,13 @@ pub fn encode_png(image: &RgbaImage) -> std::result::Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
-/// Writes `image` to `path` as PNG, atomically.
+/// Writes `image` to `path` as PNG, atomically (`-` is standard output).
 pub fn write_png(path: &Path, image: &RgbaImage) -> Result<()> {
     let bytes = encode_png(image).map_err(|message| ViewerError::Png {
         path: path.to_path_buf(),
         message,
     })?;
-    tin::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| match e {
-        tin::TinError::Io { source, .. } => ViewerError::Io {
-            path: path.to_path_buf(),
-            source,
-        },
-        other => ViewerError::Tin(other),
-    })
+    Ok(outfile::write_bytes(path, &bytes)?)
 }
 
 /// Reads a PNG as 8-bit RGBA (grey, RGB, palette and 16-bit images are converted).

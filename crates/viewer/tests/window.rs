@@ -6,7 +6,8 @@
 //! culls.
 //!
 //! The viewer runs in a child process (winit wants the main thread and one event loop per process). Without
-//! Xvfb or a GPU adapter the test prints a SKIP notice and passes, unless `TINCULL_REQUIRE_GPU` is set.
+//! Xvfb, or when the viewer reports that it cannot open a window or find an adapter, the test prints a SKIP notice
+//! and passes, unless `TINCULL_REQUIRE_GPU` is set; a crash, a failed check or a hang of the child always fails.
 
 mod common;
 
@@ -20,6 +21,8 @@ use viewer::app::{BuildParams, Progress, RebuildFn, ScreenshotRequest, Source, S
 use viewer::{RgbaImage, gpu_required};
 
 const CHILD_ENV: &str = "TINCULL_VIEWER_TEST_CHILD";
+/// Exit code of the child when the viewer cannot start (no window system or no adapter).
+const NO_WINDOW: i32 = 2;
 const WIDTH: u32 = 900;
 const HEIGHT: u32 = 600;
 
@@ -42,16 +45,20 @@ fn main() {
     display.stop();
     match status {
         Some(s) if s.success() => {}
-        // A panic in the child is a failed check, never a missing GPU.
-        Some(s) if s.code() == Some(101) => panic!("the viewer process failed a check ({s})"),
-        other => {
-            let msg = format!("the viewer process ended with {other:?} (no window, no adapter, or a crash)");
+        // The only skip: the child reported that the viewer could not open a window or find an adapter.
+        Some(s) if s.code() == Some(NO_WINDOW) => {
+            let msg = "the viewer could not open a window or find a GPU adapter";
             if gpu_required() {
                 panic!("{msg}");
             }
             eprintln!("SKIP: {msg}; set TINCULL_REQUIRE_GPU=1 to make this an error");
             return;
         }
+        // A panic (a failed check), a crash (a signal), a missing screenshot or a hang is a failure, never a skip.
+        Some(s) => {
+            panic!("the viewer process failed: {s} (101 = a failed check, 3 = no screenshot, no code = a crash)")
+        }
+        None => panic!("the viewer process did not finish within the time limit"),
     }
     let image = viewer::read_png(&shot).expect("the viewer wrote its screenshot");
     check(&image);
@@ -97,7 +104,7 @@ fn child(out: &Path) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("viewer failed: {e}");
-            std::process::exit(2);
+            std::process::exit(NO_WINDOW);
         }
     };
     if !out.exists() {

@@ -73,6 +73,48 @@ impl DemOptions {
 
 /// Reads a DEM, choosing the reader from the extension (`.npy`, `.asc`, `.hgt`, `.png`, `.tif`/`.tiff`, any case).
 pub fn read_dem(path: &Path, opts: &DemOptions) -> Result<Grid> {
+    let grid = read_dem_unchecked(path, opts)?;
+    check_range(&grid, path)?;
+    Ok(grid)
+}
+
+/// Refuses a grid with a sample whose coordinates no stage can handle ([`crate::COORDINATE_LIMIT`]), naming the
+/// file and the 1-based row and column (row 1 is the northern edge).
+fn check_range(g: &Grid, path: &Path) -> Result<()> {
+    let corners = [(0, 0), (g.rows.saturating_sub(1), g.cols.saturating_sub(1))];
+    for (r, c) in corners {
+        let (x, y) = (g.origin.x + c as f64 * g.dx, g.origin.y - r as f64 * g.dy);
+        for (axis, v) in [("x", x), ("y", y)] {
+            if !crate::predicates::coordinate_in_range(v) {
+                return Err(TinError::format(
+                    path,
+                    format!(
+                        "row {}, column {}: {axis} = {v:e} is outside the coordinates every stage accepts (0 or 2^-100 \
+                         to 2^100 in magnitude)",
+                        r + 1,
+                        c + 1
+                    ),
+                ));
+            }
+        }
+    }
+    for (i, &z) in g.z.iter().enumerate() {
+        if !z.is_nan() && !crate::predicates::coordinate_in_range(z) {
+            return Err(TinError::format(
+                path,
+                format!(
+                    "row {}, column {}: height {z:e} is outside the coordinates every stage accepts (0 or 2^-100 to \
+                     2^100 in magnitude)",
+                    i / g.cols.max(1) + 1,
+                    i % g.cols.max(1) + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check()?;
     let ext = path
         .extension()

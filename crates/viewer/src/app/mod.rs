@@ -16,7 +16,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use cull::{Camera, CullStats, Culler, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, CullStats, DrawList, Hierarchy};
 use eframe::egui;
 use eframe::egui_wgpu;
 use glam::{DVec3, Vec3};
@@ -134,7 +134,7 @@ impl std::fmt::Debug for ViewerOptions {
 struct Model {
     tin: Arc<Tin>,
     terrain: Terrain,
-    culler: Option<Culler>,
+    culler: Option<AnyCuller>,
 }
 
 impl Model {
@@ -152,7 +152,7 @@ impl Model {
     fn from_hierarchy(h: Hierarchy) -> Result<Model> {
         let positions = h.mesh.positions.iter().map(|p| DVec3::from_array(*p)).collect();
         let tin = Tin::from_parts(positions, h.mesh.triangles.clone())?;
-        let culler = Culler::new(&h);
+        let culler = AnyCuller::new(&h, CullMethod::Safe);
         Ok(Model {
             tin: Arc::new(tin),
             terrain: Terrain::from_hierarchy(h)?,
@@ -405,6 +405,13 @@ impl ViewerApp {
 
     fn terrain(&self) -> &Terrain {
         &self.model.terrain
+    }
+
+    /// Switches the culling method (the safe culler by default; the thesis' test for comparison).
+    fn set_method(&mut self, method: CullMethod) {
+        if let Some(h) = &self.terrain().hierarchy {
+            self.model.culler = Some(AnyCuller::new(h, method));
+        }
     }
 
     /// Runs the culler for the current viewpoint (timed) and returns the drawn mask's fingerprint.

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use eframe::egui;
 use glam::{Vec2, Vec3};
-use pipeline::export::{write_grouped_obj, write_json};
+use pipeline::export::{mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
 
 use super::{ViewMode, ViewerApp};
 use crate::scene::ColourMode;
@@ -136,7 +136,19 @@ impl ViewerApp {
     pub(super) fn stats_ui(&mut self, ui: &mut egui::Ui) {
         let s = self.list.stats;
         let n = self.terrain().num_triangles();
-        if self.model.culler.is_some() {
+        if let Some(culler) = &self.model.culler {
+            let current = culler.method();
+            let mut chosen = current;
+            egui::ComboBox::from_label("culling method")
+                .selected_text(current.name())
+                .show_ui(ui, |ui| {
+                    for m in cull::CullMethod::ALL {
+                        ui.selectable_value(&mut chosen, m, m.name());
+                    }
+                });
+            if chosen != current {
+                self.set_method(chosen);
+            }
             ui.label(format!(
                 "nodes tested {}, culled {} (occlusion {}, frustum {}), skipped {}",
                 s.nodes_tested,
@@ -249,15 +261,20 @@ impl ViewerApp {
         ui.horizontal(|ui| {
             if ui.button(".tch").clicked() {
                 let path = stem.with_extension("tch");
-                result = Some(h.save(&path).map(|_| path).map_err(|e| e.to_string()));
+                let written = h.to_bytes().map_err(|e| e.to_string());
+                let written = written.and_then(|b| outfile::write_bytes(&path, &b).map_err(|e| e.to_string()));
+                result = Some(written.map(|_| path));
             }
             if ui.button("JSON").clicked() {
                 let path = stem.with_extension("json");
-                result = Some(write_json(h, &path).map(|_| path).map_err(|e| format!("{e:#}")));
+                let written = to_json(h).map_err(|e| format!("{e:#}"));
+                let written =
+                    written.and_then(|t| outfile::write_bytes(&path, t.as_bytes()).map_err(|e| e.to_string()));
+                result = Some(written.map(|_| path));
             }
             if ui.button("grouped OBJ").clicked() {
                 let path = stem.with_extension("obj");
-                result = Some(write_grouped_obj(h, &path).map(|_| path).map_err(|e| format!("{e:#}")));
+                result = Some(write_grouped_obj(h, &path).map(|_| path));
             }
         });
         match result {
@@ -266,4 +283,15 @@ impl ViewerApp {
             None => {}
         }
     }
+}
+
+/// Writes the grouped OBJ of `h` and its `.mtl` beside it, both or neither.
+fn write_grouped_obj(h: &cull::Hierarchy, obj: &std::path::Path) -> std::result::Result<(), String> {
+    let (mtl, name) = mtl_path(obj).map_err(|e| format!("{e:#}"))?;
+    let mut batch = outfile::Batch::new();
+    batch.add(&mtl, |w| write_mtl_to(h, w)).map_err(|e| e.to_string())?;
+    batch
+        .add(obj, |w| write_grouped_obj_to(h, &name, w))
+        .map_err(|e| e.to_string())?;
+    batch.commit().map_err(|e| e.to_string())
 }

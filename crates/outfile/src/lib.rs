@@ -1,0 +1,393 @@
+//! The one writer of every tincull output file (`.tch`, OBJ, MTL, JSON, CSV, PNG).
+//!
+//! Rules, in the order they are applied:
+//!
+//! 1. **Check before the work.** [`check`] (and [`Batch::check`]) resolve and validate a path without writing it, so
+//!    a command can refuse a bad `-o` before a long build instead of after it: the directory must exist and be a
+//!    directory, the target must not be a directory, and the directory must accept a new file (a temporary file
+//!    is created and removed there, which is the only reliable test; permission bits lie for root and on
+//!    read-only mounts).
+//! 2. **Symlinks are followed.** `-o link.tch` writes the file the link points to (an existing target as the
+//!    kernel resolves it, so `/dev/stdout -> /proc/self/fd/1 -> pipe:[..]` is seen as the pipe it is; a dangling
+//!    link link by link, relative to each link's directory, at most 40 links); the link itself stays a link and the
+//!    target is replaced atomically in its own directory. A dangling link creates its target.
+//! 3. **Only regular files are replaced.** A directory, FIFO, socket, character or block device (`/dev/full`,
+//!    `/dev/null`, a terminal) is refused with an error that names it; nothing is written. The one exception is
+//!    the path `-`, which means standard output, written directly (not atomically) where a command allows it
+//!    ([`Target::Stdout`]).
+//! 4. **Atomic replacement.** The content goes to a fresh temporary file in the target's directory (the `tempfile`
+//!    crate: unpredictable name, created exclusively, removed on failure), is flushed to disk, gets the permissions
+//!    of the file it replaces (or `0666` less the umask for a new file), and is renamed over the target. A reader
+//!    sees the old file or the complete new one, never a half-written one.
+//! 5. **All or nothing.** A [`Batch`] writes several files (OBJ + MTL, `.tch` + exports): every content is written
+//!    to its temporary file first, and only when all succeeded are they renamed, in order. If a rename fails, the
+//!    files this batch had newly created are removed again; files it replaced cannot be restored (their old content
+//!    is gone), so a batch's targets should be checked first, which makes that case a race with another process.
+//!    Two targets of one batch that resolve to the same file are refused.
+#![warn(missing_docs)]
+
+use std::fmt;
+use std::fs;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use tempfile::NamedTempFile;
+
+/// What went wrong with an output, naming the path the user gave.
+#[derive(Debug)]
+pub struct Error {
+    /// The output path as given.
+    pub path: PathBuf,
+    /// What is wrong with it.
+    pub kind: ErrorKind,
+}
+
+/// The kinds of [`Error`].
+#[derive(Debug)]
+pub enum ErrorKind {
+    /// The target is not a regular file (what it is instead).
+    NotRegular(&'static str),
+    /// The directory of the target does not exist or is not a directory.
+    NoDirectory(PathBuf),
+    /// The path has no file name (`..`, `/`, empty).
+    NoFileName,
+    /// A symlink chain too long or circular.
+    SymlinkLoop,
+    /// Standard output is not allowed here (a multi-file output or a command that prints to it).
+    StdoutNotAllowed,
+    /// Two outputs of one command are the same file.
+    SameFile(PathBuf),
+    /// An I/O error (creating, writing, syncing or renaming).
+    Io(io::Error),
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.path.display();
+        match &self.kind {
+            ErrorKind::NotRegular(what) => write!(
+                f,
+                "{p}: is {what}, not a regular file; tincull only replaces regular files (give `-` to write to \
+                 standard output where the command allows it)"
+            ),
+            ErrorKind::NoDirectory(d) => write!(f, "{p}: the directory {} does not exist", d.display()),
+            ErrorKind::NoFileName => write!(f, "{p}: not a file name"),
+            ErrorKind::SymlinkLoop => write!(f, "{p}: too many levels of symbolic links"),
+            ErrorKind::StdoutNotAllowed => write!(f, "{p}: standard output cannot take this output"),
+            ErrorKind::SameFile(other) => {
+                write!(
+                    f,
+                    "{p}: the same file as the output {}; give distinct outputs",
+                    other.display()
+                )
+            }
+            ErrorKind::Io(e) => write!(f, "{p}: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            ErrorKind::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// Results of this crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+fn err(path: &Path, kind: ErrorKind) -> Error {
+    Error {
+        path: path.to_path_buf(),
+        kind,
+    }
+}
+
+/// A checked output: standard output, or the regular file (existing or not) that a path resolves to.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// The path `-`.
+    Stdout,
+    /// A file.
+    File {
+        /// The path as given (for messages).
+        given: PathBuf,
+        /// The file written: symlinks resolved.
+        resolved: PathBuf,
+        /// Whether it exists now (its permissions are kept).
+        exists: bool,
+    },
+}
+
+impl Target {
+    /// The path as given (`-` for standard output).
+    pub fn given(&self) -> &Path {
+        match self {
+            Target::Stdout => Path::new("-"),
+            Target::File { given, .. } => given,
+        }
+    }
+}
+
+/// What a file type is, for messages; `None` for a regular file.
+fn non_regular(meta: &fs::Metadata) -> Option<&'static str> {
+    let t = meta.file_type();
+    if t.is_file() {
+        return None;
+    }
+    if t.is_dir() {
+        return Some("a directory");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if t.is_char_device() {
+            return Some("a character device");
+        }
+        if t.is_block_device() {
+            return Some("a block device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a regular file")
+}
+
+/// The directory of `path` (`.` for a bare name).
+fn dir_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Follows symlinks from `path` to the final non-link path (which may not exist).
+fn resolve(given: &Path) -> Result<PathBuf> {
+    let mut path = given.to_path_buf();
+    for _ in 0..40 {
+        match fs::symlink_metadata(&path) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let link = fs::read_link(&path).map_err(|e| err(given, ErrorKind::Io(e)))?;
+                path = if link.is_absolute() {
+                    link
+                } else {
+                    dir_of(&path).join(link)
+                };
+            }
+            Ok(_) => return Ok(path),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(path),
+            Err(e) => return Err(err(given, ErrorKind::Io(e))),
+        }
+    }
+    Err(err(given, ErrorKind::SymlinkLoop))
+}
+
+/// Checks that `path` can be written (rules 1 to 3 of the crate docs) without writing it; `-` is standard output.
+pub fn check(path: &Path) -> Result<Target> {
+    if path == Path::new("-") {
+        return Ok(Target::Stdout);
+    }
+    if path.file_name().is_none() {
+        return Err(err(path, ErrorKind::NoFileName));
+    }
+    // An existing target is judged by what the kernel follows to (this also covers links such as /dev/stdout ->
+    // /proc/self/fd/1 -> pipe:[..], which no path resolution can follow); a missing one by resolving the link chain.
+    let (resolved, exists) = match fs::metadata(path) {
+        Ok(m) => {
+            if let Some(what) = non_regular(&m) {
+                return Err(err(path, ErrorKind::NotRegular(what)));
+            }
+            (fs::canonicalize(path).map_err(|e| err(path, ErrorKind::Io(e)))?, true)
+        }
+        Err(e) if e.kind() == io::ErrorKind::NotFound => (resolve(path)?, false),
+        // A link chain that cannot be followed (a loop): say so.
+        Err(e) => match resolve(path) {
+            Err(loop_error) => return Err(loop_error),
+            Ok(_) => return Err(err(path, ErrorKind::Io(e))),
+        },
+    };
+    if resolved.file_name().is_none() {
+        return Err(err(path, ErrorKind::NoFileName));
+    }
+    let dir = dir_of(&resolved);
+    match fs::metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        _ => return Err(err(path, ErrorKind::NoDirectory(dir.to_path_buf()))),
+    }
+    // The only reliable test of writability: create (and drop, which removes) a temporary file there.
+    NamedTempFile::new_in(dir).map_err(|e| err(path, ErrorKind::Io(e)))?;
+    Ok(Target::File {
+        given: path.to_path_buf(),
+        resolved,
+        exists,
+    })
+}
+
+/// Checks that `path` can be written and is not standard output (for outputs that must be files).
+pub fn check_file(path: &Path) -> Result<Target> {
+    match check(path)? {
+        Target::Stdout => Err(err(path, ErrorKind::StdoutNotAllowed)),
+        t => Ok(t),
+    }
+}
+
+/// A content written to its temporary file, waiting to be renamed over its target.
+struct Staged {
+    target: Target,
+    temp: Option<NamedTempFile>,
+}
+
+/// Writes the content of `target` to a temporary file beside it (or to standard output), with the permissions of
+/// the file it will replace.
+fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<Staged> {
+    match &target {
+        Target::Stdout => {
+            let stdout = io::stdout();
+            let mut w = BufWriter::new(stdout.lock());
+            write(&mut w)
+                .and_then(|_| w.flush())
+                .map_err(|e| err(Path::new("-"), ErrorKind::Io(e)))?;
+            Ok(Staged { target, temp: None })
+        }
+        Target::File { given, resolved, .. } => {
+            let io = |e| err(given, ErrorKind::Io(e));
+            let dir = dir_of(resolved);
+            let mut builder = tempfile::Builder::new();
+            builder.prefix(".tincull-").suffix(".tmp");
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                // A new file gets the usual 0666 less the umask (the mode given to open() is masked).
+                builder.permissions(fs::Permissions::from_mode(0o666));
+            }
+            let temp = builder.tempfile_in(dir).map_err(io)?;
+            // Keep the permissions of the file being replaced, exactly (set after creation: no umask).
+            if let Ok(m) = fs::metadata(resolved)
+                && m.is_file()
+            {
+                fs::set_permissions(temp.path(), m.permissions()).map_err(io)?;
+            }
+            let mut w = BufWriter::new(temp);
+            write(&mut w).map_err(io)?;
+            let temp = w.into_inner().map_err(|e| io(e.into_error()))?;
+            temp.as_file().sync_all().map_err(io)?;
+            Ok(Staged {
+                target,
+                temp: Some(temp),
+            })
+        }
+    }
+}
+
+impl Staged {
+    /// Renames the temporary file over the target (after re-checking that the target is still a regular file or
+    /// absent).
+    fn commit(self) -> Result<()> {
+        let (Target::File { given, resolved, .. }, Some(temp)) = (self.target, self.temp) else {
+            return Ok(());
+        };
+        if let Ok(m) = fs::metadata(&resolved)
+            && let Some(what) = non_regular(&m)
+        {
+            return Err(err(&given, ErrorKind::NotRegular(what)));
+        }
+        temp.persist(&resolved)
+            .map_err(|e| err(&given, ErrorKind::Io(e.error)))?;
+        Ok(())
+    }
+}
+
+/// Writes one output: checks `path` (rules 1 to 3), then writes it through `write` atomically (rule 4); `-` writes
+/// to standard output.
+pub fn write(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+    stage(check(path)?, write)?.commit()
+}
+
+/// Writes `bytes` to `path` as [`write`] does.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write(path, |w| w.write_all(bytes))
+}
+
+/// Several outputs of one command, all or nothing (rule 5 of the crate docs). Check every target first
+/// ([`Batch::check`], before the work), then [`Batch::add`] each content, then [`Batch::commit`].
+#[derive(Default)]
+pub struct Batch {
+    targets: Vec<Target>,
+    staged: Vec<Staged>,
+}
+
+impl Batch {
+    /// An empty batch.
+    pub fn new() -> Batch {
+        Batch::default()
+    }
+
+    /// Checks `path` as an output of this batch: writable, a file (standard output cannot take part in a batch),
+    /// and not the same file as an output checked before.
+    pub fn check(&mut self, path: &Path) -> Result<()> {
+        let target = check_file(path)?;
+        let Target::File { resolved, .. } = &target else {
+            return Err(err(path, ErrorKind::StdoutNotAllowed));
+        };
+        let canon = canonical(resolved);
+        for t in &self.targets {
+            if let Target::File { given, resolved: r, .. } = t
+                && canonical(r) == canon
+            {
+                return Err(err(path, ErrorKind::SameFile(given.clone())));
+            }
+        }
+        self.targets.push(target);
+        Ok(())
+    }
+
+    /// Writes the content of `path` (checked now if it was not) to its temporary file.
+    pub fn add(&mut self, path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+        if !self.targets.iter().any(|t| t.given() == path) {
+            self.check(path)?;
+        }
+        let Some(i) = self.targets.iter().position(|t| t.given() == path) else {
+            return Err(err(path, ErrorKind::NoFileName));
+        };
+        let target = self.targets.remove(i);
+        self.staged.push(stage(target, write)?);
+        Ok(())
+    }
+
+    /// Renames every staged file over its target, in the order added. On failure, the files this batch newly
+    /// created are removed again, and the temporary files of the rest are dropped.
+    pub fn commit(self) -> Result<()> {
+        let mut created: Vec<PathBuf> = Vec::new();
+        for s in self.staged {
+            let new = match &s.target {
+                Target::File { resolved, exists, .. } => (!exists).then(|| resolved.clone()),
+                Target::Stdout => None,
+            };
+            if let Err(e) = s.commit() {
+                for p in &created {
+                    let _ = fs::remove_file(p);
+                }
+                return Err(e);
+            }
+            created.extend(new);
+        }
+        Ok(())
+    }
+}
+
+/// The canonical form of a path whose file may not exist yet (its directory does).
+fn canonical(path: &Path) -> PathBuf {
+    if let Ok(p) = fs::canonicalize(path) {
+        return p;
+    }
+    match (fs::canonicalize(dir_of(path)), path.file_name()) {
+        (Ok(d), Some(n)) => d.join(n),
+        _ => path.to_path_buf(),
+    }
+}

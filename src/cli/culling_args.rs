@@ -1,0 +1,59 @@
+//! Options shared by the commands that cull: the safe culler's parameters, and files of eye positions.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use cull::SafeParams;
+
+use super::cull_cmd::parse_point;
+
+/// The safe culler's run-time parameters (nothing of them is stored in the `.tch`).
+#[derive(Clone, Debug, Args)]
+pub struct SafeArgs {
+    /// Safe culler: horizon columns per 90° face, a power of two from 2 to 65536 (more: finer horizon, slower).
+    #[arg(long, default_value_t = 256, value_name = "N")]
+    pub columns: usize,
+    /// Safe culler: largest patch (triangles) it tests and draws below the hierarchy's leaves, 1 to 64.
+    #[arg(long, default_value_t = 16, value_name = "N")]
+    pub patch: usize,
+    /// Safe culler: most occluder triangles written per cull, nearest first (bounds the cost of views that see
+    /// much terrain; fewer occluders cull less, never wrongly). Unlimited by default.
+    #[arg(long, value_name = "N")]
+    pub occluder_budget: Option<usize>,
+}
+
+impl SafeArgs {
+    /// The parameters, checked.
+    pub fn params(&self) -> Result<SafeParams> {
+        anyhow::ensure!(
+            self.columns.is_power_of_two() && (2..=65536).contains(&self.columns),
+            "--columns must be a power of two from 2 to 65536, got {}",
+            self.columns
+        );
+        anyhow::ensure!(
+            (1..=64).contains(&self.patch),
+            "--patch must be from 1 to 64, got {}",
+            self.patch
+        );
+        Ok(SafeParams {
+            columns_per_face: self.columns,
+            patch: self.patch,
+            occluder_budget: self.occluder_budget.unwrap_or(usize::MAX),
+        })
+    }
+}
+
+/// Reads a file of eye positions, one `x,y,z` per line (blank lines and `#` comments skipped); errors name the file
+/// and the 1-based line.
+pub fn read_eyes(path: &Path) -> Result<Vec<[f64; 3]>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let eyes: Vec<[f64; 3]> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+        .map(|(i, l)| parse_point(l).map_err(|e| anyhow::anyhow!("{}:{}: {e}", path.display(), i + 1)))
+        .collect::<Result<_>>()?;
+    anyhow::ensure!(!eyes.is_empty(), "{}: no eye positions", path.display());
+    Ok(eyes)
+}

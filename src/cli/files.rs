@@ -1,0 +1,101 @@
+//! The outputs of one command, through the project's one writer (the `outfile` crate): every path is checked before
+//! the work starts (directory exists, not a directory, writable, a regular file or none; symlinks followed), the
+//! contents are written to temporary files, and all are renamed at the end, so a command that fails leaves none of
+//! its outputs. `-` is standard output where a command allows it (one output, and then the command's own text goes
+//! to stderr or nowhere).
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, bail};
+use cull::Hierarchy;
+use pipeline::export::{mtl_path, write_grouped_obj_to, write_mtl_to};
+
+use super::Output;
+
+/// The checked outputs of one command, written all or nothing by [`Outputs::commit`].
+#[derive(Default)]
+pub struct Outputs {
+    batch: outfile::Batch,
+    stdout: Option<Vec<u8>>,
+    stdout_checked: bool,
+}
+
+impl Outputs {
+    /// No outputs yet.
+    pub fn new() -> Outputs {
+        Outputs::default()
+    }
+
+    /// Checks a file output (before the work).
+    pub fn check(&mut self, path: &Path) -> Result<()> {
+        Ok(self.batch.check(path)?)
+    }
+
+    /// Checks an output that may be `-` (standard output). With `-`, `out` stops printing text and `--json` is
+    /// refused (both would go to standard output).
+    pub fn check_or_stdout(&mut self, path: &Path, out: &mut Output) -> Result<()> {
+        if path != Path::new("-") {
+            return self.check(path);
+        }
+        if out.json {
+            bail!("-o - and --json both write to standard output; give a file to one of them");
+        }
+        if self.stdout_checked {
+            bail!("only one output can go to standard output (-)");
+        }
+        self.stdout_checked = true;
+        out.quiet_text = true;
+        Ok(())
+    }
+
+    /// Checks a grouped OBJ output and its `.mtl` (refused when the OBJ is named like its `.mtl`).
+    pub fn check_grouped_obj(&mut self, obj: &Path) -> Result<()> {
+        let (mtl, _) = mtl_path(obj)?;
+        self.check(obj)?;
+        self.check(&mtl)
+    }
+
+    /// Writes the content of a checked output to its temporary file (or keeps it for standard output).
+    pub fn add(&mut self, path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+        if path == Path::new("-") && self.stdout_checked {
+            let mut bytes = Vec::new();
+            write(&mut bytes)?;
+            self.stdout = Some(bytes);
+            return Ok(());
+        }
+        Ok(self.batch.add(path, write)?)
+    }
+
+    /// [`Outputs::add`] with bytes.
+    pub fn add_bytes(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
+        self.add(path, |w| w.write_all(bytes))
+    }
+
+    /// Adds the grouped OBJ of `h` and its `.mtl`.
+    pub fn add_grouped_obj(&mut self, h: &Hierarchy, obj: &Path) -> Result<PathBuf> {
+        let (mtl, name) = mtl_path(obj)?;
+        self.add(&mtl, |w| write_mtl_to(h, w))?;
+        self.add(obj, |w| write_grouped_obj_to(h, &name, w))?;
+        Ok(mtl)
+    }
+
+    /// Renames every file output over its target, then writes standard output's content.
+    pub fn commit(self) -> Result<()> {
+        self.batch.commit()?;
+        if let Some(bytes) = self.stdout {
+            let mut out = io::stdout().lock();
+            out.write_all(&bytes)?;
+            out.flush()?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes one output now (checked, atomic); `-` is not allowed.
+pub fn write_one(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+    let mut o = Outputs::new();
+    o.check(path)?;
+    o.add(path, write)?;
+    o.commit()
+}

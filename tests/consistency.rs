@@ -1,0 +1,187 @@
+//! One command line (issue 16): `--json` is the same flag everywhere (one JSON object on stdout; files go to
+//! `--export-json FILE`), `-o/--out` everywhere, `--view-seed` seeds viewpoints and `--rng-seed` the grouping,
+//! `subsectors` means per sector, every command that reads a mesh takes `--keep-faces` and `--dedupe`, and
+//! nonsense values are refused with an error that names the option.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mesh(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 path")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "tincull {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_slice(&ok(args).stdout).expect("one JSON object on stdout")
+}
+
+fn fails_with(args: &[&str], needle: &str) {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "tincull {args:?} should fail");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains(needle), "tincull {args:?}: {needle:?} not in\n{stderr}");
+}
+
+/// A small hierarchy in a temporary directory.
+fn hierarchy(dir: &Path) -> PathBuf {
+    let tch = dir.join("h.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "-q"]);
+    tch
+}
+
+#[test]
+fn json_is_a_flag_everywhere_and_files_are_export_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    let out = dir.path().join("e.json");
+    let v = json(&[
+        "eval",
+        s(&tch),
+        "--viewpoints",
+        "1",
+        "--classes",
+        "sky",
+        "--no-per-triangle",
+        "--export-json",
+        s(&out),
+        "--json",
+    ]);
+    assert_eq!(v["viewpoints_per_class"], 1);
+    assert!(v["rows"].as_array().is_some_and(|r| !r.is_empty()));
+    let file: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).expect("file")).expect("JSON file");
+    assert!(file["rows"].is_array());
+
+    let hj = dir.path().join("h.json");
+    let v = json(&["export", s(&tch), "--export-json", s(&hj), "--json"]);
+    assert_eq!(v["json"], s(&hj));
+    // `-` puts the hierarchy's JSON on stdout; with --json both would go there.
+    let text = ok(&["export", s(&tch), "--export-json", "-"]).stdout;
+    let h: serde_json::Value = serde_json::from_slice(&text).expect("the hierarchy's JSON on stdout");
+    assert!(h["nodes"].is_array());
+    fails_with(&["export", s(&tch), "--export-json", "-", "--json"], "standard output");
+}
+
+#[test]
+fn failmap_takes_out() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    let png = dir.path().join("m.png");
+    ok(&["failmap", s(&tch), "--cell", "4000", "--out", s(&png), "-q"]);
+    assert!(png.exists());
+    let out = run(&["failmap", s(&tch), "--cell", "4000", "--output", s(&png)]);
+    assert!(!out.status.success(), "--output is gone: -o/--out everywhere");
+}
+
+#[test]
+fn subsectors_mean_per_sector() {
+    let v = json(&[
+        "horizon",
+        s(&mesh("jacksboro-2k.obj")),
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(v["sectors"], 8);
+    assert_eq!(v["subsectors"], 2);
+    assert_eq!(v["total_subsectors"], 16);
+}
+
+#[test]
+fn seeds_have_one_name_each() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    let base = [
+        "eval",
+        s(&tch),
+        "--viewpoints",
+        "1",
+        "--classes",
+        "sky",
+        "--no-per-triangle",
+        "-q",
+    ];
+    let mut with_view = base.to_vec();
+    with_view.extend(["--view-seed", "3"]);
+    ok(&with_view);
+    let mut with_rng = base.to_vec();
+    with_rng.extend(["--rng-seed", "3"]);
+    let out = run(&with_rng);
+    assert!(
+        !out.status.success(),
+        "eval's viewpoint seed is --view-seed, not --rng-seed"
+    );
+}
+
+#[test]
+fn nonsense_values_are_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    fails_with(&["eval", s(&tch), "--viewpoints", "0"], "--viewpoints");
+    fails_with(&["cull", s(&tch), "--eye", "0,0,100", "--yaw", "nan"], "--yaw");
+    fails_with(&["cull", s(&tch), "--eye", "0,0,100", "--fov", "nan"], "--fov");
+    if cfg!(feature = "viewer") {
+        // Refused before any GPU work, so this runs without an adapter.
+        let png = dir.path().join("x.png");
+        fails_with(
+            &["render", s(&tch), "-o", s(&png), "--colour", "level", "--level", "99"],
+            "--level 99",
+        );
+        fails_with(&["render", s(&tch), "-o", s(&png), "--yaw", "nan"], "--yaw");
+        assert!(!png.exists());
+    }
+}
+
+#[test]
+fn every_command_that_reads_a_mesh_takes_keep_faces_and_dedupe() {
+    let mut commands = vec!["info", "horizon", "build", "sweep", "stress", "demo"];
+    if cfg!(feature = "viewer") {
+        commands.extend(["render", "view"]);
+    }
+    for c in commands {
+        let help = String::from_utf8_lossy(&ok(&[c, "--help"]).stdout).into_owned();
+        assert!(
+            help.contains("--keep-faces") && help.contains("--dedupe"),
+            "tincull {c} lacks --keep-faces or --dedupe:\n{help}"
+        );
+    }
+}
+
+#[test]
+fn stress_does_not_read_developer_data_by_default() {
+    let help = String::from_utf8_lossy(&ok(&["stress", "--help"]).stdout).into_owned();
+    assert!(!help.contains("../shared"), "{help}");
+    fails_with(
+        &[
+            "stress",
+            s(&mesh("jacksboro-2k.obj")),
+            "--quick",
+            "--dem-dir",
+            "/nonexistent-dir",
+        ],
+        "crater_lake.npy",
+    );
+}

@@ -1,0 +1,165 @@
+//! Outputs of the `tincull` binary never destroy what is not theirs (issue 16): every output path is checked before
+//! the work, FIFOs and directories are refused and left alone, symlinks are followed (the link stays), a failed
+//! command leaves none of its outputs, `export --export-obj same.mtl` is refused, and `-o -` writes to standard output.
+//! Everything is made in a temporary directory; no real device is touched.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mesh(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().expect("UTF-8 temporary path")
+}
+
+/// Names in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn fails_with(args: &[&str], needles: &[&str]) -> String {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "tincull {args:?} should fail");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "tincull {args:?}: {n:?} not in\n{stderr}");
+    }
+    stderr
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "tincull {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+const SMALL: &str = "jacksboro-2k.obj";
+
+#[test]
+fn a_missing_directory_is_refused_before_the_build() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("nodir/x.tch");
+    let m = mesh(SMALL);
+    let stderr = fails_with(
+        &["build", p(&m), "-o", p(&out), "--quiet"],
+        &["nodir", "does not exist"],
+    );
+    // Refused before the work: no build report was printed.
+    assert!(!stderr.contains("triangles"), "{stderr}");
+}
+
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_refused_and_left_alone() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fifo = dir.path().join("out.tch");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo").success());
+    let m = mesh(SMALL);
+    fails_with(&["build", p(&m), "-o", p(&fifo), "--quiet"], &["out.tch", "FIFO"]);
+    assert!(fs::symlink_metadata(&fifo).expect("lstat").file_type().is_fifo());
+    assert_eq!(names(dir.path()), ["out.tch"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symlink_output_writes_its_target_and_stays_a_link() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let target = dir.path().join("real.tch");
+    let link = dir.path().join("link.tch");
+    fs::write(&target, "stale").expect("write");
+    std::os::unix::fs::symlink("real.tch", &link).expect("symlink");
+    let m = mesh(SMALL);
+    ok(&["build", p(&m), "-o", p(&link), "--quiet"]);
+    assert!(fs::symlink_metadata(&link).expect("lstat").file_type().is_symlink());
+    let h = cull::Hierarchy::load(&target).expect("the link's target is the new hierarchy");
+    assert!(!h.nodes.is_empty());
+    assert_eq!(names(dir.path()), ["link.tch", "real.tch"]);
+}
+
+#[test]
+fn a_failed_build_leaves_none_of_its_outputs() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    let obj_dir = dir.path().join("sub");
+    fs::create_dir(&obj_dir).expect("mkdir");
+    // The OBJ export's .mtl is a directory: refused before the build, so not even the .tch is written.
+    fs::create_dir(obj_dir.join("g.mtl")).expect("mkdir");
+    let m = mesh(SMALL);
+    let obj = obj_dir.join("g.obj");
+    fails_with(
+        &["build", p(&m), "-o", p(&tch), "--export-obj", p(&obj), "--quiet"],
+        &["g.mtl", "directory"],
+    );
+    assert_eq!(names(dir.path()), ["sub"]);
+    assert_eq!(names(&obj_dir), ["g.mtl"]);
+}
+
+#[test]
+fn export_refuses_an_obj_named_like_its_materials() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    let m = mesh(SMALL);
+    ok(&["build", p(&m), "-o", p(&tch), "--quiet"]);
+    let same = dir.path().join("same.mtl");
+    fails_with(&["export", p(&tch), "--export-obj", p(&same)], &["same.mtl", ".mtl"]);
+    assert_eq!(names(dir.path()), ["h.tch"]);
+    // A good pair is written together.
+    let obj = dir.path().join("g.obj");
+    ok(&["export", p(&tch), "--export-obj", p(&obj), "--quiet"]);
+    assert_eq!(names(dir.path()), ["g.mtl", "g.obj", "h.tch"]);
+}
+
+#[test]
+fn dash_writes_the_hierarchy_to_standard_output() {
+    let m = mesh(SMALL);
+    let out = ok(&["build", p(&m), "-o", "-", "--quiet"]);
+    let h = cull::Hierarchy::from_bytes(&out.stdout).expect("stdout holds exactly the .tch file");
+    assert!(!h.nodes.is_empty());
+    fails_with(&["build", p(&m), "-o", "-", "--json"], &["standard output"]);
+}
+
+#[test]
+fn new_outputs_are_not_private_files() {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("t.obj");
+        ok(&[
+            "synth",
+            "-o",
+            p(&out),
+            "--vertices",
+            "200",
+            "--rng-seed",
+            "1",
+            "--quiet",
+        ]);
+        let mode = fs::metadata(&out).expect("stat").permissions().mode() & 0o777;
+        assert_ne!(
+            mode, 0o600,
+            "a new output gets 0666 less the umask, not a temporary file's 0600"
+        );
+    }
+}
