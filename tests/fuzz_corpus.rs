@@ -48,6 +48,11 @@ fn dem_readers_corpus_never_panics() {
 }
 
 #[test]
+fn geotiff_corpus_never_panics() {
+    replay("geotiff", targets::geotiff);
+}
+
+#[test]
 fn tch_load_corpus_never_panics() {
     replay("tch_load", targets::tch_load);
 }
@@ -92,7 +97,7 @@ fn valid_seeds_load() {
         ("utm_float64_transform.tif", 12),
         ("utm_uint16_tiled.tif", 256),
     ] {
-        let tif = std::fs::read(dir.join("dem_readers").join(name)).expect("seed");
+        let tif = std::fs::read(dir.join("geotiff").join(name)).expect("seed");
         let (g, _) = tin::dem::geotiff::parse_geotiff(&tif, Path::new(name), &tin::DemOptions::default())
             .unwrap_or_else(|e| panic!("a valid GeoTIFF seed parses: {e}"));
         assert_eq!(g.points().len(), points, "{name}");

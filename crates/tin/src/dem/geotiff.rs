@@ -55,6 +55,9 @@ mod key {
     pub const PROJ_LINEAR_UNITS: u16 = 3076;
 }
 
+/// The most decoded sample bytes a GeoTIFF may have (1 GiB); larger images are refused, not read.
+pub const MAX_DECODED_BYTES: usize = 1 << 30;
+
 /// The tag of GDAL's nodata value.
 const GDAL_NODATA: u16 = 42113;
 /// The GeoTIFF tag holding GeoKey ASCII parameters.
@@ -128,10 +131,11 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
     let err = |m: String| TinError::format(path, m);
     let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
     let mut dec = Decoder::new(Cursor::new(bytes)).map_err(|e| tiff_err("not a readable TIFF", e))?;
-    // Bounded memory on hostile headers: at most 2^31 bytes of decoded samples.
+    // Bounded memory on hostile headers: at most 1 GiB of decoded samples (a 16k x 16k float32 DEM) and 256 MiB
+    // per compressed strip or tile.
     let mut limits = Limits::default();
-    limits.decoding_buffer_size = 1 << 31;
-    limits.intermediate_buffer_size = 1 << 30;
+    limits.decoding_buffer_size = MAX_DECODED_BYTES;
+    limits.intermediate_buffer_size = 1 << 28;
     dec = dec.with_limits(limits);
     let (width, height) = dec
         .dimensions()
