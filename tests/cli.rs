@@ -365,3 +365,82 @@ fn delaunay_is_the_same_in_every_process() {
         .collect();
     assert!(hashes.windows(2).all(|w| w[0] == w[1]));
 }
+
+/// `../shared/dem` (CI has it; a missing directory fails the test).
+fn shared_dem(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/dem");
+    assert!(dir.is_dir(), "{} is missing: the GeoTIFF tests need it", dir.display());
+    dir.join(name)
+}
+
+#[test]
+fn geotiff_input_in_tin_info_and_mesh_commands() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let tif = shared_dem("N50E008_deflate.tif");
+    let obj = tmp.path().join("n50.obj");
+    let v = json(&["tin", s(&tif), "-o", s(&obj), "--vertices", "500", "--json", "--quiet"]);
+    assert_eq!(v["vertices"], 500);
+    assert_eq!(v["voids"], 50);
+    // The same TIN as from the .hgt twin.
+    let hgt_obj = tmp.path().join("n50-hgt.obj");
+    ok(&[
+        "tin",
+        s(&shared_dem("N50E008.hgt")),
+        "-o",
+        s(&hgt_obj),
+        "--vertices",
+        "500",
+        "--quiet",
+    ]);
+    assert_eq!(std::fs::read(&obj).expect("obj"), std::fs::read(&hgt_obj).expect("obj"));
+    // info on a GeoTIFF: the grid and the CRS, then the mesh it simplifies to.
+    let i = json(&[
+        "info",
+        s(&shared_dem("dfw_srtm.tif")),
+        "--dem-vertices",
+        "800",
+        "--json",
+        "--quiet",
+    ]);
+    assert_eq!(i["vertices"], 800);
+    assert_eq!(i["dem"]["rows"], 359);
+    assert_eq!(i["dem"]["geotiff"]["epsg"], 4326);
+    assert_eq!(i["dem"]["geotiff"]["crs_kind"], "geographic");
+    let text =
+        String::from_utf8_lossy(&ok(&["info", s(&shared_dem("crater_lake_utm.tif")), "--dem-vertices", "300"]).stdout)
+            .into_owned();
+    assert!(text.contains("EPSG:26910 (projected, metres)"), "{text}");
+    // A mesh command on a DEM.
+    let tch = tmp.path().join("crater.tch");
+    ok(&[
+        "build",
+        s(&shared_dem("crater_lake_utm.tif")),
+        "--dem-vertices",
+        "400",
+        "-o",
+        s(&tch),
+        "--quiet",
+    ]);
+    assert!(tch.is_file());
+    // A broken GeoTIFF: an error naming the file, no panic.
+    let bad = tmp.path().join("bad.tif");
+    std::fs::write(&bad, b"II*\0\x08\0\0\0garbage").expect("write");
+    fails_with(&["tin", s(&bad), "-o", s(&obj), "--vertices", "10"], "bad.tif");
+}
+
+#[test]
+fn export_gltf_writes_glb_and_gltf_with_bin() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let tch = tmp.path().join("j2k.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "--quiet"]);
+    let glb = tmp.path().join("j2k.glb");
+    let gltf = tmp.path().join("j2k.gltf");
+    ok(&["export", s(&tch), "--gltf", s(&glb), "--quiet"]);
+    ok(&["export", s(&tch), "--gltf", s(&gltf), "--quiet"]);
+    let bytes = std::fs::read(&glb).expect("glb");
+    assert_eq!(&bytes[..4], b"glTF");
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&gltf).expect("gltf")).expect("JSON");
+    assert_eq!(doc["buffers"][0]["uri"], "j2k.bin");
+    assert!(tmp.path().join("j2k.bin").is_file());
+    assert_eq!(doc["scenes"][0]["extras"]["tincull"]["version"], 1);
+}

@@ -48,6 +48,11 @@ fn dem_readers_corpus_never_panics() {
 }
 
 #[test]
+fn geotiff_corpus_never_panics() {
+    replay("geotiff", targets::geotiff);
+}
+
+#[test]
 fn tch_load_corpus_never_panics() {
     replay("tch_load", targets::tch_load);
 }
@@ -79,10 +84,22 @@ fn valid_seeds_load() {
     let opts = tin::DemOptions {
         spacing: Some((10.0, 10.0)),
         z_scale: 1.0,
+        band: None,
     };
     let g = tin::dem::png::parse_png(&png, Path::new("gray16_4x3.png"), &opts).expect("a valid .png seed parses");
     assert_eq!(g.points().len(), 12);
     let asc = std::fs::read(dir.join("dem_readers/grid.asc")).expect("seed");
     let g = tin::dem::asc::parse_asc(&asc, Path::new("grid.asc"), &tin::DemOptions::default()).expect("asc parses");
     assert_eq!(g.points().len(), 11, "12 samples, one of them nodata");
+    for (name, points) in [
+        ("utm_int16_4x3.tif", 12),
+        ("geo_float32_point_nodata.tif", 11),
+        ("utm_float64_transform.tif", 12),
+        ("utm_uint16_tiled.tif", 256),
+    ] {
+        let tif = std::fs::read(dir.join("geotiff").join(name)).expect("seed");
+        let (g, _) = tin::dem::geotiff::parse_geotiff(&tif, Path::new(name), &tin::DemOptions::default())
+            .unwrap_or_else(|e| panic!("a valid GeoTIFF seed parses: {e}"));
+        assert_eq!(g.points().len(), points, "{name}");
+    }
 }

@@ -1,7 +1,9 @@
 //! The bodies of the fuzz targets: each takes arbitrary bytes and must never panic (errors are fine).
 //!
 //! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies.
-//! - `dem_readers`: the `.npy`, `.asc`, `.hgt` and `.png` parsers of `tin::dem`.
+//! - `dem_readers`: the `.npy`, `.asc`, `.hgt`, `.png` and GeoTIFF parsers of `tin::dem`.
+//! - `geotiff`: [`tin::dem::geotiff::parse_geotiff`] alone (TIFF structure, GeoKeys, decompression, predictors),
+//!   with no band and with band 2 chosen; a grid that loads is simplified a little.
 //! - `tch_load`: [`cull::Hierarchy::from_bytes`]; a file that loads is culled from a few cameras, degenerate ones
 //!   included (inside a node, far away, non-finite).
 
@@ -31,7 +33,7 @@ pub fn obj_import(data: &[u8]) {
     }
 }
 
-/// The four DEM parsers on `data`.
+/// The five DEM parsers on `data` (GeoTIFF also with band 2 chosen).
 pub fn dem_readers(data: &[u8]) {
     let data = &data[..data.len().min(MAX_INPUT)];
     let _ = tin::dem::npy::parse_npy(data, Path::new("fuzz.npy"));
@@ -42,9 +44,31 @@ pub fn dem_readers(data: &[u8]) {
     let png_opts = DemOptions {
         spacing: Some((10.0, 10.0)),
         z_scale: 1.0,
+        band: None,
     };
     if let Ok(grid) = tin::dem::png::parse_png(data, Path::new("fuzz.png"), &png_opts) {
         let _ = grid.points();
+    }
+    let _ = tin::dem::geotiff::parse_geotiff(data, Path::new("fuzz.tif"), &opts);
+}
+
+/// The GeoTIFF parser on `data`, with no band and with band 2 chosen.
+pub fn geotiff(data: &[u8]) {
+    let data = &data[..data.len().min(MAX_INPUT)];
+    for band in [None, Some(2)] {
+        let opts = DemOptions {
+            band,
+            ..DemOptions::default()
+        };
+        if let Ok((grid, _)) = tin::dem::geotiff::parse_geotiff(data, Path::new("fuzz.tif"), &opts)
+            && grid.rows * grid.cols <= 4096
+        {
+            let simplify = tin::SimplifyOptions {
+                max_vertices: Some(16),
+                max_error: None,
+            };
+            let _ = tin::simplify(&grid, &simplify, None);
+        }
     }
 }
 

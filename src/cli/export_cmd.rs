@@ -1,4 +1,4 @@
-//! `tincull export`: a `.tch` hierarchy as JSON or as a grouped OBJ.
+//! `tincull export`: a `.tch` hierarchy as JSON, as a grouped OBJ, or as glTF 2.0 (`.glb`, or `.gltf` + `.bin`).
 
 use std::path::PathBuf;
 
@@ -8,12 +8,13 @@ use cull::Hierarchy;
 
 use super::{Output, OutputArgs};
 use pipeline::export::to_json;
+use pipeline::gltf::{bin_path, gltf_files, is_glb};
 
 use super::files::Outputs;
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]
-#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["export_json", "export_obj"])))]
+#[command(group(clap::ArgGroup::new("format").required(true).multiple(true).args(["export_json", "export_obj", "export_gltf"])))]
 pub struct ExportArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
@@ -23,6 +24,10 @@ pub struct ExportArgs {
     /// Write the mesh as OBJ with one group per leaf and the orphans (and a .mtl beside it).
     #[arg(long, value_name = "FILE")]
     pub export_obj: Option<PathBuf>,
+    /// Write the mesh as glTF 2.0: one primitive per leaf group and one for the always-visible set, nodes mirroring
+    /// the hierarchy, regions and ranges in `extras.tincull`; `.glb` for binary, else `.gltf` with a `.bin` beside it.
+    #[arg(long, visible_alias = "gltf", value_name = "FILE")]
+    pub export_gltf: Option<PathBuf>,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -38,6 +43,12 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     if let Some(path) = &args.export_obj {
         files.check_grouped_obj(path)?;
     }
+    if let Some(path) = &args.export_gltf {
+        files.check(path)?;
+        if !is_glb(path) {
+            files.check(&bin_path(path)?.0)?;
+        }
+    }
     let h = Hierarchy::load(&args.hierarchy)?;
     if let Some(path) = &args.export_json {
         files.add_bytes(path, to_json(&h)?.as_bytes())?;
@@ -45,7 +56,18 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     if let Some(path) = &args.export_obj {
         files.add_grouped_obj(&h, path)?;
     }
+    let mut gltf_written = Vec::new();
+    if let Some(path) = &args.export_gltf {
+        for (p, bytes) in gltf_files(&h, path)? {
+            files.add_bytes(&p, &bytes)?;
+            gltf_written.push(p);
+        }
+    }
     files.commit()?;
+    if !gltf_written.is_empty() {
+        let names: Vec<String> = gltf_written.iter().map(|p| p.display().to_string()).collect();
+        out.say(format!("wrote {}", names.join(" and ")));
+    }
     if let Some(path) = &args.export_json {
         out.say(format!("wrote {}", path.display()));
     }
@@ -56,5 +78,6 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         "hierarchy": args.hierarchy,
         "json": args.export_json,
         "obj": args.export_obj,
+        "gltf": gltf_written,
     }))
 }

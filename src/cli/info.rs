@@ -20,22 +20,57 @@ pub struct InfoArgs {
 
 /// Runs `tincull info`.
 pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
-    let (tin, import) = args.mesh.load(out)?;
+    let (tin, import, dem) = args.mesh.load_with_source(out)?;
     let stats = tin::mesh_stats(&tin);
     let check = tin::validate(&tin);
     let b = stats.bbox;
     out.say(format!("{}", args.mesh.mesh.display()));
-    out.say(format!(
-        "  vertices      {} (file: {} vertices, {} faces{})",
-        stats.vertices,
-        import.vertices_read,
-        import.faces_read,
-        if import.kept_faces {
-            ", faces kept"
-        } else {
-            ", re-triangulated (Delaunay)"
+    if let Some(d) = &dem {
+        out.say(format!(
+            "  DEM grid      {} x {} samples ({} voids), spacing {:.4} x {:.4} m, north-west sample at ({:.3}, {:.3})",
+            d.rows, d.cols, d.voids, d.spacing.0, d.spacing.1, d.origin[0], d.origin[1]
+        ));
+        if let Some(g) = &d.geotiff {
+            out.say(format!("  CRS           {}", g.crs));
+            let [w, s, e, n] = g.native_bbox;
+            out.say(format!(
+                "  native bbox   x {w} .. {e}, y {s} .. {n} (sample centres, {:?})",
+                g.raster_type
+            ));
+            if !g.conversion.is_empty() {
+                out.say(format!("  to metres     {}", g.conversion));
+            }
+            out.say(format!(
+                "  GeoTIFF       {} {}, {}, band {} of {}, nodata {}",
+                g.sample_type,
+                g.layout,
+                g.compression,
+                g.bands.1,
+                g.bands.0,
+                g.nodata.map_or("none".to_string(), |v| v.to_string())
+            ));
         }
-    ));
+        out.say(format!(
+            "  simplified    to {} vertices (max error {:.3} m; --dem-vertices)",
+            tin.num_vertices(),
+            d.max_error
+        ));
+    }
+    if dem.is_none() {
+        out.say(format!(
+            "  vertices      {} (file: {} vertices, {} faces{})",
+            stats.vertices,
+            import.vertices_read,
+            import.faces_read,
+            if import.kept_faces {
+                ", faces kept"
+            } else {
+                ", re-triangulated (Delaunay)"
+            }
+        ));
+    } else {
+        out.say(format!("  vertices      {}", stats.vertices));
+    }
     out.say(format!("  triangles     {}", stats.triangles));
     out.say(format!(
         "  bbox          x {:.3} .. {:.3}, y {:.3} .. {:.3}, z {:.3} .. {:.3}",
@@ -73,5 +108,6 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
         "stats": stats,
         "validation": check,
         "import": import,
+        "dem": dem,
     }))
 }

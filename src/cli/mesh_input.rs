@@ -1,4 +1,8 @@
 //! Loading the terrain mesh that most commands take as their first argument.
+//!
+//! An OBJ file is imported as it is; a DEM grid (`.npy`, `.asc`, `.hgt`, `.png`, `.tif`/`.tiff`) is read with
+//! [`tin::read_dem`] and simplified by greedy insertion to `--dem-vertices` vertices first (what `tincull tin` does,
+//! without writing the OBJ).
 
 use std::path::PathBuf;
 
@@ -20,7 +24,7 @@ pub enum DedupeArg {
 
 /// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
 /// `--keep-faces` and `--dedupe` as every command that reads a mesh.
-#[derive(Clone, Copy, Debug, Default, Args)]
+#[derive(Clone, Copy, Debug, Args)]
 pub struct ImportArgs {
     /// For a mesh input: use the file's own triangles (checked to form a height field) instead of
     /// re-triangulating its vertices.
@@ -29,6 +33,23 @@ pub struct ImportArgs {
     /// For a mesh input: what to do with vertices that share x,y but differ in z.
     #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
     pub dedupe: DedupeArg,
+    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
+    #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
+    pub dem_vertices: usize,
+    /// For a multi-band GeoTIFF: the elevation band (1-based).
+    #[arg(long)]
+    pub band: Option<u16>,
+}
+
+impl Default for ImportArgs {
+    fn default() -> Self {
+        ImportArgs {
+            keep_faces: false,
+            dedupe: DedupeArg::Reject,
+            dem_vertices: DEFAULT_DEM_VERTICES,
+            band: None,
+        }
+    }
 }
 
 impl ImportArgs {
@@ -38,6 +59,8 @@ impl ImportArgs {
             mesh: path.to_path_buf(),
             keep_faces: self.keep_faces,
             dedupe: self.dedupe,
+            dem_vertices: self.dem_vertices,
+            band: self.band,
         }
     }
 }
@@ -45,7 +68,7 @@ impl ImportArgs {
 /// Arguments naming a terrain mesh and how to import it.
 #[derive(Debug, Args)]
 pub struct MeshArgs {
-    /// The terrain mesh (OBJ).
+    /// The terrain mesh (OBJ), or a DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to --dem-vertices.
     pub mesh: PathBuf,
     /// Use the file's own triangles (checked to form a height field) instead of re-triangulating its vertices.
     #[arg(long)]
@@ -53,23 +76,56 @@ pub struct MeshArgs {
     /// What to do with vertices that share x,y but differ in z.
     #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
     pub dedupe: DedupeArg,
+    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
+    #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
+    pub dem_vertices: usize,
+    /// For a multi-band GeoTIFF: the elevation band (1-based).
+    #[arg(long)]
+    pub band: Option<u16>,
+}
+
+/// Default vertex budget when a command is given a DEM grid instead of a mesh.
+pub const DEFAULT_DEM_VERTICES: usize = 10_000;
+
+/// What was read when the input was a DEM grid.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct DemSource {
+    /// Rows and columns of the grid.
+    pub rows: usize,
+    /// Columns of the grid.
+    pub cols: usize,
+    /// Sample spacing (m).
+    pub spacing: (f64, f64),
+    /// World x,y of the north-west sample (m).
+    pub origin: [f64; 2],
+    /// Void samples.
+    pub voids: usize,
+    /// Largest vertical error of the simplified TIN (m).
+    pub max_error: f64,
+    /// The GeoTIFF's CRS, units and layout, for `.tif` inputs.
+    pub geotiff: Option<tin::dem::geotiff::GeoTiffInfo>,
+}
+
+/// Whether `path` names a DEM grid (by extension) rather than a mesh.
+pub fn is_dem(path: &std::path::Path) -> bool {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    matches!(ext.as_str(), "npy" | "asc" | "hgt" | "png" | "tif" | "tiff")
 }
 
 impl MeshArgs {
     /// Reads the mesh, reporting what the import did (merged duplicates, re-triangulation) as warnings.
     pub fn load(&self, out: Output) -> Result<(Tin, ObjImportReport)> {
-        let ext = self
-            .mesh
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .unwrap_or_default();
-        if matches!(ext.as_str(), "npy" | "asc" | "hgt" | "png") {
-            bail!(
-                "{} is a DEM grid; turn it into a mesh first with `tincull tin {} -o MESH.obj --vertices N`",
-                self.mesh.display(),
-                self.mesh.display()
-            );
+        self.load_with_source(out).map(|(t, r, _)| (t, r))
+    }
+
+    /// [`MeshArgs::load`], also returning what was read when the input is a DEM grid.
+    pub fn load_with_source(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
+        if is_dem(&self.mesh) {
+            return self.load_dem(out);
         }
         let opts = ObjImportOptions {
             keep_faces: self.keep_faces,
@@ -93,6 +149,65 @@ impl MeshArgs {
                 report.dropped_lower
             ));
         }
-        Ok((tin, report))
+        Ok((tin, report, None))
+    }
+
+    /// Reads a DEM grid and simplifies it to `dem_vertices` vertices.
+    fn load_dem(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
+        if self.dem_vertices < 3 {
+            bail!("--dem-vertices must be at least 3, got {}", self.dem_vertices);
+        }
+        let opts = tin::DemOptions {
+            band: self.band,
+            ..Default::default()
+        };
+        let spinner = out.spinner("reading DEM");
+        let (grid, geotiff) = if matches!(
+            self.mesh
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(str::to_ascii_lowercase)
+                .as_deref(),
+            Some("tif" | "tiff")
+        ) {
+            let (g, i) = tin::dem::geotiff::read_geotiff_info(&self.mesh, &opts)?;
+            (g, Some(i))
+        } else {
+            (tin::read_dem(&self.mesh, &opts)?, None)
+        };
+        spinner.finish_and_clear();
+        let bar = out.progress(self.dem_vertices as u64, "simplifying DEM");
+        let progress = |v: usize| bar.set_position(v as u64);
+        let simplify = tin::SimplifyOptions {
+            max_vertices: Some(self.dem_vertices),
+            max_error: None,
+        };
+        let (tin, simplified) = tin::simplify(&grid, &simplify, Some(&progress))?;
+        bar.finish_and_clear();
+        out.warn(format!(
+            "{} is a DEM grid ({} x {} samples, {} voids): simplified to {} vertices (max error {:.3} m); \
+             `tincull tin` writes the mesh with more control",
+            self.mesh.display(),
+            grid.rows,
+            grid.cols,
+            grid.voids(),
+            simplified.vertices,
+            simplified.max_error
+        ));
+        let report = ObjImportReport {
+            vertices: tin.num_vertices(),
+            triangles: tin.num_triangles(),
+            ..Default::default()
+        };
+        let source = DemSource {
+            rows: grid.rows,
+            cols: grid.cols,
+            spacing: (grid.dx, grid.dy),
+            origin: grid.origin.to_array(),
+            voids: grid.voids(),
+            max_error: simplified.max_error,
+            geotiff,
+        };
+        Ok((tin, report, Some(source)))
     }
 }

@@ -15,7 +15,8 @@ use super::{Output, OutputArgs};
 #[derive(Debug, Args)]
 #[command(group(clap::ArgGroup::new("budget").required(true).multiple(true).args(["vertices", "max_error"])))]
 pub struct TinArgs {
-    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM) or 16-bit grayscale .png.
+    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF
+    /// (.tif, .tiff; geographic CRSs are converted to metres like .hgt).
     pub dem: PathBuf,
     /// Output OBJ file.
     #[arg(short, long)]
@@ -32,6 +33,9 @@ pub struct TinArgs {
     /// Multiply heights by this (for .png: metres per grey level).
     #[arg(long, default_value_t = 1.0)]
     pub z_scale: f64,
+    /// The elevation band (1-based) of a multi-band GeoTIFF.
+    #[arg(long)]
+    pub band: Option<u16>,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -55,6 +59,7 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let dem_opts = DemOptions {
         spacing: args.spacing,
         z_scale: args.z_scale,
+        band: args.band,
     };
     let spinner = out.spinner("reading DEM");
     let grid = tin::read_dem(&args.dem, &dem_opts)?;

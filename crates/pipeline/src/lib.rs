@@ -15,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod export;
+pub mod gltf;
 pub mod palette;
 
 use std::sync::Arc;

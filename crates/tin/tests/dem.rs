@@ -14,6 +14,7 @@ fn with_spacing(dx: f64, dy: f64) -> DemOptions {
     DemOptions {
         spacing: Some((dx, dy)),
         z_scale: 1.0,
+        band: None,
     }
 }
 
@@ -170,6 +171,7 @@ fn npy_sidecar_gives_spacing_nodata_and_origin() {
         &DemOptions {
             spacing: Some((1.0, 2.0)),
             z_scale: 0.5,
+            band: None,
         },
     )
     .expect("reads");
@@ -430,6 +432,7 @@ fn png_height_maps() {
     let o = DemOptions {
         spacing: Some((2.0, 3.0)),
         z_scale: 0.1,
+        band: None,
     };
     let g = read_dem(&path, &o).expect("reads");
     assert_eq!((g.rows, g.cols, g.dx, g.dy), (2, 3, 2.0, 3.0));
@@ -486,20 +489,24 @@ fn png_height_maps() {
 
 #[test]
 fn dispatch_and_options() {
-    let m = format_message(read_dem(Path::new("terrain.tif"), &opts()));
-    assert!(m.contains("unsupported DEM extension \"tif\""), "{m}");
+    let m = format_message(read_dem(Path::new("terrain.xyz"), &opts()));
+    assert!(m.contains("unsupported DEM extension \"xyz\""), "{m}");
+    assert!(m.contains(".tif"), "{m}");
     for bad in [
         DemOptions {
             spacing: None,
             z_scale: 0.0,
+            band: None,
         },
         DemOptions {
             spacing: Some((0.0, 1.0)),
             z_scale: 1.0,
+            band: None,
         },
         DemOptions {
             spacing: Some((1.0, f64::NAN)),
             z_scale: 1.0,
+            band: None,
         },
     ] {
         assert!(matches!(

@@ -2,8 +2,8 @@
 //!
 //! The thesis builds its TINs from gridded DEMs (Edmondson 2004, section 6.1); this module reads the formats the
 //! project's data comes in: NumPy `.npy` arrays with a JSON sidecar ([`npy`]), ESRI ASCII grids ([`asc`]), SRTM
-//! `.hgt` tiles ([`hgt`]) and 8/16-bit grayscale PNG height maps ([`png`]). [`read_dem`] picks the reader from the
-//! file extension.
+//! `.hgt` tiles ([`hgt`]), 8/16-bit grayscale PNG height maps ([`png`]) and GeoTIFF rasters ([`geotiff`]).
+//! [`read_dem`] picks the reader from the file extension.
 //!
 //! Conventions shared by all readers:
 //! - [`Grid::origin`] is the **centre of the north-west sample**; row 0 is north, column 0 west.
@@ -15,6 +15,8 @@
 //!   (0, 0)**, so all coordinates are non-negative.
 
 pub mod asc;
+#[cfg(feature = "geotiff")]
+pub mod geotiff;
 pub mod hgt;
 pub mod npy;
 #[cfg(feature = "png")]
@@ -35,6 +37,9 @@ pub struct DemOptions {
     pub spacing: Option<(f64, f64)>,
     /// Factor applied to every stored value to get heights in metres (default 1).
     pub z_scale: f64,
+    /// The elevation band (1-based) of a multi-band GeoTIFF; single-band files need none. Other formats ignore it.
+    #[serde(default)]
+    pub band: Option<u16>,
 }
 
 impl Default for DemOptions {
@@ -42,6 +47,7 @@ impl Default for DemOptions {
         DemOptions {
             spacing: None,
             z_scale: 1.0,
+            band: None,
         }
     }
 }
@@ -65,7 +71,7 @@ impl DemOptions {
     }
 }
 
-/// Reads a DEM, choosing the reader from the extension (`.npy`, `.asc`, `.hgt`, `.png`, any case).
+/// Reads a DEM, choosing the reader from the extension (`.npy`, `.asc`, `.hgt`, `.png`, `.tif`/`.tiff`, any case).
 pub fn read_dem(path: &Path, opts: &DemOptions) -> Result<Grid> {
     let grid = read_dem_unchecked(path, opts)?;
     check_range(&grid, path)?;
@@ -125,9 +131,16 @@ fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
             path,
             "PNG height maps need the `png` feature of the tin crate, which this build lacks",
         )),
+        #[cfg(feature = "geotiff")]
+        "tif" | "tiff" => geotiff::read_geotiff(path, opts),
+        #[cfg(not(feature = "geotiff"))]
+        "tif" | "tiff" => Err(TinError::format(
+            path,
+            "GeoTIFF rasters need the `geotiff` feature of the tin crate, which this build lacks",
+        )),
         _ => Err(TinError::format(
             path,
-            format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt or .png"),
+            format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt, .png, .tif or .tiff"),
         )),
     }
 }

@@ -1,0 +1,370 @@
+//! glTF 2.0 export of a hierarchy: binary `.glb`, or `.gltf` JSON with a `.bin` beside it.
+//!
+//! What is written (JSON by hand with `serde_json`, the binary buffer little-endian):
+//! - **Buffer** (one): positions (f32 VEC3, relative to the hierarchy's local origin), normals (f32 VEC3, per vertex,
+//!   area-weighted, unit length), then the triangle indices (u32) in hierarchy order, in three buffer views
+//!   (0 positions, 1 normals, 2 indices). Triangle `t` of the hierarchy is indices `3t .. 3t+3` of buffer view 2, so
+//!   a triangle range `[s, e)` is the index bytes `12 s .. 12 e`.
+//! - **Meshes**: one per leaf group (group `i` is the `i`-th leaf in triangle order, as in the OBJ export), one
+//!   primitive each whose index accessor is the group's range of buffer view 2; then one mesh `always_visible` for
+//!   the always-visible (orphan) triangles when there are any. All primitives share the POSITION and NORMAL
+//!   accessors 0 and 1.
+//! - **Materials**: the group colours of the OBJ export ([`crate::palette`]), converted from sRGB to the linear
+//!   `baseColorFactor` glTF expects, dark grey for the always-visible set; not metallic, fully rough.
+//! - **Nodes**: node 0 `terrain` is the root; its `translation` is the local origin (rounded to f32). Hierarchy node
+//!   `i` is glTF node `i + 1`, with the children of the hierarchy as its children and, for a leaf, its group's mesh;
+//!   the hierarchy's top-level nodes and a last node `always_visible` (with its mesh) are the children of node 0.
+//! - **Culling data** in `extras.tincull` (documented here; no extension is required to load the file):
+//!   - on the scene: `{"version": 1, "sectors", "origin": [x, y, z] (exact f64), "roots": [hierarchy node indices],
+//!     "always_visible": [s, e], "triangles", "vertices", "node_offset": 1, "index_buffer_view": 2, "build": {...}}`;
+//!   - on each hierarchy node's glTF node: `{"index": i, "centre": [x, y], "radius", "children": [...],
+//!     "triangles": [s, e], "level", "regions": [{"sector", "points": [[t, z], ...], "tail_slope"}]}`, the same
+//!     fields and values as the `.tch` file (and its JSON form), so a loader can rebuild the [`cull::Hierarchy`]
+//!     without the `.tch` ([`hierarchy_from_gltf_json`] does exactly that, positions from the f32 buffer).
+//!
+//! [`gltf_files`] returns the bytes of the files; the caller writes them (the CLI through its one writer).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail, ensure};
+use cull::{Hierarchy, Mesh, Node};
+use serde_json::{Value, json};
+
+use crate::palette::{ORPHAN_COLOUR, group_colour};
+
+/// Version of the `extras.tincull` layout.
+pub const EXTRAS_VERSION: u32 = 1;
+
+const FLOAT: u32 = 5126;
+const UNSIGNED_INT: u32 = 5125;
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+/// The glTF JSON document (with the buffer's `uri` when given, for `.gltf`) and the binary buffer.
+pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8>)> {
+    let nv = h.mesh.positions.len();
+    let nt = h.mesh.triangles.len();
+    if nv == 0 || nt == 0 {
+        bail!("the hierarchy has no triangles to export");
+    }
+    let o = h.origin;
+    let positions: Vec<[f32; 3]> = h
+        .mesh
+        .positions
+        .iter()
+        .map(|p| [(p[0] - o[0]) as f32, (p[1] - o[1]) as f32, (p[2] - o[2]) as f32])
+        .collect();
+    let normals = vertex_normals(&h.mesh);
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for p in &positions {
+        for k in 0..3 {
+            min[k] = min[k].min(p[k]);
+            max[k] = max[k].max(p[k]);
+        }
+    }
+    let mut bin = Vec::with_capacity(24 * nv + 12 * nt);
+    for p in &positions {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for n in &normals {
+        for c in n {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for t in &h.mesh.triangles {
+        for i in t {
+            bin.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    let vbytes = 12 * nv;
+    let ibytes = 12 * nt;
+
+    let mut accessors = vec![
+        json!({"bufferView": 0, "componentType": FLOAT, "count": nv, "type": "VEC3", "min": min, "max": max}),
+        json!({"bufferView": 1, "componentType": FLOAT, "count": nv, "type": "VEC3"}),
+    ];
+    let mut meshes = Vec::new();
+    let mut materials = Vec::new();
+    let mut add_mesh = |name: String, [s, e]: [u32; 2], colour: [f64; 3]| -> usize {
+        let a = accessors.len();
+        accessors.push(json!({
+            "bufferView": 2,
+            "byteOffset": 12 * s as usize,
+            "componentType": UNSIGNED_INT,
+            "count": 3 * (e - s) as usize,
+            "type": "SCALAR",
+        }));
+        let m = materials.len();
+        let linear = colour.map(srgb_to_linear);
+        materials.push(json!({
+            "name": name,
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [linear[0], linear[1], linear[2], 1.0],
+                "metallicFactor": 0.0,
+                "roughnessFactor": 1.0,
+            },
+        }));
+        meshes.push(json!({
+            "name": name,
+            "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": a, "material": m, "mode": 4}],
+        }));
+        meshes.len() - 1
+    };
+
+    let leaves = h.leaf_ranges();
+    let mut leaf_mesh = std::collections::HashMap::new();
+    for (i, &range) in leaves.iter().enumerate() {
+        if range[1] > range[0] {
+            let m = add_mesh(format!("group_{i}"), range, group_colour(i));
+            leaf_mesh.insert(range, (i, m));
+        }
+    }
+    let av = h.always_visible;
+    let av_mesh = (av[1] > av[0]).then(|| add_mesh("always_visible".into(), av, ORPHAN_COLOUR));
+
+    let mut nodes = Vec::with_capacity(h.nodes.len() + 2);
+    let mut root_children: Vec<usize> = h.roots.iter().map(|&r| r as usize + 1).collect();
+    root_children.push(h.nodes.len() + 1);
+    nodes.push(json!({
+        "name": "terrain",
+        "translation": [o[0] as f32, o[1] as f32, o[2] as f32],
+        "children": root_children,
+    }));
+    for (i, n) in h.nodes.iter().enumerate() {
+        let mut extras = serde_json::to_value(n).context("cannot encode a hierarchy node")?;
+        extras["index"] = json!(i);
+        let mut node = json!({ "extras": { "tincull": extras } });
+        if n.children.is_empty() {
+            match leaf_mesh.get(&n.triangles) {
+                Some(&(g, m)) => {
+                    node["name"] = json!(format!("group_{g}"));
+                    node["mesh"] = json!(m);
+                }
+                None => node["name"] = json!(format!("node_{i}")),
+            }
+        } else {
+            node["name"] = json!(format!("node_{i}"));
+            node["children"] = json!(n.children.iter().map(|&c| c as usize + 1).collect::<Vec<_>>());
+        }
+        nodes.push(node);
+    }
+    let mut av_node = json!({"name": "always_visible"});
+    if let Some(m) = av_mesh {
+        av_node["mesh"] = json!(m);
+    }
+    nodes.push(av_node);
+
+    let mut buffer = json!({"byteLength": bin.len()});
+    if let Some(uri) = buffer_uri {
+        buffer["uri"] = json!(uri);
+    }
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("tincull ", env!("CARGO_PKG_VERSION"))},
+        "scene": 0,
+        "scenes": [{
+            "name": "tincull hierarchy",
+            "nodes": [0],
+            "extras": {"tincull": {
+                "version": EXTRAS_VERSION,
+                "sectors": h.sectors,
+                "origin": h.origin,
+                "roots": h.roots,
+                "always_visible": h.always_visible,
+                "triangles": nt,
+                "vertices": nv,
+                "node_offset": 1,
+                "index_buffer_view": 2,
+                "build": h.build,
+            }},
+        }],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": accessors,
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": vbytes, "target": ARRAY_BUFFER},
+            {"buffer": 0, "byteOffset": vbytes, "byteLength": vbytes, "target": ARRAY_BUFFER},
+            {"buffer": 0, "byteOffset": 2 * vbytes, "byteLength": ibytes, "target": ELEMENT_ARRAY_BUFFER},
+        ],
+        "buffers": [buffer],
+    });
+    Ok((doc, bin))
+}
+
+/// The binary glTF (`.glb`) bytes of `h`.
+pub fn to_glb(h: &Hierarchy) -> Result<Vec<u8>> {
+    let (doc, mut bin) = to_gltf(h, None)?;
+    let mut json = serde_json::to_vec(&doc)?;
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let total = u32::try_from(total).context("the mesh is too large for a .glb (over 4 GiB)")?;
+    let mut out = Vec::with_capacity(total as usize);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&total.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    Ok(out)
+}
+
+/// The files of `h` as glTF for `path`: the `.glb` alone when `path` ends in `.glb` (any case), else the `.gltf`
+/// JSON and the `.bin` buffer beside it (same stem; the JSON names it by its file name). The caller writes them (the
+/// CLI through its one output writer, all or none).
+pub fn gltf_files(h: &Hierarchy, path: &Path) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    if is_glb(path) {
+        return Ok(vec![(path.to_path_buf(), to_glb(h)?)]);
+    }
+    let (bin_path, uri) = bin_path(path)?;
+    let (doc, bin) = to_gltf(h, Some(&uri))?;
+    let text = serde_json::to_string_pretty(&doc)?;
+    Ok(vec![(path.to_path_buf(), text.into_bytes()), (bin_path, bin)])
+}
+
+/// Whether `path` asks for binary glTF (`.glb`, any case).
+pub fn is_glb(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+}
+
+/// The `.bin` beside a `.gltf` file and the `uri` that names it; refused when `path` itself ends in `.bin`.
+pub fn bin_path(path: &Path) -> Result<(PathBuf, String)> {
+    ensure!(
+        !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("bin")),
+        "{}: a .gltf output cannot end in .bin, which is its buffer's name",
+        path.display()
+    );
+    let bin = path.with_extension("bin");
+    let uri = bin
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .with_context(|| format!("{}: the glTF path has no file name", path.display()))?;
+    Ok((bin, uri))
+}
+
+/// Rebuilds the hierarchy from a glTF document written by [`to_gltf`] and its binary buffer: nodes, roots, regions
+/// and ranges from `extras.tincull`, the mesh from the buffer (positions are the f32 values plus the exact origin).
+/// This is what a loader does to cull without the `.tch`; errors name the element that is missing or malformed.
+pub fn hierarchy_from_gltf_json(doc: &Value, bin: &[u8]) -> Result<Hierarchy> {
+    let scene = &doc["scenes"][0]["extras"]["tincull"];
+    if scene["version"].as_u64() != Some(u64::from(EXTRAS_VERSION)) {
+        bail!("scenes[0].extras.tincull.version is not {EXTRAS_VERSION}: not a tincull glTF");
+    }
+    let field = |v: &Value, name: &str| -> Result<Value> {
+        v.get(name)
+            .cloned()
+            .with_context(|| format!("scenes[0].extras.tincull.{name} is missing"))
+    };
+    let sectors: u32 = serde_json::from_value(field(scene, "sectors")?).context("extras.tincull.sectors")?;
+    let origin: [f64; 3] = serde_json::from_value(field(scene, "origin")?).context("extras.tincull.origin")?;
+    let roots: Vec<u32> = serde_json::from_value(field(scene, "roots")?).context("extras.tincull.roots")?;
+    let always_visible: [u32; 2] =
+        serde_json::from_value(field(scene, "always_visible")?).context("extras.tincull.always_visible")?;
+    let nv = field(scene, "vertices")?.as_u64().context("extras.tincull.vertices")? as usize;
+    let nt = field(scene, "triangles")?
+        .as_u64()
+        .context("extras.tincull.triangles")? as usize;
+    let build = serde_json::from_value(field(scene, "build")?).context("extras.tincull.build")?;
+    let mut nodes: Vec<(usize, Node)> = Vec::new();
+    for (k, n) in doc["nodes"].as_array().context("no nodes")?.iter().enumerate() {
+        if let Some(e) = n.get("extras").and_then(|e| e.get("tincull")) {
+            let index = e["index"]
+                .as_u64()
+                .with_context(|| format!("nodes[{k}].extras.tincull.index"))?;
+            let node: Node = serde_json::from_value(e.clone()).with_context(|| format!("nodes[{k}].extras.tincull"))?;
+            nodes.push((index as usize, node));
+        }
+    }
+    nodes.sort_by_key(|(i, _)| *i);
+    if nodes.iter().enumerate().any(|(k, (i, _))| k != *i) {
+        bail!(
+            "the hierarchy nodes' extras.tincull.index values are not 0..{}",
+            nodes.len()
+        );
+    }
+    let (pos_len, idx_len) = (12 * nv, 12 * nt);
+    if bin.len() < 2 * pos_len + idx_len {
+        bail!(
+            "the buffer holds {} bytes, fewer than {} vertices and {} triangles need",
+            bin.len(),
+            nv,
+            nt
+        );
+    }
+    let f = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    let u = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    let positions = bin[..pos_len]
+        .chunks_exact(12)
+        .map(|c| {
+            [
+                origin[0] + f64::from(f(&c[0..4])),
+                origin[1] + f64::from(f(&c[4..8])),
+                origin[2] + f64::from(f(&c[8..12])),
+            ]
+        })
+        .collect();
+    let triangles = bin[2 * pos_len..2 * pos_len + idx_len]
+        .chunks_exact(12)
+        .map(|c| [u(&c[0..4]), u(&c[4..8]), u(&c[8..12])])
+        .collect();
+    let h = Hierarchy {
+        sectors,
+        origin,
+        nodes: nodes.into_iter().map(|(_, n)| n).collect(),
+        roots,
+        always_visible,
+        mesh: Mesh { positions, triangles },
+        build,
+    };
+    h.check_invariants()?;
+    Ok(h)
+}
+
+/// Unit vertex normals: the area-weighted sum of the incident triangles' normals (straight up when degenerate).
+fn vertex_normals(mesh: &Mesh) -> Vec<[f32; 3]> {
+    let mut acc = vec![[0.0f64; 3]; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        for &i in t {
+            for k in 0..3 {
+                acc[i as usize][k] += n[k];
+            }
+        }
+    }
+    acc.into_iter()
+        .map(|n| {
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if len > 0.0 && len.is_finite() {
+                [(n[0] / len) as f32, (n[1] / len) as f32, (n[2] / len) as f32]
+            } else {
+                [0.0, 0.0, 1.0]
+            }
+        })
+        .collect()
+}
+
+/// sRGB-encoded display value to linear.
+fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}

@@ -1,0 +1,184 @@
+//! glTF export: the `gltf` crate re-imports the same triangles (per group, in hierarchy order) and positions, the
+//! hierarchy rebuilt from `extras.tincull` culls like the original, and the Khronos glTF-Validator reports no errors
+//! (required when `TINCULL_REQUIRE_GLTF_VALIDATOR=1` or `TINCULL_REQUIRE_GPU=1`, as `scripts/test` sets them).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use cull::{AnyCuller, Camera, CullMethod, Hierarchy};
+use pipeline::gltf::{gltf_files, hierarchy_from_gltf_json, to_glb, to_gltf};
+
+/// Writes the glTF files of `h` for `path`, returning their paths.
+fn write_gltf(h: &Hierarchy, path: &Path) -> Vec<PathBuf> {
+    gltf_files(h, path)
+        .expect("glTF files")
+        .into_iter()
+        .map(|(p, bytes)| {
+            std::fs::write(&p, bytes).expect("write");
+            p
+        })
+        .collect()
+}
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn bundled(name: &str) -> Hierarchy {
+    let obj = workspace().join("meshes").join(name);
+    let (t, _) = tin::read_obj(&obj, &tin::ObjImportOptions::default()).expect("the bundled mesh");
+    pipeline::build(&t, &pipeline::BuildParams::default(), None)
+        .expect("build")
+        .hierarchy
+}
+
+/// Re-imports with the `gltf` crate: every primitive's triangles are its group's range of the hierarchy's
+/// triangles, the groups and the always-visible set cover all triangles once, positions are the f32 local ones.
+fn check_reimport(h: &Hierarchy, document: &gltf::Document, bin: &[u8]) {
+    let buffers = [bin];
+    let mut covered = vec![false; h.num_triangles()];
+    let leaves = h.leaf_ranges();
+    let mut primitives = 0;
+    for mesh in document.meshes() {
+        for p in mesh.primitives() {
+            primitives += 1;
+            assert_eq!(p.mode(), gltf::mesh::Mode::Triangles);
+            let reader = p.reader(|b| buffers.get(b.index()).copied());
+            let positions: Vec<[f32; 3]> = reader.read_positions().expect("positions").collect();
+            assert_eq!(positions.len(), h.mesh.positions.len());
+            for (q, p) in positions.iter().zip(&h.mesh.positions) {
+                for k in 0..3 {
+                    assert_eq!(q[k], (p[k] - h.origin[k]) as f32);
+                }
+            }
+            let normals: Vec<[f32; 3]> = reader.read_normals().expect("normals").collect();
+            assert!(
+                normals
+                    .iter()
+                    .all(|n| ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-5)
+            );
+            let idx: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+            let tris: Vec<[u32; 3]> = idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let name = mesh.name().expect("named mesh");
+            let range = if name == "always_visible" {
+                h.always_visible
+            } else {
+                let g: usize = name.strip_prefix("group_").expect("group_N").parse().expect("N");
+                leaves[g]
+            };
+            assert_eq!(
+                &tris[..],
+                &h.mesh.triangles[range[0] as usize..range[1] as usize],
+                "{name}"
+            );
+            for t in range[0]..range[1] {
+                assert!(!covered[t as usize], "triangle {t} in two primitives");
+                covered[t as usize] = true;
+            }
+        }
+    }
+    assert!(covered.iter().all(|&c| c), "every triangle is in a primitive");
+    assert_eq!(primitives, leaves.len() + 1);
+    // The node tree mirrors the hierarchy: node 0 carries the origin, hierarchy node i is node i + 1.
+    let nodes: Vec<gltf::Node> = document.nodes().collect();
+    let (t, _, _) = nodes[0].transform().decomposed();
+    assert_eq!(t, h.origin.map(|c| c as f32));
+    for (i, n) in h.nodes.iter().enumerate() {
+        let kids: Vec<usize> = nodes[i + 1].children().map(|c| c.index()).collect();
+        assert_eq!(kids, n.children.iter().map(|&c| c as usize + 1).collect::<Vec<_>>());
+        assert_eq!(nodes[i + 1].mesh().is_some(), n.children.is_empty());
+    }
+}
+
+fn eyes(h: &Hierarchy) -> Vec<Camera> {
+    let p = &h.mesh.positions;
+    p.iter()
+        .step_by(p.len() / 10)
+        .map(|v| Camera::all_around([v[0], v[1], v[2] + 2.0]))
+        .collect()
+}
+
+#[test]
+fn glb_reimports_to_the_same_triangles_and_hierarchy() {
+    let h = bundled("jacksboro-2k.obj");
+    let glb = to_glb(&h).expect("glb");
+    let g = gltf::Gltf::from_slice(&glb).expect("the gltf crate reads the .glb");
+    let blob = g.blob.clone().expect("a BIN chunk");
+    check_reimport(&h, &g.document, &blob);
+    // The culling data in extras: the same hierarchy (f32 positions), the same thesis culls.
+    let (doc, bin) = to_gltf(&h, None).expect("gltf");
+    let back = hierarchy_from_gltf_json(&doc, &bin).expect("rebuilt from extras");
+    assert_eq!(back.nodes, h.nodes);
+    assert_eq!(back.roots, h.roots);
+    assert_eq!(back.always_visible, h.always_visible);
+    assert_eq!(back.mesh.triangles, h.mesh.triangles);
+    assert_eq!(back.origin, h.origin);
+    let (a, b) = (
+        AnyCuller::new(&h, CullMethod::Thesis),
+        AnyCuller::new(&back, CullMethod::Thesis),
+    );
+    for c in eyes(&h) {
+        assert_eq!(a.cull(&c).ranges, b.cull(&c).ranges);
+    }
+}
+
+#[test]
+fn gltf_with_bin_reimports() {
+    let h = bundled("jacksboro-2k.obj");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("terrain.gltf");
+    let written = write_gltf(&h, &path);
+    assert_eq!(written, vec![path.clone(), dir.path().join("terrain.bin")]);
+    let g = gltf::Gltf::open(&path).expect("the gltf crate reads the .gltf");
+    let bin = std::fs::read(dir.path().join("terrain.bin")).expect("bin");
+    check_reimport(&h, &g.document, &bin);
+    assert!(
+        gltf_files(&h, &dir.path().join("x.bin")).is_err(),
+        "a .gltf named .bin is refused"
+    );
+    // A bad rebuild input names what is missing.
+    let e = hierarchy_from_gltf_json(&serde_json::json!({"scenes": [{}]}), &[]).unwrap_err();
+    assert!(e.to_string().contains("extras.tincull"), "{e}");
+}
+
+fn validator_required() -> bool {
+    ["TINCULL_REQUIRE_GLTF_VALIDATOR", "TINCULL_REQUIRE_GPU"]
+        .iter()
+        .any(|v| std::env::var(v).is_ok_and(|s| s == "1"))
+}
+
+#[test]
+fn khronos_validator_reports_no_errors() {
+    let h = bundled("jacksboro-2k.obj");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let glb = dir.path().join("terrain.glb");
+    let gltf = dir.path().join("terrain.gltf");
+    write_gltf(&h, &glb);
+    write_gltf(&h, &gltf);
+    let script = workspace().join("scripts/gltf-validate.cjs");
+    let out = match Command::new("node").arg(&script).arg(&glb).arg(&gltf).output() {
+        Ok(o) => o,
+        Err(e) => {
+            assert!(!validator_required(), "node is missing ({e}): run scripts/install-deps");
+            eprintln!("node is missing ({e}): skipping the glTF-Validator check");
+            return;
+        }
+    };
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.code() == Some(2) {
+        assert!(!validator_required(), "the glTF-Validator is missing: {stderr}");
+        eprintln!("{stderr}: skipping the glTF-Validator check");
+        return;
+    }
+    println!("{stdout}");
+    assert!(out.status.success(), "glTF-Validator found errors:\n{stdout}\n{stderr}");
+    let reports: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON report per file"))
+        .collect();
+    assert_eq!(reports.len(), 2);
+    for r in &reports {
+        assert_eq!(r["errors"], 0, "{r}");
+    }
+}

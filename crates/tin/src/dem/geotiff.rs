@@ -1,0 +1,585 @@
+//! GeoTIFF elevation rasters (`.tif`, `.tiff`), read with the pure-Rust `tiff` crate (no GDAL).
+//!
+//! What is read:
+//! - one image (the first IFD); samples int8/16/32/64, uint8/16/32/64, float32 or float64, in strips or tiles,
+//!   uncompressed, LZW or Deflate, with no predictor, the horizontal predictor (2) or the floating-point predictor
+//!   (3): whatever the `tiff` crate decodes;
+//! - one band: a single-band image, or band [`DemOptions::band`] (1-based, like GDAL) of an interleaved multi-band
+//!   image; a multi-band image without a chosen band is an error;
+//! - `GDAL_NODATA` (tag 42113): samples equal to it become voids, as do NaN samples;
+//! - the georeference: ModelPixelScale (33550) + one ModelTiepoint (33922), or a ModelTransformation (34264) without
+//!   rotation or shear; north-up only (row 0 north). `GTRasterTypeGeoKey` says whether the tie point is the corner
+//!   of a pixel (pixel-is-area, the default) or its centre (pixel-is-point); the grid origin is always the centre of
+//!   the north-west sample.
+//!
+//! Coordinate reference systems (`GeoKeyDirectory`, tag 34735):
+//! - **Projected** (`GTModelTypeGeoKey` = 1) in metres (`ProjLinearUnitsGeoKey` = 9001, or absent with a UTM
+//!   `ProjectedCSTypeGeoKey`: EPSG 326xx/327xx, 269xx, 267xx, 258xx, 322xx/323xx): coordinates are used as they are.
+//!   Other linear units (feet, …) are an error.
+//! - **Geographic** (`GTModelTypeGeoKey` = 2; EPSG:4326 and any datum) in degrees (`GeogAngularUnitsGeoKey` 9102 or
+//!   9122, or absent), arc-minutes (9103) or arc-seconds (9104): converted to metres in the same local frame as
+//!   SRTM `.hgt` tiles ([`super::hgt`]): 1° of latitude is 111,320 m, 1° of longitude is `111,320 · cos(φc)` m with
+//!   φc the latitude midway between the northern and southern sample rows; x is metres east of the western sample
+//!   column (column 0 at x = 0), y is `latitude · 111,320` (the southern row at `south · 111,320`). A spacing within
+//!   10⁻⁹ (relative) of 1/n degree for a whole n is taken as exactly 1/n degree, because writers store 3″ as
+//!   0.000833…; so a GeoTIFF written from an `.hgt` tile reads to exactly the tile's grid.
+//! - No GeoKeyDirectory, a geocentric or user-defined model, radians or grads, a rotated or sheared transformation,
+//!   several tie points, or a south-up raster are errors naming the file and the tag.
+//!
+//! [`DemOptions::spacing`] overrides the spacing (the origin stays where the georeference puts it).
+//! [`read_geotiff_info`] also returns what was found ([`GeoTiffInfo`]: the CRS, units, raster type, the native
+//! bounding box), which `tincull info` prints.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use glam::DVec2;
+use tiff::decoder::{Decoder, DecodingResult, Limits};
+use tiff::tags::Tag;
+
+use super::hgt::METRES_PER_DEGREE;
+use super::{DemOptions, finish, read_bytes};
+use crate::error::{Result, TinError};
+use crate::grid::Grid;
+
+/// GeoKey ids used here (GeoTIFF 1.1, section 7).
+mod key {
+    pub const MODEL_TYPE: u16 = 1024;
+    pub const RASTER_TYPE: u16 = 1025;
+    pub const CITATION: u16 = 1026;
+    pub const GEOGRAPHIC_TYPE: u16 = 2048;
+    pub const GEOG_CITATION: u16 = 2049;
+    pub const GEOG_ANGULAR_UNITS: u16 = 2054;
+    pub const PROJECTED_CS_TYPE: u16 = 3072;
+    pub const PCS_CITATION: u16 = 3073;
+    pub const PROJ_LINEAR_UNITS: u16 = 3076;
+}
+
+/// The most decoded sample bytes a GeoTIFF may have (1 GiB); larger images are refused, not read.
+pub const MAX_DECODED_BYTES: usize = 1 << 30;
+
+/// The tag of GDAL's nodata value.
+const GDAL_NODATA: u16 = 42113;
+/// The GeoTIFF tag holding GeoKey ASCII parameters.
+const GEO_ASCII_PARAMS: u16 = 34737;
+
+/// The kind of coordinate reference system of a GeoTIFF.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CrsKind {
+    /// A projected CRS in metres: coordinates used as they are.
+    Projected,
+    /// A geographic CRS (latitude/longitude): converted to metres like `.hgt` tiles.
+    Geographic,
+}
+
+/// Whether the tie point names a pixel's corner or its centre (`GTRasterTypeGeoKey`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RasterType {
+    /// Pixel-is-area (1, the default): raster coordinate (0, 0) is the north-west corner of the first pixel.
+    PixelIsArea,
+    /// Pixel-is-point (2): raster coordinate (0, 0) is the centre of the first pixel.
+    PixelIsPoint,
+}
+
+/// What a GeoTIFF says about itself, beyond the grid.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GeoTiffInfo {
+    /// Projected (metres) or geographic (degrees, converted).
+    pub crs_kind: CrsKind,
+    /// The EPSG code of the projected or geographic CRS, when the file gives one.
+    pub epsg: Option<u16>,
+    /// The CRS in words, e.g. `EPSG:26910 (projected, metres)`, with the file's citation when it has one.
+    pub crs: String,
+    /// How the native coordinates became metres (empty for projected CRSs).
+    pub conversion: String,
+    /// Pixel-is-area or pixel-is-point.
+    pub raster_type: RasterType,
+    /// Native bounding box of the sample centres: (west, south, east, north), in the CRS's units (degrees for
+    /// geographic CRSs).
+    pub native_bbox: [f64; 4],
+    /// Native sample spacing (x, y) in the CRS's units.
+    pub native_spacing: (f64, f64),
+    /// The `GDAL_NODATA` value, if any.
+    pub nodata: Option<f64>,
+    /// The sample type, e.g. `int16`, `float32`.
+    pub sample_type: String,
+    /// The TIFF compression (`none`, `lzw`, `deflate`, …) and predictor (`none`, `horizontal`, `floating-point`).
+    pub compression: String,
+    /// `strips` or `tiles`.
+    pub layout: String,
+    /// Number of bands (samples per pixel), and the one read (1-based).
+    pub bands: (u16, u16),
+}
+
+/// Reads a GeoTIFF DEM (see the module documentation).
+pub fn read_geotiff(path: &Path, opts: &DemOptions) -> Result<Grid> {
+    read_geotiff_info(path, opts).map(|(g, _)| g)
+}
+
+/// Reads a GeoTIFF DEM and what its tags say ([`GeoTiffInfo`]).
+pub fn read_geotiff_info(path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTiffInfo)> {
+    opts.check()?;
+    let bytes = read_bytes(path)?;
+    parse_geotiff(&bytes, path, opts)
+}
+
+/// Parses the bytes of a GeoTIFF; `path` names it in errors.
+pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTiffInfo)> {
+    opts.check()?;
+    let err = |m: String| TinError::format(path, m);
+    let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
+    let mut dec = Decoder::new(Cursor::new(bytes)).map_err(|e| tiff_err("not a readable TIFF", e))?;
+    // Bounded memory on hostile headers: at most 1 GiB of decoded samples (a 16k x 16k float32 DEM) and 256 MiB
+    // per compressed strip or tile.
+    let mut limits = Limits::default();
+    limits.decoding_buffer_size = MAX_DECODED_BYTES;
+    limits.intermediate_buffer_size = 1 << 28;
+    dec = dec.with_limits(limits);
+    let (width, height) = dec
+        .dimensions()
+        .map_err(|e| tiff_err("image size (ImageWidth/ImageLength)", e))?;
+    let (cols, rows) = (width as usize, height as usize);
+
+    // Tags, read before the samples.
+    let spp: u16 = find_u64(&mut dec, Tag::SamplesPerPixel, path)?
+        .unwrap_or(1)
+        .try_into()
+        .unwrap_or(u16::MAX);
+    let planar = find_u64(&mut dec, Tag::PlanarConfiguration, path)?.unwrap_or(1);
+    let compression = match find_u64(&mut dec, Tag::Compression, path)?.unwrap_or(1) {
+        1 => "none".to_string(),
+        5 => "lzw".to_string(),
+        8 | 32946 => "deflate".to_string(),
+        c => format!("compression {c}"),
+    };
+    let predictor = match find_u64(&mut dec, Tag::Predictor, path)?.unwrap_or(1) {
+        1 => "none".to_string(),
+        2 => "horizontal".to_string(),
+        3 => "floating-point".to_string(),
+        p => format!("predictor {p}"),
+    };
+    let layout = if dec.find_tag(Tag::TileWidth).ok().flatten().is_some() {
+        "tiles"
+    } else {
+        "strips"
+    };
+    let nodata = match dec.find_tag(Tag::Unknown(GDAL_NODATA)) {
+        Ok(Some(v)) => {
+            let s = v
+                .into_string()
+                .map_err(|e| tiff_err("tag GDAL_NODATA (42113) is not text", e))?;
+            let t = s.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+            Some(parse_nodata(t).ok_or_else(|| err(format!("tag GDAL_NODATA (42113): {t:?} is not a number")))?)
+        }
+        Ok(None) => None,
+        Err(e) => return Err(tiff_err("tag GDAL_NODATA (42113)", e)),
+    };
+    let georef = read_georef(&mut dec, path)?;
+
+    let band = match (spp, opts.band) {
+        (1, None | Some(1)) => 1,
+        (1, Some(b)) => {
+            return Err(err(format!(
+                "band {b} requested, but the image has 1 band (SamplesPerPixel)"
+            )));
+        }
+        (n, None) => {
+            return Err(err(format!(
+                "the image has {n} bands (SamplesPerPixel = {n}): choose the elevation band (1..{n})"
+            )));
+        }
+        (n, Some(b)) if b == 0 || b > n => {
+            return Err(err(format!(
+                "band {b} requested, but the image has bands 1..{n} (SamplesPerPixel)"
+            )));
+        }
+        (_, Some(b)) if planar == 2 && b != 1 => {
+            return Err(err(format!(
+                "band {b} of a planar (PlanarConfiguration = 2) multi-band image: only band 1 can be read"
+            )));
+        }
+        (_, Some(b)) => b,
+    };
+
+    let image = dec.read_image().map_err(|e| {
+        tiff_err(
+            &format!("cannot decode the samples ({compression}, predictor {predictor})"),
+            e,
+        )
+    })?;
+    let (sample_type, values) = to_f64(image);
+    let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
+    let stride = if planar == 2 { 1 } else { usize::from(spp) };
+    let n = rows
+        .checked_mul(cols)
+        .ok_or_else(|| err(format!("{cols} x {rows} samples overflow")))?;
+    if values.len() < n * stride {
+        return Err(err(format!(
+            "decoded {} samples, expected {} ({cols} x {rows} x {stride})",
+            values.len(),
+            n * stride
+        )));
+    }
+    let nd32 = nodata.map(|v| v as f32);
+    let z: Vec<f64> = values
+        .iter()
+        .skip(usize::from(band) - 1)
+        .step_by(stride)
+        .take(n)
+        .map(|&v| {
+            let void = v.is_nan()
+                || nodata.is_some_and(|nd| v == nd)
+                || (sample_type == "float32" && nd32.is_some_and(|nd| v as f32 == nd));
+            if void { f64::NAN } else { v }
+        })
+        .collect();
+
+    // The georeference: native coordinates of the centre of sample (0, 0) and the native spacing.
+    let c = match georef.raster_type {
+        RasterType::PixelIsArea => 0.5,
+        RasterType::PixelIsPoint => 0.0,
+    };
+    let (sx, sy) = georef.scale;
+    let x0 = georef.tie_world.0 + (c - georef.tie_raster.0) * sx;
+    let y0 = georef.tie_world.1 - (c - georef.tie_raster.1) * sy;
+    let (x1, y1) = (x0 + (cols as f64 - 1.0) * sx, y0 - (rows as f64 - 1.0) * sy);
+    let native_bbox = [x0, y1, x1, y0];
+    if !native_bbox.iter().all(|v| v.is_finite()) {
+        return Err(err(format!(
+            "the georeference gives a non-finite bounding box {native_bbox:?}"
+        )));
+    }
+
+    let (spacing, origin, conversion) = match georef.kind {
+        CrsKind::Projected => ((sx, sy), DVec2::new(x0, y0), String::new()),
+        CrsKind::Geographic => {
+            let deg = georef.angular_unit_deg;
+            let (per_deg_x, per_deg_y) = (per_degree(sx * deg), per_degree(sy * deg));
+            let north = y0 * deg;
+            let south = north - (rows as f64 - 1.0) / per_deg_y;
+            if !(-90.0..=90.0).contains(&south) || !(-90.0..=90.0).contains(&north) {
+                return Err(err(format!(
+                    "latitudes {south}..{north} are outside -90..90: the GeoKeys say geographic but the \
+                     coordinates are not degrees"
+                )));
+            }
+            let centre = 0.5 * (north + south);
+            let dy = METRES_PER_DEGREE / per_deg_y;
+            let dx = METRES_PER_DEGREE / per_deg_x * centre.to_radians().cos();
+            if dx.is_nan() || dx <= 0.0 {
+                return Err(err(format!("the raster reaches a pole (mid-latitude {centre})")));
+            }
+            let conversion = format!(
+                "degrees to metres like .hgt: 1° latitude = 111320 m, 1° longitude = 111320·cos({centre:.6}°) = \
+                 {:.3} m; x from the western sample column ({:.9}°), y = latitude·111320",
+                METRES_PER_DEGREE * centre.to_radians().cos(),
+                x0 * deg
+            );
+            let spacing = (dx, dy);
+            let dy_used = opts.spacing.map_or(dy, |s| s.1);
+            let origin = DVec2::new(0.0, south * METRES_PER_DEGREE + (rows as f64 - 1.0) * dy_used);
+            (spacing, origin, conversion)
+        }
+    };
+    let spacing = opts.spacing.unwrap_or(spacing);
+    let info = GeoTiffInfo {
+        crs_kind: georef.kind,
+        epsg: georef.epsg,
+        crs: georef.description,
+        conversion,
+        raster_type: georef.raster_type,
+        native_bbox,
+        native_spacing: (sx, sy),
+        nodata,
+        sample_type: sample_type.to_string(),
+        compression: format!("{compression}, predictor {predictor}"),
+        layout: layout.to_string(),
+        bands: (spp, band),
+    };
+    let grid = finish(path, rows, cols, spacing, origin, z, opts)?;
+    Ok((grid, info))
+}
+
+/// Samples per degree for a spacing of `s` degrees: a whole number n when `s` is within 1e-9 (relative) of 1/n.
+fn per_degree(s: f64) -> f64 {
+    let n = (1.0 / s).round();
+    if n >= 1.0 && ((1.0 / s) - n).abs() <= 1e-9 * n {
+        n
+    } else {
+        1.0 / s
+    }
+}
+
+/// Parses GDAL's nodata text (a decimal number, `nan`, `inf`, `-inf`).
+fn parse_nodata(t: &str) -> Option<f64> {
+    match t.to_ascii_lowercase().as_str() {
+        "nan" | "-nan" => Some(f64::NAN),
+        "inf" | "+inf" => Some(f64::INFINITY),
+        "-inf" => Some(f64::NEG_INFINITY),
+        s => s.parse().ok(),
+    }
+}
+
+/// The samples as f64 with their type name (None for float16).
+fn to_f64(image: DecodingResult) -> (Option<&'static str>, Vec<f64>) {
+    fn conv<T: Copy>(v: Vec<T>, f: impl Fn(T) -> f64) -> Vec<f64> {
+        v.into_iter().map(f).collect()
+    }
+    match image {
+        DecodingResult::U8(v) => (Some("uint8"), conv(v, f64::from)),
+        DecodingResult::U16(v) => (Some("uint16"), conv(v, f64::from)),
+        DecodingResult::U32(v) => (Some("uint32"), conv(v, f64::from)),
+        DecodingResult::U64(v) => (Some("uint64"), conv(v, |x| x as f64)),
+        DecodingResult::I8(v) => (Some("int8"), conv(v, f64::from)),
+        DecodingResult::I16(v) => (Some("int16"), conv(v, f64::from)),
+        DecodingResult::I32(v) => (Some("int32"), conv(v, f64::from)),
+        DecodingResult::I64(v) => (Some("int64"), conv(v, |x| x as f64)),
+        DecodingResult::F32(v) => (Some("float32"), conv(v, f64::from)),
+        DecodingResult::F64(v) => (Some("float64"), v),
+        DecodingResult::F16(_) => (None, Vec::new()),
+    }
+}
+
+/// An optional unsigned tag, naming the file and tag on error.
+fn find_u64(dec: &mut Decoder<Cursor<&[u8]>>, tag: Tag, path: &Path) -> Result<Option<u64>> {
+    match dec.find_tag(tag) {
+        Ok(None) => Ok(None),
+        Ok(Some(v)) => v
+            .into_u64()
+            .map(Some)
+            .map_err(|e| TinError::format(path, format!("tag {tag:?} ({}): {e}", tag.to_u16()))),
+        Err(e) => Err(TinError::format(path, format!("tag {tag:?} ({}): {e}", tag.to_u16()))),
+    }
+}
+
+/// An optional tag of doubles.
+fn find_f64s(dec: &mut Decoder<Cursor<&[u8]>>, tag: Tag, name: &str, path: &Path) -> Result<Option<Vec<f64>>> {
+    let e = |m: String| TinError::format(path, format!("tag {name} ({}): {m}", tag.to_u16()));
+    match dec.find_tag(tag) {
+        Ok(None) => Ok(None),
+        Ok(Some(v)) => v.into_f64_vec().map(Some).map_err(|x| e(x.to_string())),
+        Err(x) => Err(e(x.to_string())),
+    }
+}
+
+/// The georeference of the image.
+struct Georef {
+    kind: CrsKind,
+    epsg: Option<u16>,
+    description: String,
+    raster_type: RasterType,
+    /// Degrees per native angular unit (geographic only).
+    angular_unit_deg: f64,
+    /// Native spacing (x east, y south), both positive.
+    scale: (f64, f64),
+    /// Raster coordinates (column, row) of the tie point.
+    tie_raster: (f64, f64),
+    /// Native coordinates (x, y) of the tie point.
+    tie_world: (f64, f64),
+}
+
+/// Reads the GeoKeys, the pixel scale and tie point (or the transformation).
+fn read_georef(dec: &mut Decoder<Cursor<&[u8]>>, path: &Path) -> Result<Georef> {
+    let err = |m: String| TinError::format(path, m);
+    let dir = match dec.find_tag(Tag::GeoKeyDirectoryTag) {
+        Ok(Some(v)) => v
+            .into_u16_vec()
+            .map_err(|e| err(format!("tag GeoKeyDirectory (34735): {e}")))?,
+        Ok(None) => {
+            return Err(err(
+                "no GeoKeyDirectory tag (34735): a plain TIFF has no georeference; write it as a GeoTIFF".into(),
+            ));
+        }
+        Err(e) => return Err(err(format!("tag GeoKeyDirectory (34735): {e}"))),
+    };
+    let ascii = match dec.find_tag(Tag::Unknown(GEO_ASCII_PARAMS)) {
+        Ok(Some(v)) => v.into_string().unwrap_or_default(),
+        _ => String::new(),
+    };
+    if dir.len() < 4 || dir.len() < 4 + 4 * usize::from(dir[3]) {
+        return Err(err(format!(
+            "tag GeoKeyDirectory (34735): {} values cannot hold the header and {} keys",
+            dir.len(),
+            dir.get(3).copied().unwrap_or(0)
+        )));
+    }
+    let entries: Vec<&[u16]> = dir[4..4 + 4 * usize::from(dir[3])].chunks_exact(4).collect();
+    let short = |id: u16| -> Option<u16> { entries.iter().find(|e| e[0] == id && e[1] == 0).map(|e| e[3]) };
+    let text = |id: u16| -> Option<String> {
+        let e = entries.iter().find(|e| e[0] == id && e[1] == GEO_ASCII_PARAMS)?;
+        let (start, len) = (usize::from(e[3]), usize::from(e[2]));
+        let s = ascii.get(start..start.checked_add(len)?)?;
+        let s = s.trim_end_matches(['|', '\0']).trim();
+        (!s.is_empty()).then(|| s.to_string())
+    };
+
+    let raster_type = match short(key::RASTER_TYPE) {
+        None | Some(1) => RasterType::PixelIsArea,
+        Some(2) => RasterType::PixelIsPoint,
+        Some(v) => {
+            return Err(err(format!(
+                "GeoKey GTRasterTypeGeoKey (1025) = {v}: expected 1 (pixel-is-area) or 2 (pixel-is-point)"
+            )));
+        }
+    };
+    let citation = text(key::CITATION)
+        .or_else(|| text(key::PCS_CITATION))
+        .or_else(|| text(key::GEOG_CITATION));
+    let cite = |s: String| match &citation {
+        Some(c) => format!("{s}, \"{c}\""),
+        None => s,
+    };
+    let (kind, epsg, description, angular_unit_deg) = match short(key::MODEL_TYPE) {
+        Some(1) => {
+            let pcs = short(key::PROJECTED_CS_TYPE).filter(|&c| c != 32767 && c != 0);
+            let metric_pcs = pcs.is_some_and(|c| {
+                (32601..=32660).contains(&c)
+                    || (32701..=32760).contains(&c)
+                    || (26901..=26923).contains(&c)
+                    || (26701..=26722).contains(&c)
+                    || (25828..=25838).contains(&c)
+                    || (32201..=32260).contains(&c)
+                    || (32301..=32360).contains(&c)
+            });
+            match short(key::PROJ_LINEAR_UNITS) {
+                Some(9001) => {}
+                None if metric_pcs => {}
+                None => {
+                    return Err(err(format!(
+                        "GeoKey ProjLinearUnitsGeoKey (3076) is missing and the projected CRS {} is not one known \
+                         to be in metres: unknown units",
+                        pcs.map_or("(user-defined)".to_string(), |c| format!("EPSG:{c}"))
+                    )));
+                }
+                Some(u) => {
+                    return Err(err(format!(
+                        "GeoKey ProjLinearUnitsGeoKey (3076) = {u}: only metres (9001) are supported{}",
+                        match u {
+                            9002 => " (this is the international foot)",
+                            9003 => " (this is the US survey foot)",
+                            _ => "",
+                        }
+                    )));
+                }
+            }
+            let d = cite(match pcs {
+                Some(c) => format!("EPSG:{c} (projected, metres)"),
+                None => "user-defined projected CRS (metres)".to_string(),
+            });
+            (CrsKind::Projected, pcs, d, 1.0)
+        }
+        Some(2) => {
+            let gcs = short(key::GEOGRAPHIC_TYPE).filter(|&c| c != 32767 && c != 0);
+            let (unit, unit_name) = match short(key::GEOG_ANGULAR_UNITS) {
+                None | Some(9102) | Some(9122) => (1.0, "degrees"),
+                Some(9103) => (1.0 / 60.0, "arc-minutes"),
+                Some(9104) => (1.0 / 3600.0, "arc-seconds"),
+                Some(u) => {
+                    return Err(err(format!(
+                        "GeoKey GeogAngularUnitsGeoKey (2054) = {u}: only degrees (9102), arc-minutes (9103) and \
+                         arc-seconds (9104) are supported"
+                    )));
+                }
+            };
+            let d = cite(match gcs {
+                Some(c) => format!("EPSG:{c} (geographic, {unit_name})"),
+                None => format!("user-defined geographic CRS ({unit_name})"),
+            });
+            (CrsKind::Geographic, gcs, d, unit)
+        }
+        Some(3) => {
+            return Err(err(
+                "GeoKey GTModelTypeGeoKey (1024) = 3: geocentric coordinates are not a height field".into(),
+            ));
+        }
+        Some(v) => {
+            return Err(err(format!(
+                "GeoKey GTModelTypeGeoKey (1024) = {v}: expected 1 (projected) or 2 (geographic)"
+            )));
+        }
+        None => {
+            return Err(err(
+                "GeoKey GTModelTypeGeoKey (1024) is missing: cannot tell projected from geographic".into(),
+            ));
+        }
+    };
+
+    let scale = find_f64s(dec, Tag::ModelPixelScaleTag, "ModelPixelScale", path)?;
+    let tie = find_f64s(dec, Tag::ModelTiepointTag, "ModelTiepoint", path)?;
+    let transform = find_f64s(dec, Tag::ModelTransformationTag, "ModelTransformation", path)?;
+    let (scale, tie_raster, tie_world) = match (scale, tie, transform) {
+        (Some(s), Some(t), _) => {
+            if s.len() < 2 {
+                return Err(err(format!(
+                    "tag ModelPixelScale (33550) has {} values, expected 3",
+                    s.len()
+                )));
+            }
+            if t.len() != 6 {
+                return Err(err(format!(
+                    "tag ModelTiepoint (33922) has {} values: exactly one tie point (6 values) is supported, \
+                     several tie points (a warped raster) are not",
+                    t.len()
+                )));
+            }
+            if !(s[0].is_finite() && s[1].is_finite() && s[0] > 0.0) || s[1] == 0.0 {
+                return Err(err(format!(
+                    "tag ModelPixelScale (33550) = {:?}: the scales must be positive and finite",
+                    &s[..2]
+                )));
+            }
+            if s[1] < 0.0 {
+                return Err(err(format!(
+                    "tag ModelPixelScale (33550) has a negative y scale {}: south-up rasters are not supported",
+                    s[1]
+                )));
+            }
+            ((s[0], s[1]), (t[0], t[1]), (t[3], t[4]))
+        }
+        (_, _, Some(m)) => {
+            if m.len() != 16 {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264) has {} values, expected 16",
+                    m.len()
+                )));
+            }
+            let (a, b, d, e, f, h) = (m[0], m[1], m[3], m[4], m[5], m[7]);
+            if b != 0.0 || e != 0.0 {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264) rotates or shears the raster (terms {b}, {e}): not supported"
+                )));
+            }
+            if !(a > 0.0 && a.is_finite() && f.is_finite() && f != 0.0) {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264): pixel sizes {a} x {f} must be finite, x positive"
+                )));
+            }
+            if f > 0.0 {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264) has a positive y term {f}: south-up rasters are not supported"
+                )));
+            }
+            ((a, -f), (0.0, 0.0), (d, h))
+        }
+        (None, _, None) => {
+            return Err(err(
+                "no ModelPixelScale (33550) and no ModelTransformation (34264): the raster has no georeference".into(),
+            ));
+        }
+        (Some(_), None, None) => {
+            return Err(err("ModelPixelScale (33550) without a ModelTiepoint (33922)".into()));
+        }
+    };
+    Ok(Georef {
+        kind,
+        epsg,
+        description,
+        raster_type,
+        angular_unit_deg,
+        scale,
+        tie_raster,
+        tie_world,
+    })
+}

@@ -1,0 +1,413 @@
+//! GeoTIFF reader: the three real files of `../shared/dem` against their `.npy` / `.hgt` twins and the README's
+//! georeferencing (these fail, never skip, when the directory is missing), and GeoTIFFs written by the tests with the
+//! `tiff` encoder (sample types, compression, predictors, transformation, bands, and the errors).
+#![cfg(feature = "geotiff")]
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use glam::DVec2;
+use tiff::encoder::{Compression, Predictor, TiffEncoder, colortype};
+use tiff::tags::Tag;
+use tin::dem::geotiff::{CrsKind, GeoTiffInfo, RasterType, parse_geotiff, read_geotiff_info};
+use tin::dem::hgt::METRES_PER_DEGREE;
+use tin::{DemOptions, Grid, SimplifyOptions, Tin, TinError, read_dem};
+
+/// `../shared/dem`: required (CI has it); a missing directory fails the test.
+fn shared_dem() -> PathBuf {
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/dem"));
+    assert!(
+        dir.is_dir(),
+        "{} is missing: the GeoTIFF tests need the shared DEMs",
+        dir.display()
+    );
+    dir
+}
+
+fn same_heights(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()))
+}
+
+fn range(g: &Grid) -> (f64, f64) {
+    g.z.iter()
+        .filter(|z| !z.is_nan())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &z| {
+            (lo.min(z), hi.max(z))
+        })
+}
+
+fn simplified(g: &Grid, n: usize) -> Tin {
+    tin::simplify(
+        g,
+        &SimplifyOptions {
+            max_vertices: Some(n),
+            max_error: None,
+        },
+        None,
+    )
+    .expect("simplify")
+    .0
+}
+
+/// Same grid bit for bit, and the same TIN from it.
+fn assert_twins(tif: &Grid, twin: &Grid) {
+    assert_eq!((tif.rows, tif.cols), (twin.rows, twin.cols));
+    assert_eq!(
+        (tif.dx.to_bits(), tif.dy.to_bits()),
+        (twin.dx.to_bits(), twin.dy.to_bits()),
+        "spacing {} x {} vs {} x {}",
+        tif.dx,
+        tif.dy,
+        twin.dx,
+        twin.dy
+    );
+    assert_eq!(tif.origin, twin.origin);
+    assert!(same_heights(&tif.z, &twin.z));
+    let (a, b) = (simplified(tif, 3000), simplified(twin, 3000));
+    assert_eq!(a.positions(), b.positions());
+    assert_eq!(a.triangles(), b.triangles());
+}
+
+fn info(path: &Path) -> (Grid, GeoTiffInfo) {
+    read_geotiff_info(path, &DemOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn crater_lake_utm_matches_its_npy_twin() {
+    let dir = shared_dem();
+    let (tif, i) = info(&dir.join("crater_lake_utm.tif"));
+    let npy = read_dem(&dir.join("crater_lake.npy"), &DemOptions::default()).expect("npy");
+    assert_twins(&tif, &npy);
+    // README: 513 x 513 float32, 20.182 x 27.305 m, UTM 10N (EPSG:26910), 1524 - 2478 m, pixel-is-area, tiles,
+    // Deflate with the floating-point predictor, nodata -9999 unused. Sidecar: easting_min 561133.125, northing_max
+    // 4760971.5 (sample centres).
+    assert_eq!((tif.rows, tif.cols), (513, 513));
+    assert_eq!((tif.dx, tif.dy), (20.182, 27.305));
+    assert_eq!(tif.origin, DVec2::new(561133.125, 4760971.5));
+    assert_eq!(range(&tif), (1524.0, 2478.0));
+    assert_eq!(tif.voids(), 0);
+    assert_eq!(i.crs_kind, CrsKind::Projected);
+    assert_eq!(i.epsg, Some(26910));
+    assert!(i.crs.contains("EPSG:26910"), "{}", i.crs);
+    assert_eq!(i.raster_type, RasterType::PixelIsArea);
+    assert_eq!(i.nodata, Some(-9999.0));
+    assert_eq!(i.sample_type, "float32");
+    assert_eq!(i.layout, "tiles");
+    assert_eq!(i.compression, "deflate, predictor floating-point");
+    let [w, s, e, n] = i.native_bbox;
+    assert_eq!((w, n), (561133.125, 4760971.5));
+    assert!((e - (561133.125 + 512.0 * 20.182)).abs() < 1e-6);
+    assert!((s - (4760971.5 - 512.0 * 27.305)).abs() < 1e-6);
+}
+
+#[test]
+fn n50e008_deflate_matches_its_hgt_twin() {
+    let dir = shared_dem();
+    let (tif, i) = info(&dir.join("N50E008_deflate.tif"));
+    let hgt = read_dem(&dir.join("N50E008.hgt"), &DemOptions::default()).expect("hgt");
+    assert_twins(&tif, &hgt);
+    // README: 1201 x 1201 int16, 3", EPSG:4326, 62 - 885 m, 50 voids, pixel-is-point with the tie point 8E 51N at
+    // sample (0, 0), strips of 16 rows, Deflate with the horizontal predictor.
+    assert_eq!((tif.rows, tif.cols), (1201, 1201));
+    assert_eq!(tif.voids(), 50);
+    assert_eq!(range(&tif), (62.0, 885.0));
+    assert_eq!(i.crs_kind, CrsKind::Geographic);
+    assert_eq!(i.epsg, Some(4326));
+    assert_eq!(i.raster_type, RasterType::PixelIsPoint);
+    assert_eq!(i.nodata, Some(-32768.0));
+    assert_eq!(i.sample_type, "int16");
+    assert_eq!(i.layout, "strips");
+    assert_eq!(i.compression, "deflate, predictor horizontal");
+    assert_eq!(i.native_bbox, [8.0, 50.0, 9.0, 51.0]);
+    // Metres: the .hgt frame, x from the western column, y = latitude * 111320.
+    assert_eq!(tif.origin, DVec2::new(0.0, 51.0 * METRES_PER_DEGREE));
+    assert!((tif.dy - METRES_PER_DEGREE / 1200.0).abs() < 1e-12);
+    assert!((tif.dx - METRES_PER_DEGREE / 1200.0 * 50.5f64.to_radians().cos()).abs() < 1e-12);
+    let south = tif.origin.y - 1200.0 * tif.dy;
+    assert!((south - 50.0 * METRES_PER_DEGREE).abs() < 1e-6);
+}
+
+#[test]
+fn dfw_srtm_georeference_is_exact() {
+    let dir = shared_dem();
+    let (g, i) = info(&dir.join("dfw_srtm.tif"));
+    // README: 359 x 367 int16, 3 arc-seconds, EPSG:4326, 147 - 298 m (nodata -32768), 16x16 tiles, uncompressed,
+    // pixel-is-area. The tie point is the north-west corner of the first pixel: 97.485W, 32.82166666666536N.
+    assert_eq!((g.rows, g.cols), (359, 367));
+    assert_eq!(range(&g), (147.0, 298.0));
+    assert_eq!(i.crs_kind, CrsKind::Geographic);
+    assert_eq!(i.epsg, Some(4326));
+    assert!(i.crs.contains("WGS 84"), "{}", i.crs);
+    assert_eq!(i.raster_type, RasterType::PixelIsArea);
+    assert_eq!(i.nodata, Some(-32768.0));
+    assert_eq!(i.layout, "tiles");
+    assert_eq!(i.compression, "none, predictor none");
+    let step = 0.0008333333333333;
+    let (west, north) = (-97.4849999999961, 32.82166666666536);
+    let [w, s, e, n] = i.native_bbox;
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    assert!(close(w, west + step / 2.0), "{w}");
+    assert!(close(n, north - step / 2.0), "{n}");
+    assert!(close(e, west + 366.5 * step), "{e}");
+    assert!(close(s, north - 358.5 * step), "{s}");
+    // Metres: 3" = 111320 / 1200 m north-south, times cos(mid-latitude) east-west; y = latitude * 111320.
+    let mid = 0.5 * (n + (n - 358.0 / 1200.0));
+    assert!((g.dy - METRES_PER_DEGREE / 1200.0).abs() < 1e-12);
+    assert!((g.dx - METRES_PER_DEGREE / 1200.0 * mid.to_radians().cos()).abs() < 1e-9);
+    assert!((g.origin.y - n * METRES_PER_DEGREE).abs() < 1e-6);
+    assert_eq!(g.origin.x, 0.0);
+    assert!(i.conversion.contains("111320"), "{}", i.conversion);
+}
+
+#[test]
+fn missing_file_names_it() {
+    let p = Path::new("/nonexistent/dem.tif");
+    let e = read_dem(p, &DemOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("/nonexistent/dem.tif"), "{e}");
+}
+
+// ---------------------------------------------------------------- written by the tests
+
+/// GeoKeys of a projected CRS in metres (EPSG:32633), pixel-is-area.
+const KEYS_UTM: [u16; 16] = [1, 1, 0, 3, 1024, 0, 1, 1, 1025, 0, 1, 1, 3072, 0, 1, 32633];
+
+/// How to write a test GeoTIFF.
+struct Spec<'a> {
+    keys: Option<&'a [u16]>,
+    scale: Option<[f64; 3]>,
+    tie: Option<Vec<f64>>,
+    transform: Option<[f64; 16]>,
+    nodata: Option<&'a str>,
+    compression: Compression,
+    predictor: Predictor,
+}
+
+impl Default for Spec<'_> {
+    fn default() -> Self {
+        Spec {
+            keys: Some(&KEYS_UTM),
+            scale: Some([10.0, 20.0, 0.0]),
+            tie: Some(vec![0.0, 0.0, 0.0, 500_000.0, 4_000_000.0, 0.0]),
+            transform: None,
+            nodata: None,
+            compression: Compression::Uncompressed,
+            predictor: Predictor::None,
+        }
+    }
+}
+
+macro_rules! write_tif {
+    ($ct:ty, $w:expr, $h:expr, $data:expr, $spec:expr) => {{
+        let spec: &Spec = $spec;
+        let mut buf = Cursor::new(Vec::new());
+        {
+            let mut enc = TiffEncoder::new(&mut buf)
+                .expect("encoder")
+                .with_compression(spec.compression)
+                .with_predictor(spec.predictor);
+            let mut img = enc.new_image::<$ct>($w, $h).expect("image");
+            img.rows_per_strip(2).expect("strips");
+            let d = img.encoder();
+            if let Some(k) = spec.keys {
+                d.write_tag(Tag::GeoKeyDirectoryTag, k).expect("tag");
+            }
+            if let Some(s) = spec.scale {
+                d.write_tag(Tag::ModelPixelScaleTag, &s[..]).expect("tag");
+            }
+            if let Some(t) = &spec.tie {
+                d.write_tag(Tag::ModelTiepointTag, &t[..]).expect("tag");
+            }
+            if let Some(m) = spec.transform {
+                d.write_tag(Tag::ModelTransformationTag, &m[..]).expect("tag");
+            }
+            if let Some(n) = spec.nodata {
+                d.write_tag(Tag::Unknown(42113), n).expect("tag");
+            }
+            img.write_data($data).expect("data");
+        }
+        buf.into_inner()
+    }};
+}
+
+fn parse(bytes: &[u8]) -> tin::Result<(Grid, GeoTiffInfo)> {
+    parse_geotiff(bytes, Path::new("test.tif"), &DemOptions::default())
+}
+
+fn message(r: tin::Result<(Grid, GeoTiffInfo)>) -> String {
+    match r {
+        Err(TinError::Format { path, message }) => {
+            assert_eq!(path, Path::new("test.tif"));
+            message
+        }
+        Err(e) => panic!("expected a format error, got {e}"),
+        Ok((g, _)) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
+    }
+}
+
+#[test]
+fn sample_types_compressions_and_predictors() {
+    let (w, h) = (5u32, 4u32);
+    let vals: Vec<f64> = (0..w * h).map(|i| f64::from(i) * 3.0 + 100.0).collect();
+    let check = |bytes: Vec<u8>, ty: &str| {
+        let (g, i) = parse(&bytes).unwrap_or_else(|e| panic!("{ty}: {e}"));
+        assert_eq!(i.sample_type, ty);
+        assert_eq!((g.rows, g.cols), (4, 5));
+        assert_eq!((g.dx, g.dy), (10.0, 20.0));
+        assert_eq!(g.origin, DVec2::new(500_005.0, 3_999_990.0));
+        assert!(same_heights(&g.z, &vals), "{ty}: {:?}", g.z);
+    };
+    for (c, p) in [
+        (Compression::Uncompressed, Predictor::None),
+        (Compression::Lzw, Predictor::None),
+        (Compression::Lzw, Predictor::Horizontal),
+        (Compression::Deflate(Default::default()), Predictor::Horizontal),
+    ] {
+        let spec = Spec {
+            compression: c,
+            predictor: p,
+            ..Spec::default()
+        };
+        let i16s: Vec<i16> = vals.iter().map(|&v| v as i16).collect();
+        check(write_tif!(colortype::GrayI16, w, h, &i16s, &spec), "int16");
+        let i32s: Vec<i32> = vals.iter().map(|&v| v as i32).collect();
+        check(write_tif!(colortype::GrayI32, w, h, &i32s, &spec), "int32");
+        let u16s: Vec<u16> = vals.iter().map(|&v| v as u16).collect();
+        check(write_tif!(colortype::Gray16, w, h, &u16s, &spec), "uint16");
+        if p == Predictor::None {
+            let f32s: Vec<f32> = vals.iter().map(|&v| v as f32).collect();
+            check(write_tif!(colortype::Gray32Float, w, h, &f32s, &spec), "float32");
+            check(write_tif!(colortype::Gray64Float, w, h, &vals, &spec), "float64");
+        }
+    }
+}
+
+#[test]
+fn nodata_pixel_is_point_and_transformation() {
+    let data: Vec<f32> = vec![1.0, -9999.0, 3.0, f32::NAN, 5.0, 6.0];
+    let keys: [u16; 16] = [1, 1, 0, 3, 1024, 0, 1, 1, 1025, 0, 1, 2, 3076, 0, 1, 9001];
+    let spec = Spec {
+        keys: Some(&keys),
+        nodata: Some("-9999"),
+        ..Spec::default()
+    };
+    let (g, i) = parse(&write_tif!(colortype::Gray32Float, 3, 2, &data, &spec)).expect("point");
+    assert_eq!(i.raster_type, RasterType::PixelIsPoint);
+    assert_eq!(g.voids(), 2);
+    assert_eq!(g.origin, DVec2::new(500_000.0, 4_000_000.0));
+    assert_eq!(i.epsg, None);
+    // The same georeference as a ModelTransformation (pixel-is-point): x = 10 i + 500000, y = -20 j + 4000000.
+    let mut m = [0.0; 16];
+    (m[0], m[3], m[5], m[7], m[15]) = (10.0, 500_000.0, -20.0, 4_000_000.0, 1.0);
+    let spec = Spec {
+        keys: Some(&keys),
+        scale: None,
+        tie: None,
+        transform: Some(m),
+        ..Spec::default()
+    };
+    let (t, _) = parse(&write_tif!(colortype::Gray32Float, 3, 2, &data, &spec)).expect("transformation");
+    assert_eq!((t.dx, t.dy, t.origin), (10.0, 20.0, g.origin));
+    // Rotated: an error naming the tag.
+    m[1] = 0.5;
+    let spec = Spec {
+        keys: Some(&keys),
+        scale: None,
+        tie: None,
+        transform: Some(m),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::Gray32Float, 3, 2, &data, &spec)));
+    assert!(msg.contains("ModelTransformation") && msg.contains("rotates"), "{msg}");
+}
+
+#[test]
+fn geographic_arc_seconds_snap_to_whole_fractions() {
+    // EPSG:4326, pixel-is-area, 1" cells stored as rounded decimals.
+    let keys: [u16; 16] = [1, 1, 0, 3, 1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326];
+    let step = 0.000277777777777778;
+    let spec = Spec {
+        keys: Some(&keys),
+        scale: Some([step, step, 0.0]),
+        tie: Some(vec![0.0, 0.0, 0.0, 10.0 - step / 2.0, 46.0 + step / 2.0, 0.0]),
+        ..Spec::default()
+    };
+    let data = vec![1i16; 12];
+    let (g, i) = parse(&write_tif!(colortype::GrayI16, 4, 3, &data, &spec)).expect("geographic");
+    assert_eq!(i.crs_kind, CrsKind::Geographic);
+    assert_eq!(g.dy, METRES_PER_DEGREE / 3600.0);
+    assert!((g.origin.y - 46.0 * METRES_PER_DEGREE).abs() < 1e-6);
+    // Not degrees after all: latitudes out of range.
+    let spec = Spec {
+        keys: Some(&keys),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 4, 3, &data, &spec)));
+    assert!(msg.contains("-90..90"), "{msg}");
+}
+
+#[test]
+fn clear_errors() {
+    let data = vec![1i16; 6];
+    let no_keys = Spec {
+        keys: None,
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &no_keys)));
+    assert!(msg.contains("GeoKeyDirectory"), "{msg}");
+    let feet: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9002];
+    let spec = Spec {
+        keys: Some(&feet),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &spec)));
+    assert!(msg.contains("ProjLinearUnitsGeoKey") && msg.contains("foot"), "{msg}");
+    let unknown: [u16; 8] = [1, 1, 0, 1, 1024, 0, 1, 1];
+    let spec = Spec {
+        keys: Some(&unknown),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &spec)));
+    assert!(msg.contains("unknown units"), "{msg}");
+    let radians: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 2, 2054, 0, 1, 9101];
+    let spec = Spec {
+        keys: Some(&radians),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &spec)));
+    assert!(msg.contains("GeogAngularUnitsGeoKey"), "{msg}");
+    let no_geo = Spec {
+        scale: None,
+        tie: None,
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &no_geo)));
+    assert!(msg.contains("ModelPixelScale"), "{msg}");
+    let two_ties = Spec {
+        tie: Some(vec![0.0; 12]),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &two_ties)));
+    assert!(msg.contains("ModelTiepoint"), "{msg}");
+    // Multi-band: an error without a chosen band, the band with one.
+    let rgb: Vec<u16> = (0..18).collect();
+    let bytes = write_tif!(colortype::RGB16, 3, 2, &rgb, &Spec::default());
+    let msg = message(parse(&bytes));
+    assert!(msg.contains("3 bands") && msg.contains("SamplesPerPixel"), "{msg}");
+    let opts = DemOptions {
+        band: Some(2),
+        ..DemOptions::default()
+    };
+    let (g, i) = parse_geotiff(&bytes, Path::new("test.tif"), &opts).expect("band 2");
+    assert_eq!(g.z, vec![1.0, 4.0, 7.0, 10.0, 13.0, 16.0]);
+    assert_eq!(i.bands, (3, 2));
+    // Garbage and truncation.
+    let msg = message(parse(b"II*\0garbage"));
+    assert!(!msg.is_empty());
+    let good = write_tif!(colortype::GrayI16, 3, 2, &data, &Spec::default());
+    for cut in [8, good.len() / 2, good.len() - 1] {
+        assert!(parse(&good[..cut]).is_err(), "cut at {cut}");
+    }
+}
