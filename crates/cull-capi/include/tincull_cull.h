@@ -59,6 +59,11 @@
 #define TC_METHOD_THESIS 1
 
 /**
+ * Stewart's region test over a quadtree-grouped hierarchy (`tincull build --grouping quadtree`; not conservative).
+ */
+#define TC_METHOD_STEWART 2
+
+/**
  * A loaded hierarchy with its culler and working memory (opaque to C).
  */
 typedef struct TcCuller TcCuller;

@@ -39,6 +39,8 @@ pub const TC_ERR_PANIC: i32 = 6;
 pub const TC_METHOD_SAFE: u32 = 0;
 /// The thesis' region culler (not conservative).
 pub const TC_METHOD_THESIS: u32 = 1;
+/// Stewart's region test over a quadtree-grouped hierarchy (`tincull build --grouping quadtree`; not conservative).
+pub const TC_METHOD_STEWART: u32 = 2;
 
 /// A loaded hierarchy with its culler and working memory (opaque to C).
 pub struct TcCuller {
@@ -134,9 +136,10 @@ fn method(m: u32) -> Result<CullMethod, Failure> {
     match m {
         TC_METHOD_SAFE => Ok(CullMethod::Safe),
         TC_METHOD_THESIS => Ok(CullMethod::Thesis),
+        TC_METHOD_STEWART => Ok(CullMethod::Stewart),
         _ => fail(
             TC_ERR_INVALID,
-            format!("unknown method {m}: expected TC_METHOD_SAFE (0) or TC_METHOD_THESIS (1)"),
+            format!("unknown method {m}: expected TC_METHOD_SAFE (0), TC_METHOD_THESIS (1) or TC_METHOD_STEWART (2)"),
         ),
     }
 }
@@ -192,6 +195,8 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
             .map_err(|_| Failure(TC_ERR_INVALID, "tc_load_path: the path is not UTF-8".into()))?;
         let m = method(method_id)?;
         let h = Hierarchy::load(Path::new(path)).map_err(|e| load_error(path, e))?;
+        m.check(&h)
+            .map_err(|e| Failure(TC_ERR_INVALID, format!("{path}: {e}")))?;
         // SAFETY: `out` checked non-null.
         unsafe { store(h, m, out) };
         Ok(())
@@ -218,6 +223,8 @@ pub unsafe extern "C" fn tc_load_buffer(data: *const u8, len: usize, method_id: 
         let bytes = unsafe { std::slice::from_raw_parts(data, len) };
         let m = method(method_id)?;
         let h = Hierarchy::from_bytes(bytes).map_err(|e| load_error("memory buffer", e))?;
+        m.check(&h)
+            .map_err(|e| Failure(TC_ERR_INVALID, format!("memory buffer: {e}")))?;
         // SAFETY: `out` checked non-null.
         unsafe { store(h, m, out) };
         Ok(())
@@ -348,6 +355,7 @@ pub unsafe extern "C" fn tc_info(culler: *const TcCuller, out: *mut TcInfo) -> i
             method: match c.culler.method() {
                 CullMethod::Safe => TC_METHOD_SAFE,
                 CullMethod::Thesis => TC_METHOD_THESIS,
+                CullMethod::Stewart => TC_METHOD_STEWART,
             },
             origin: h.origin,
         };
