@@ -13,8 +13,12 @@
 //! ## One cull
 //!
 //! Nodes are taken nearest first (by the least horizontal distance `d_min` of their circle from the camera). Before
-//! a node is tested, every drawn patch whose greatest distance `d_max` is below the node's `d_min` is written into
-//! the horizon as occluders (its triangles lowered by `μ`). A node is then
+//! a node is tested, every drawn patch whose greatest distance `d_max` is below the node's `d_min` becomes
+//! *eligible*: its triangles (lowered by `μ`) may be written into the horizon as occluders. They are written lazily:
+//! each eligible patch raises a per-column bound `P` of what it could write (its highest lowered vertex over the
+//! columns its vertices span), and the eligible patches are written only when a test would pass against `max(H, P)`
+//! but not against `H` alone. Writing fewer occluders only makes the horizon lower, so this changes how much is
+//! culled, never whether a verdict is right. A node is then
 //!
 //! - *visible* if the camera's x,y is inside its circle;
 //! - *hidden* if its bounding cylinder (circle, height up to its highest vertex plus `μ`) is below the horizon in
