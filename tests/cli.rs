@@ -1,50 +1,13 @@
 //! End-to-end tests of the `tincull` binary: every command on the bundled meshes, bad input, determinism.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
+
+mod common;
+use common::{fails_with, json, mesh, ok, s};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tincull"))
-}
-
-fn mesh(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "tincull {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let out = ok(args);
-    serde_json::from_slice(&out.stdout).expect("one JSON object on stdout")
-}
-
-/// A failing command exits non-zero with a clear `error:` line and no panic.
-fn fails_with(args: &[&str], needle: &str) {
-    let out = run(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "tincull {args:?} should fail");
-    assert!(!stderr.contains("panicked"), "tincull {args:?} panicked:\n{stderr}");
-    assert!(stderr.contains("error"), "no error message for {args:?}:\n{stderr}");
-    assert!(
-        stderr.contains(needle),
-        "error for {args:?} does not mention {needle:?}:\n{stderr}"
-    );
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 #[test]

@@ -4,44 +4,9 @@
 //! nonsense values are refused with an error that names the option.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn mesh(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tincull"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "tincull {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    serde_json::from_slice(&ok(args).stdout).expect("one JSON object on stdout")
-}
-
-fn fails_with(args: &[&str], needle: &str) {
-    let out = run(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "tincull {args:?} should fail");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert!(stderr.contains(needle), "tincull {args:?}: {needle:?} not in\n{stderr}");
-}
+mod common;
+use common::{fails_with, json, mesh, ok, run, s};
 
 /// A small hierarchy in a temporary directory.
 fn hierarchy(dir: &Path) -> PathBuf {

@@ -1,44 +1,8 @@
 //! End-to-end: Stewart's quadtree baseline through the CLI (`build --grouping quadtree`, `eval`, `cull --method
 //! stewart`), and the pairing of region methods with groupings.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn mesh(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tincull"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "tincull {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn fails_with(args: &[&str], needle: &str) {
-    let out = run(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "tincull {args:?} should fail");
-    assert!(!stderr.contains("panicked"), "tincull {args:?} panicked:\n{stderr}");
-    assert!(
-        stderr.contains(needle),
-        "error for {args:?} does not mention {needle:?}:\n{stderr}"
-    );
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
+mod common;
+use common::{fails_with, mesh, ok, s};
 
 #[test]
 fn quadtree_build_eval_and_cull() {
