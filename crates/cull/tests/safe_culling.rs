@@ -6,115 +6,14 @@
 
 use std::f64::consts::TAU;
 
-use cull::{BuildInfo, Camera, Hierarchy, Mesh, Node, SafeCuller, SafeParams};
+mod common;
+
+use common::{grid_tin, hierarchy_of, notch, random_tin, splitmix};
+use cull::{Camera, SafeCuller, SafeParams};
 use glam::DVec3;
 use proptest::prelude::*;
 use tin::{DedupePolicy, Tin, triangulate};
 use truth::GroundTruth;
-
-/// Orders triangles so that halving is a spatial split (the build's layout, written independently here).
-fn spatial(tris: &mut [u32], c: &[[f64; 2]]) {
-    if tris.len() <= 2 {
-        tris.sort_unstable();
-        return;
-    }
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for &t in tris.iter() {
-        for k in 0..2 {
-            lo[k] = lo[k].min(c[t as usize][k]);
-            hi[k] = hi[k].max(c[t as usize][k]);
-        }
-    }
-    let axis = usize::from(hi[1] - lo[1] > hi[0] - lo[0]);
-    let mid = tris.len() / 2;
-    tris.select_nth_unstable_by(mid, |&a, &b| {
-        c[a as usize][axis].total_cmp(&c[b as usize][axis]).then(a.cmp(&b))
-    });
-    let (l, r) = tris.split_at_mut(mid);
-    spatial(l, c);
-    spatial(r, c);
-}
-
-/// A hierarchy over `tin` without regions (the safe culler reads none): triangles in spatial order, leaves of `leaf`
-/// triangles, parents over pairs of leaves, and the last `orphans` triangles always visible. Returns it with the
-/// order (`order[i]` is the TIN triangle drawn `i`-th).
-fn hierarchy_of(tin: &Tin, leaf: usize, orphans: usize) -> (Hierarchy, Vec<u32>) {
-    let nt = tin.num_triangles();
-    let centroids: Vec<[f64; 2]> = (0..nt)
-        .map(|t| {
-            let c = tin.corners(t);
-            [(c[0].x + c[1].x + c[2].x) / 3.0, (c[0].y + c[1].y + c[2].y) / 3.0]
-        })
-        .collect();
-    let mut order: Vec<u32> = (0..nt as u32).collect();
-    spatial(&mut order, &centroids);
-    let orphans = orphans.min(nt);
-    let grouped = (nt - orphans) as u32;
-    let origin = tin.origin().to_array();
-    let circle = |range: [u32; 2]| {
-        let pts: Vec<glam::DVec2> = order[range[0] as usize..range[1] as usize]
-            .iter()
-            .flat_map(|&t| tin.corners(t as usize).map(|p| p.truncate()))
-            .collect();
-        let c = tin::bounding_circle_of_points(&pts).expect("a non-empty node");
-        let centre = [(c.centre.x - origin[0]) as f32, (c.centre.y - origin[1]) as f32];
-        let shift =
-            (f64::from(centre[0]) + origin[0] - c.centre.x).hypot(f64::from(centre[1]) + origin[1] - c.centre.y);
-        (centre, ((c.radius + shift) * (1.0 + 1e-6) + 1e-3) as f32)
-    };
-    let mut nodes = Vec::new();
-    let mut leaves = Vec::new();
-    let mut s = 0u32;
-    while s < grouped {
-        let e = (s + leaf as u32).min(grouped);
-        let (centre, radius) = circle([s, e]);
-        leaves.push(nodes.len() as u32);
-        nodes.push(Node {
-            centre,
-            radius,
-            children: vec![],
-            triangles: [s, e],
-            level: 0,
-            regions: vec![],
-        });
-        s = e;
-    }
-    let mut roots = Vec::new();
-    for pair in leaves.chunks(2) {
-        if pair.len() == 1 {
-            roots.push(pair[0]);
-            continue;
-        }
-        let range = [
-            nodes[pair[0] as usize].triangles[0],
-            nodes[pair[1] as usize].triangles[1],
-        ];
-        let (centre, radius) = circle(range);
-        roots.push(nodes.len() as u32);
-        nodes.push(Node {
-            centre,
-            radius,
-            children: pair.to_vec(),
-            triangles: range,
-            level: 1,
-            regions: vec![],
-        });
-    }
-    let h = Hierarchy {
-        sectors: 16,
-        origin,
-        nodes,
-        roots,
-        always_visible: [grouped, nt as u32],
-        mesh: Mesh {
-            positions: tin.positions().iter().map(|p| p.to_array()).collect(),
-            triangles: order.iter().map(|&t| tin.triangles()[t as usize]).collect(),
-        },
-        build: BuildInfo::default(),
-    };
-    h.check_invariants().expect("a valid test hierarchy");
-    (h, order)
-}
 
 /// Culls `tin` from every eye with several parameter sets and asserts that no triangle the exact checker sees is
 /// culled. Returns the occlusion captured over all eyes (culled hidden / hidden) with the default parameters.
@@ -185,17 +84,6 @@ fn assert_safe(name: &str, tin: &Tin, eyes: &[DVec3]) -> f64 {
     captured.0 as f64 / captured.1.max(1) as f64
 }
 
-fn grid_tin(n: usize, size: f64, offset: DVec3, height: impl Fn(f64, f64) -> f64) -> Tin {
-    let mut pts = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let (x, y) = (size * i as f64 / (n - 1) as f64, size * j as f64 / (n - 1) as f64);
-            pts.push(DVec3::new(x, y, height(x, y)) + offset);
-        }
-    }
-    triangulate(&pts, DedupePolicy::Reject).expect("a valid grid").0
-}
-
 /// Eyes around a terrain of side `size` (offset `o`): a ring at several heights, plus the given ones.
 fn eyes_over(tin: &Tin, extra: &[DVec3]) -> Vec<DVec3> {
     let b = tin.bbox();
@@ -211,14 +99,6 @@ fn eyes_over(tin: &Tin, extra: &[DVec3]) -> Vec<DVec3> {
         }
     }
     eyes
-}
-
-/// A ridge at x = 100 (30 m) with a V notch down to 5 m at y = 100: triangles behind the notch are seen through it
-/// while their vertices are hidden — the case that defeats vertex regions.
-fn notch(x: f64, y: f64) -> f64 {
-    let ridge = (30.0 - 3.0 * (x - 100.0).abs()).max(0.0);
-    let notch = (5.0 + 1.5 * (y - 100.0).abs()).min(30.0);
-    ridge.min(notch.max(if (x - 100.0).abs() < 10.0 { 0.0 } else { 30.0 }))
 }
 
 #[test]
@@ -344,21 +224,8 @@ proptest! {
     /// Random TINs (random points, rough random heights) and random eyes inside and outside the footprint.
     #[test]
     fn random_tins_have_no_false_culls(seed in any::<u64>(), n in 20usize..160, rough in 0.0f64..3.0) {
-        let mut g = seed;
-        let mut next = || {
-            g = g.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = g;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let pts: Vec<DVec3> = (0..n)
-            .map(|_| {
-                let (x, y) = (next() * 500.0, next() * 500.0);
-                DVec3::new(x, y, 20.0 * (x / 60.0).sin() * (y / 80.0).cos() + rough * 15.0 * next())
-            })
-            .collect();
-        let Ok((tin, _)) = triangulate(&pts, DedupePolicy::Reject) else { return Ok(()) };
+        let mut next = splitmix(seed);
+        let Some(tin) = random_tin(&mut next, n, rough) else { return Ok(()) };
         let loc = truth::Locator::new(&tin);
         let mut eyes = Vec::new();
         for k in 0..6 {

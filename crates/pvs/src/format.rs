@@ -1,0 +1,185 @@
+//! The `.pvs` file: the PVS of many viewcells in a compact, versioned, checksummed binary form.
+//!
+//! Layout (little-endian): 8 bytes magic [`MAGIC`], 4 bytes format version ([`FORMAT_VERSION`]), 8 bytes payload
+//! length `n`, 4 bytes CRC-32 (IEEE) of the payload, then the payload: a [`PvsFile`] encoded with postcard. Node ids
+//! are stored as differences from the previous one and ranges as (gap from the previous end, length) pairs, all
+//! postcard varints, so a PVS of a few hundred ranges takes a few hundred bytes. This crate encodes and decodes; the
+//! writer is the caller's (tincull's is the `outfile` crate).
+
+use serde::{Deserialize, Serialize};
+
+use crate::{CellPvs, PvsError, PvsParams, ViewCell};
+
+/// The magic number that starts every `.pvs` file.
+pub const MAGIC: [u8; 8] = *b"TINCPVS\x1a";
+/// The format version this build writes and reads.
+pub const FORMAT_VERSION: u32 = 1;
+const HEADER_LEN: usize = 8 + 4 + 8 + 4;
+
+/// One viewcell's PVS as stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CellRecord {
+    /// The viewcell.
+    pub cell: ViewCell,
+    /// The top of the cell box used (m).
+    pub ztop: f64,
+    /// Node ids, each as its difference from the previous one.
+    node_deltas: Vec<u32>,
+    /// Ranges as (gap from the previous range's end, length) pairs.
+    range_deltas: Vec<u32>,
+}
+
+impl CellRecord {
+    /// The record of `pvs` for `cell`.
+    pub fn new(cell: ViewCell, pvs: &CellPvs) -> CellRecord {
+        let mut prev = 0u32;
+        let node_deltas = pvs
+            .nodes
+            .iter()
+            .map(|&n| {
+                let d = n - prev;
+                prev = n;
+                d
+            })
+            .collect();
+        let mut end = 0u32;
+        let mut range_deltas = Vec::with_capacity(2 * pvs.ranges.len());
+        for r in &pvs.ranges {
+            range_deltas.push(r[0] - end);
+            range_deltas.push(r[1] - r[0]);
+            end = r[1];
+        }
+        CellRecord {
+            cell,
+            ztop: pvs.ztop,
+            node_deltas,
+            range_deltas,
+        }
+    }
+
+    /// The hierarchy nodes of the PVS, increasing.
+    pub fn nodes(&self) -> Vec<u32> {
+        let mut at = 0u32;
+        self.node_deltas
+            .iter()
+            .map(|&d| {
+                at = at.saturating_add(d);
+                at
+            })
+            .collect()
+    }
+
+    /// The triangle ranges of the PVS, increasing.
+    pub fn ranges(&self) -> Vec<[u32; 2]> {
+        let mut end = 0u32;
+        self.range_deltas
+            .chunks_exact(2)
+            .map(|c| {
+                let s = end.saturating_add(c[0]);
+                end = s.saturating_add(c[1]);
+                [s, end]
+            })
+            .collect()
+    }
+
+    /// Bytes of this record in the file.
+    pub fn encoded_len(&self) -> usize {
+        postcard::to_stdvec(self).map_or(0, |v| v.len())
+    }
+}
+
+/// The content of a `.pvs` file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PvsFile {
+    /// Triangles of the hierarchy the ranges refer to.
+    pub triangles: u32,
+    /// Nodes of that hierarchy.
+    pub nodes: u32,
+    /// The parameters used.
+    pub params: PvsParams,
+    /// One record per viewcell.
+    pub cells: Vec<CellRecord>,
+}
+
+impl PvsFile {
+    /// Encodes the file's bytes.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, PvsError> {
+        let payload = postcard::to_stdvec(self).map_err(|e| PvsError::BadFile(e.to_string()))?;
+        let mut out = Vec::with_capacity(HEADER_LEN + payload.len());
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        out.extend_from_slice(&payload);
+        Ok(out)
+    }
+
+    /// Decodes a file's bytes, checking magic, version, length, checksum and that every range lies within the
+    /// triangles.
+    pub fn from_bytes(bytes: &[u8]) -> Result<PvsFile, PvsError> {
+        let bad = |m: String| Err(PvsError::BadFile(m));
+        if bytes.len() < HEADER_LEN || bytes[..8] != MAGIC {
+            return bad("it does not start with the PVS magic number".into());
+        }
+        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if version != FORMAT_VERSION {
+            return bad(format!("format version {version}, this build reads {FORMAT_VERSION}"));
+        }
+        let mut len = [0u8; 8];
+        len.copy_from_slice(&bytes[12..20]);
+        let len = u64::from_le_bytes(len);
+        let payload = &bytes[HEADER_LEN..];
+        if payload.len() as u64 != len {
+            return bad(format!("payload of {} bytes, the header says {len}", payload.len()));
+        }
+        let crc = u32::from_le_bytes([bytes[20], bytes[21], bytes[22], bytes[23]]);
+        if crc32fast::hash(payload) != crc {
+            return bad("checksum mismatch".into());
+        }
+        let file: PvsFile = postcard::from_bytes(payload).map_err(|e| PvsError::BadFile(e.to_string()))?;
+        for (i, c) in file.cells.iter().enumerate() {
+            if c.range_deltas.len() % 2 != 0 || c.ranges().iter().any(|r| r[1] > file.triangles) {
+                return bad(format!("cell {i} has ranges beyond the {} triangles", file.triangles));
+            }
+        }
+        Ok(file)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Height;
+
+    #[test]
+    fn round_trip_and_rejections() {
+        let pvs = CellPvs {
+            nodes: vec![0, 3, 7],
+            ranges: vec![[0, 10], [20, 25], [100, 130]],
+            ztop: 12.5,
+            ..CellPvs::default()
+        };
+        let cell = ViewCell {
+            rect: [0.0, 0.0, 50.0, 50.0],
+            height: Height::AboveGround([0.0, 2.0]),
+        };
+        let rec = CellRecord::new(cell, &pvs);
+        assert_eq!(rec.nodes(), pvs.nodes);
+        assert_eq!(rec.ranges(), pvs.ranges);
+        let file = PvsFile {
+            triangles: 130,
+            nodes: 8,
+            params: PvsParams::default(),
+            cells: vec![rec],
+        };
+        let bytes = file.to_bytes().expect("encodes");
+        assert_eq!(PvsFile::from_bytes(&bytes).expect("decodes"), file);
+        let mut bad = bytes.clone();
+        let last = bad.len() - 1;
+        bad[last] ^= 1;
+        assert!(PvsFile::from_bytes(&bad).is_err());
+        assert!(PvsFile::from_bytes(&bytes[..10]).is_err());
+        let short = PvsFile { triangles: 100, ..file };
+        assert!(PvsFile::from_bytes(&short.to_bytes().expect("encodes")).is_err());
+    }
+}
