@@ -13,6 +13,7 @@ mod horizon_cmd;
 mod info;
 mod mesh_input;
 pub mod output;
+mod pvs_cmd;
 #[cfg(feature = "viewer")]
 mod render_cmd;
 mod stress_cmd;
@@ -64,6 +65,9 @@ pub enum Command {
     Stress(stress_cmd::StressArgs),
     /// Failure map: a raster of viewpoints over the footprint, false culls and occlusion captured per cell (PNG, CSV).
     Failmap(failmap_cmd::FailmapArgs),
+    /// From-region visibility: the potentially visible set (PVS) of a viewcell or of a grid of cells (Koltun et al.
+    /// 2001 over the TIN's walls, and the conservative regions), or a check of random cells against ground truth.
+    Pvs(pvs_cmd::PvsArgs),
     /// Render a hierarchy or mesh to PNG without a window: map, orbit overview with culling, or eye view.
     #[cfg(feature = "viewer")]
     Render(render_cmd::RenderArgs),
@@ -112,6 +116,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(args) => export_cmd::run(&args, args.output.into()),
         Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
         Command::Failmap(args) => failmap_cmd::run(&args),
+        Command::Pvs(args) => pvs_cmd::run(&args, args.output.into()),
         #[cfg(feature = "viewer")]
         Command::Render(args) => render_cmd::run(&args, args.output.into()),
         #[cfg(feature = "viewer")]

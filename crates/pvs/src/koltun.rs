@@ -77,6 +77,8 @@ pub(crate) struct Walls {
     rows: usize,
     start: Vec<u32>,
     items: Vec<u32>,
+    /// Per grid cell, the highest lowered end height of its edges (pruning only).
+    cell_top: Vec<f64>,
     /// `1 + max |x|, |y|` of the mesh.
     pub w: f64,
     /// `max |z|` of the mesh.
@@ -145,6 +147,7 @@ impl Walls {
             rows,
             start: vec![0; cols * rows + 1],
             items: Vec::new(),
+            cell_top: vec![f64::NEG_INFINITY; cols * rows],
             w,
             zabs,
             mu,
@@ -177,6 +180,9 @@ impl Walls {
                     let k = r * cols + c;
                     walls.items[fill[k] as usize] = e as u32;
                     fill[k] += 1;
+                    let [a, b] = walls.edges[e];
+                    let top = walls.pos[a as usize][2].max(walls.pos[b as usize][2]);
+                    walls.cell_top[k] = walls.cell_top[k].max(top);
                 }
             }
         }
@@ -186,8 +192,16 @@ impl Walls {
     fn cell_of(&self, p: [f64; 2]) -> (usize, usize) {
         let c = ((p[0] - self.lo[0]) / self.cell).floor();
         let r = ((p[1] - self.lo[1]) / self.cell).floor();
-        let c = if c.is_finite() { c.clamp(0.0, (self.cols - 1) as f64) } else { 0.0 };
-        let r = if r.is_finite() { r.clamp(0.0, (self.rows - 1) as f64) } else { 0.0 };
+        let c = if c.is_finite() {
+            c.clamp(0.0, (self.cols - 1) as f64)
+        } else {
+            0.0
+        };
+        let r = if r.is_finite() {
+            r.clamp(0.0, (self.rows - 1) as f64)
+        } else {
+            0.0
+        };
         (c as usize, r as usize)
     }
 
@@ -231,7 +245,9 @@ impl Walls {
         if !(x2 > x1) || !a.ztop.is_finite() || !b.ztop.is_finite() {
             return false;
         }
-        let w = self.w.max(1.0 + a.lo[0].abs().max(a.hi[0].abs()).max(a.lo[1].abs()).max(a.hi[1].abs()));
+        let w = self
+            .w
+            .max(1.0 + a.lo[0].abs().max(a.hi[0].abs()).max(a.lo[1].abs()).max(a.hi[1].abs()));
         let tau_a = 1e-12 * w;
         // Lateral intervals s1, s2 of the hull of A ∪ B at X1 and X2 (over all corner pairs), widened.
         let ca = [(a0, a.lo[l]), (a0, a.hi[l]), (x1, a.lo[l]), (x1, a.hi[l])];
@@ -273,14 +289,7 @@ impl Walls {
         if !(hi_a > lo_a) {
             return false;
         }
-        let margin = 0.1 * (x2 - x1);
-        let (q_lat0, q_lat1) = (lat_lo - margin, lat_hi + margin);
         let (q_al0, q_al1) = if sign > 0.0 { (lo_a, hi_a) } else { (-hi_a, -lo_a) };
-        let (qlo, qhi) = if k == 0 {
-            ([q_al0, q_lat0], [q_al1, q_lat1])
-        } else {
-            ([q_lat0, q_al0], [q_lat1, q_al1])
-        };
         sc.epoch = sc.epoch.wrapping_add(1);
         if sc.epoch == 0 {
             sc.stamp.iter_mut().for_each(|s| *s = 0);
@@ -290,11 +299,58 @@ impl Walls {
         let epoch = sc.epoch;
         sc.pieces.clear();
         sc.parent.clear();
-        let (c0, r0) = self.cell_of(qlo);
-        let (c1, r1) = self.cell_of(qhi);
-        for r in r0..=r1 {
-            for c in c0..=c1 {
+        // Grid cells over the quadrilateral between s1 and s2 (plus a quarter of its width and one grid cell on each
+        // side, so that pieces connect around it), column by column along the axis. Which walls are looked at only
+        // decides how much is hidden: dropping walls is always safe.
+        let (lines_along, lines_lat) = if k == 0 {
+            (self.cols, self.rows)
+        } else {
+            (self.rows, self.cols)
+        };
+        let grid_index = |v: f64, axis: usize, n: usize| {
+            let i = ((v - self.lo[axis]) / self.cell).floor();
+            if i.is_finite() {
+                i.clamp(0.0, (n - 1) as f64) as usize
+            } else {
+                0
+            }
+        };
+        let (g0, g1) = (grid_index(q_al0, k, lines_along), grid_index(q_al1, k, lines_along));
+        for gi in g0..=g1 {
+            let wa = [
+                self.lo[k] + self.cell * gi as f64,
+                self.lo[k] + self.cell * (gi + 1) as f64,
+            ];
+            let (mut lat0, mut lat1) = (f64::INFINITY, f64::NEG_INFINITY);
+            for wv in wa {
+                let lam = ((sign * wv - x1) / (x2 - x1)).clamp(0.0, 1.0);
+                lat0 = lat0.min(a_lo + lam * (b_lo - a_lo));
+                lat1 = lat1.max(a_hi + lam * (b_hi - a_hi));
+            }
+            let margin = 0.25 * (lat1 - lat0) + self.cell;
+            let (h0, h1) = (
+                grid_index(lat0 - margin, l, lines_lat),
+                grid_index(lat1 + margin, l, lines_lat),
+            );
+            for gj in h0..=h1 {
+                let (c, r) = if k == 0 { (gi, gj) } else { (gj, gi) };
                 let cell = r * self.cols + c;
+                // Skip a grid cell whose edges all stay under the plane over the cell (a heuristic: dropping walls
+                // is always safe).
+                let gx = [
+                    self.lo[0] + self.cell * c as f64,
+                    self.lo[0] + self.cell * (c + 1) as f64,
+                ];
+                let gy = [
+                    self.lo[1] + self.cell * r as f64,
+                    self.lo[1] + self.cell * (r + 1) as f64,
+                ];
+                let g = if k == 0 { gx } else { gy };
+                let (ga, gb) = (sign * g[0], sign * g[1]);
+                let t_min = plane(ga.min(gb).clamp(lo_a, hi_a)).min(plane(ga.max(gb).clamp(lo_a, hi_a)));
+                if self.cell_top[cell] < t_min + 2.0 * delta - 1e-9 * (1.0 + t_min.abs()) {
+                    continue;
+                }
                 for &e in &self.items[self.start[cell] as usize..self.start[cell + 1] as usize] {
                     if sc.stamp[e as usize] == epoch {
                         continue;
@@ -404,64 +460,97 @@ impl Walls {
             }
         }
         comps.sort_by(|x, y| y.1.cmp(&x.1).then(x.0.cmp(&y.0)));
-        // Rasterise.
-        let r = res as usize;
-        let full = full_mask(r);
-        sc.cover.clear();
-        sc.cover.resize(r, [0u64; 4]);
-        let rf = f64::from(res);
-        let edge = |i: usize| i as f64 / rf;
-        let mut lines: Vec<[f64; 3]> = Vec::with_capacity(8);
-        for comp in &comps {
-            lines.clear();
-            let mut pts: Vec<[f64; 2]> = comp.2.iter().map(|b| b.1).collect();
-            pts.sort_by(|p, q| p[0].total_cmp(&q[0]).then(p[1].total_cmp(&q[1])));
-            pts.dedup();
-            if pts.len() < 2 {
-                continue;
-            }
-            for p in &pts {
-                let lam = (p[0] - x1) / (x2 - x1);
-                let alpha = (1.0 - lam) * a_lo + lam * b_lo - p[1];
-                lines.push([alpha, (1.0 - lam) * (a_hi - a_lo), lam * (b_hi - b_lo)]);
-            }
-            let mut all = true;
-            for (i, col) in sc.cover.iter_mut().enumerate() {
-                if *col == full {
-                    continue;
+        // Each component's end points as affine functions g_P(x, y) = α + β x + γ y.
+        let sets: Vec<Vec<[f64; 3]>> = comps
+            .iter()
+            .filter_map(|comp| {
+                let mut pts: Vec<[f64; 2]> = comp.2.iter().map(|b| b.1).collect();
+                pts.sort_by(|p, q| p[0].total_cmp(&q[0]).then(p[1].total_cmp(&q[1])));
+                pts.dedup();
+                (pts.len() >= 2).then(|| {
+                    pts.iter()
+                        .map(|p| {
+                            let lam = (p[0] - x1) / (x2 - x1);
+                            let alpha = (1.0 - lam) * a_lo + lam * b_lo - p[1];
+                            [alpha, (1.0 - lam) * (a_hi - a_lo), lam * (b_hi - b_lo)]
+                        })
+                        .collect()
+                })
+            })
+            .collect();
+        // A ray that no component blocks lies in a pixel never covered at any resolution: visible. (A shortcut:
+        // answering "visible" is always safe.)
+        for i in 0..4 {
+            for j in 0..4 {
+                let (x, y) = ((f64::from(i) + 0.5) / 4.0, (f64::from(j) + 0.5) / 4.0);
+                let blocked = sets.iter().any(|set| {
+                    let (mut hi, mut lo) = (f64::NEG_INFINITY, f64::INFINITY);
+                    for &[al, be, ga] in set {
+                        let g = al + be * x + ga * y;
+                        hi = hi.max(g);
+                        lo = lo.min(g);
+                    }
+                    hi > tau && lo < -tau
+                });
+                if !blocked {
+                    return false;
                 }
-                let (xl, xh) = (edge(i), edge(i + 1));
-                // Union over lines of rows where min g > τ, and where max g < −τ: each a half-line of rows.
-                let mut pos = [0u64; 4];
-                let mut neg = [0u64; 4];
-                for &[al, be, ga] in &lines {
-                    let (xmin, xmax) = if be >= 0.0 { (xl, xh) } else { (xh, xl) };
-                    let (cmin, cmax) = (al + be * xmin, al + be * xmax);
-                    // Row j: y in [edge(j), edge(j+1)].
-                    let gmin = |j: usize| {
-                        let y = if ga >= 0.0 { edge(j) } else { edge(j + 1) };
-                        cmin + ga * y
-                    };
-                    let gmax = |j: usize| {
-                        let y = if ga >= 0.0 { edge(j + 1) } else { edge(j) };
-                        cmax + ga * y
-                    };
-                    // Both are monotone in j: non-decreasing when γ ≥ 0, else non-increasing.
-                    let up = ga >= 0.0;
-                    or_mask(&mut pos, &half_line(r, up, |j| gmin(j) > tau));
-                    or_mask(&mut neg, &half_line(r, !up, |j| gmax(j) < -tau));
-                }
-                for w in 0..4 {
-                    col[w] |= pos[w] & neg[w];
-                }
-                all &= *col == full;
-            }
-            if all {
-                return true;
             }
         }
-        false
+        // Coarse to fine: a pixel covered at resolution 16 has all its sub-pixels covered at any multiple of it (the
+        // extremes over a sub-pixel are within those over the pixel), so "hidden" at 16 is "hidden" at R.
+        if res > 16 && res % 16 == 0 && rasterise(&sets, 16, tau, &mut sc.cover) {
+            return true;
+        }
+        rasterise(&sets, res, tau, &mut sc.cover)
     }
+}
+
+/// Whether every pixel of the `res` × `res` bitmap is covered by one of the component `sets` (module documentation).
+fn rasterise(sets: &[Vec<[f64; 3]>], res: u32, tau: f64, cover: &mut Vec<[u64; 4]>) -> bool {
+    let r = res as usize;
+    let full = full_mask(r);
+    cover.clear();
+    cover.resize(r, [0u64; 4]);
+    let rf = f64::from(res);
+    let edge = |i: usize| i as f64 / rf;
+    for lines in sets {
+        let mut all = true;
+        for (i, col) in cover.iter_mut().enumerate() {
+            if *col == full {
+                continue;
+            }
+            let (xl, xh) = (edge(i), edge(i + 1));
+            // Union over lines of rows where min g > τ, and where max g < −τ: each a half-line of rows.
+            let mut pos = [0u64; 4];
+            let mut neg = [0u64; 4];
+            for &[al, be, ga] in lines {
+                let (xmin, xmax) = if be >= 0.0 { (xl, xh) } else { (xh, xl) };
+                let (cmin, cmax) = (al + be * xmin, al + be * xmax);
+                // Row j: y in [edge(j), edge(j+1)].
+                let gmin = |j: usize| {
+                    let y = if ga >= 0.0 { edge(j) } else { edge(j + 1) };
+                    cmin + ga * y
+                };
+                let gmax = |j: usize| {
+                    let y = if ga >= 0.0 { edge(j + 1) } else { edge(j) };
+                    cmax + ga * y
+                };
+                // Both are monotone in j: non-decreasing when γ ≥ 0, else non-increasing.
+                let up = ga >= 0.0;
+                or_mask(&mut pos, &half_line(r, up, |j| gmin(j) > tau));
+                or_mask(&mut neg, &half_line(r, !up, |j| gmax(j) < -tau));
+            }
+            for w in 0..4 {
+                col[w] |= pos[w] & neg[w];
+            }
+            all &= *col == full;
+        }
+        if all {
+            return true;
+        }
+    }
+    false
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -493,7 +582,11 @@ fn range_mask(lo: usize, hi: usize) -> [u64; 4] {
         let (a, b) = (lo.max(64 * w), hi.min(64 * w + 64));
         if a < b {
             let n = b - a;
-            let bits = if n == 64 { u64::MAX } else { ((1u64 << n) - 1) << (a - 64 * w) };
+            let bits = if n == 64 {
+                u64::MAX
+            } else {
+                ((1u64 << n) - 1) << (a - 64 * w)
+            };
             *word |= bits;
         }
     }

@@ -112,7 +112,9 @@ impl ViewCell {
             Height::AboveGround(h) => (h, "height above ground"),
         };
         if !(a.is_finite() && b.is_finite() && a <= b) {
-            return Err(PvsError::BadCell(format!("the {what} {a},{b} must be finite with {a} <= {b}")));
+            return Err(PvsError::BadCell(format!(
+                "the {what} {a},{b} must be finite with {a} <= {b}"
+            )));
         }
         Ok(())
     }
@@ -383,10 +385,8 @@ impl<'a> Pvs<'a> {
                     .as_ref()
                     .is_some_and(|c| regions::hidden_by_regions(c, node.hier as usize, a))
         };
-        let by_koltun = |scratch: &mut koltun::Scratch| {
-            self.walls
-                .hidden(a, &node.bounds, self.params.resolution, scratch)
-        };
+        let by_koltun =
+            |scratch: &mut koltun::Scratch| self.walls.hidden(a, &node.bounds, self.params.resolution, scratch);
         match self.params.method {
             Method::Koltun => by_koltun(scratch),
             Method::Regions => by_regions(()),
@@ -398,7 +398,9 @@ impl<'a> Pvs<'a> {
     /// the last row and column are cut at the footprint).
     pub fn grid(&self, size: f64, height: Height) -> Result<Vec<ViewCell>, PvsError> {
         if !(size.is_finite() && size > 0.0) {
-            return Err(PvsError::BadCell(format!("grid size {size} must be finite and positive")));
+            return Err(PvsError::BadCell(format!(
+                "grid size {size} must be finite and positive"
+            )));
         }
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in &self.h.mesh.positions {

@@ -133,9 +133,7 @@ fn plateau_edge_and_grazing_cells() {
 #[test]
 fn rolling_hills_and_utm_offsets() {
     for offset in [DVec3::ZERO, DVec3::new(5e5, 5e6, 1000.0)] {
-        let tin = grid_tin(21, 200.0, offset, |x, y| {
-            10.0 * ((x / 40.0).sin() + (y / 55.0).cos())
-        });
+        let tin = grid_tin(21, 200.0, offset, |x, y| 10.0 * ((x / 40.0).sin() + (y / 55.0).cos()));
         let cells = [
             cell(offset.x + 10.0, offset.y + 10.0, 30.0, GROUND),
             cell(offset.x + 100.0, offset.y + 50.0, 50.0, LOW),

@@ -1,0 +1,415 @@
+//! `tincull pvs`: from-region visibility. The potentially visible set (PVS) of one viewcell (`--cell`), of every
+//! cell of a grid over the footprint (`--grid`), or a check of random cells against the exact checker (`--check`).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail, ensure};
+use clap::Args;
+use cull::{Hierarchy, SafeCuller};
+use pvs::{CellPvs, CellRecord, Height, Method, Pvs, PvsFile, PvsParams, ViewCell, check_cell, sample_eyes};
+use rand::{RngExt, SeedableRng};
+use rayon::prelude::*;
+use serde_json::{Value, json};
+
+use super::culling_args::SafeArgs;
+use super::files::Outputs;
+use super::{Output, OutputArgs};
+use eval::evaluate::hierarchy_tin;
+
+/// Arguments of `tincull pvs`.
+#[derive(Debug, Args)]
+pub struct PvsArgs {
+    /// The hierarchy file written by `tincull build`.
+    pub hierarchy: PathBuf,
+    /// One viewcell: `x0,y0,x1,y1` in world coordinates (m).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_rect, allow_hyphen_values = true,
+          required_unless_present_any = ["grid", "check"], conflicts_with_all = ["grid", "check"])]
+    pub cell: Option<[f64; 4]>,
+    /// Every cell of a grid of SIZE × SIZE metres over the footprint's bounding box (progress bar).
+    #[arg(long, value_name = "SIZE", conflicts_with = "check")]
+    pub grid: Option<f64>,
+    /// Check N random cells of `--cell-size` against the exact checker from 64 sample points each (corners, edges,
+    /// interior, both heights): misses (target 0), PVS size against the union of the sampled visible sets and of the
+    /// safe culler's drawn sets, seconds and bytes per cell, per method and resolution.
+    #[arg(long, value_name = "N")]
+    pub check: Option<usize>,
+    /// Side of the random cells of `--check` (m).
+    #[arg(long, default_value_t = 100.0, value_name = "M")]
+    pub cell_size: f64,
+    /// Seed of the random cells of `--check` and of their interior sample points.
+    #[arg(long, default_value_t = 1)]
+    pub view_seed: u64,
+    /// Absolute height band of the cell: `z0,z1` (m).
+    #[arg(long, value_name = "Z0,Z1", value_parser = parse_pair, allow_hyphen_values = true,
+          conflicts_with = "above_ground")]
+    pub height_band: Option<[f64; 2]>,
+    /// Height band above the ground under each point of the cell: `h0,h1` (m) [default: 0,2].
+    #[arg(long, value_name = "H0,H1", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub above_ground: Option<[f64; 2]>,
+    /// Test that culls: `koltun` (Koltun et al. 2001 in the dual ray space), `regions` (the conservative precomputed
+    /// regions) or `both`. With `--check` every method is reported.
+    #[arg(long, default_value = "both", value_parser = parse_method)]
+    pub method: Method,
+    /// Resolution R of the R × R ray-space bitmap, 1 to 256; with `--check` a comma-separated list.
+    #[arg(long, value_delimiter = ',', default_value = "64", value_name = "R")]
+    pub resolution: Vec<u32>,
+    /// The safe culler's parameters (`--check` compares with it); `--patch` is also the PVS's patch size.
+    #[command(flatten)]
+    pub safe: SafeArgs,
+    /// Write the PVS of every cell here, in the compact binary form (`.pvs`).
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Parses `x0,y0,x1,y1`.
+fn parse_rect(s: &str) -> Result<[f64; 4], String> {
+    let v = parse_numbers(s, 4)?;
+    Ok([v[0], v[1], v[2], v[3]])
+}
+
+/// Parses `a,b`.
+fn parse_pair(s: &str) -> Result<[f64; 2], String> {
+    let v = parse_numbers(s, 2)?;
+    Ok([v[0], v[1]])
+}
+
+fn parse_numbers(s: &str, n: usize) -> Result<Vec<f64>, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != n {
+        return Err(format!("expected {n} comma-separated numbers, got {s:?}"));
+    }
+    parts
+        .iter()
+        .map(|t| match t.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(format!("{t:?} is not a finite number")),
+        })
+        .collect()
+}
+
+fn parse_method(s: &str) -> Result<Method, String> {
+    Method::from_name(s).ok_or_else(|| format!("unknown method {s:?}; expected one of koltun, regions, both"))
+}
+
+/// Runs `tincull pvs`.
+pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
+    let height = match (args.height_band, args.above_ground) {
+        (Some(z), _) => Height::Band(z),
+        (None, Some(h)) => Height::AboveGround(h),
+        (None, None) => Height::AboveGround([0.0, 2.0]),
+    };
+    for &r in &args.resolution {
+        ensure!(
+            (1..=pvs::MAX_RESOLUTION).contains(&r),
+            "--resolution must be from 1 to {}, got {r}",
+            pvs::MAX_RESOLUTION
+        );
+    }
+    ensure!(
+        args.check.is_some() || args.resolution.len() == 1,
+        "--resolution takes a list only with --check"
+    );
+    let safe_params = args.safe.params()?;
+    let mut files = Outputs::new();
+    if let Some(path) = &args.out {
+        files.check(path)?;
+    }
+    let h = Hierarchy::load(&args.hierarchy)?;
+    if let Some(n) = args.check {
+        return check(args, &h, height, n, safe_params, out);
+    }
+    let params = PvsParams {
+        method: args.method,
+        resolution: args.resolution[0],
+        patch: safe_params.patch as u32,
+    };
+    let prep = Instant::now();
+    let pvs = Pvs::new(&h, params)?;
+    let prep_s = prep.elapsed().as_secs_f64();
+    let cells = match (args.cell, args.grid) {
+        (Some(rect), _) => vec![ViewCell { rect, height }],
+        (None, Some(size)) => pvs.grid(size, height)?,
+        (None, None) => bail!("give --cell, --grid or --check"),
+    };
+    for c in &cells {
+        c.validate().with_context(|| format!("--cell {:?}", c.rect))?;
+    }
+    let bar = if args.grid.is_some() {
+        out.progress(cells.len() as u64, "cells")
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let start = Instant::now();
+    let results: Vec<CellPvs> = cells
+        .par_iter()
+        .map(|c| {
+            let r = pvs.compute(c);
+            bar.inc(1);
+            r
+        })
+        .collect::<Result<_, _>>()?;
+    bar.finish_and_clear();
+    let total_s = start.elapsed().as_secs_f64();
+    let records: Vec<CellRecord> = cells
+        .iter()
+        .zip(&results)
+        .map(|(c, r)| CellRecord::new(*c, r))
+        .collect();
+    let file = PvsFile {
+        triangles: h.num_triangles() as u32,
+        nodes: h.nodes.len() as u32,
+        params,
+        cells: records,
+    };
+    let bytes = file.to_bytes()?;
+    if let Some(path) = &args.out {
+        files.add_bytes(path, &bytes)?;
+        files.commit()?;
+    }
+    let nt = h.num_triangles() as u64;
+    let sizes: Vec<u64> = results.iter().map(CellPvs::triangles).collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mean_size = mean(&sizes.iter().map(|&s| s as f64).collect::<Vec<_>>());
+    let mean_s = mean(&results.iter().map(|r| r.seconds).collect::<Vec<_>>());
+    if out.json {
+        let cells_json: Vec<Value> = cells
+            .iter()
+            .zip(&results)
+            .zip(&file.cells)
+            .map(|((c, r), rec)| {
+                json!({
+                    "cell": c.rect,
+                    "ztop": r.ztop,
+                    "nodes": r.nodes,
+                    "ranges": r.ranges,
+                    "triangles": r.triangles(),
+                    "boxes_tested": r.tests,
+                    "seconds": r.seconds,
+                    "bytes": rec.encoded_len(),
+                })
+            })
+            .collect();
+        out.json(&json!({
+            "hierarchy": args.hierarchy,
+            "method": params.method.name(),
+            "resolution": params.resolution,
+            "patch": params.patch,
+            "height": height,
+            "triangles": nt,
+            "cells": cells_json,
+            "mean_pvs_triangles": mean_size,
+            "mean_seconds_per_cell": mean_s,
+            "prepare_seconds": prep_s,
+            "seconds": total_s,
+            "file_bytes": bytes.len(),
+        }))?;
+    } else {
+        for (c, r) in cells.iter().zip(&results).take(20) {
+            out.say(format!(
+                "cell {:?}: PVS {} of {} triangles ({:.1}%) in {} ranges, {} nodes; {:.3} s",
+                c.rect,
+                r.triangles(),
+                nt,
+                100.0 * r.triangles() as f64 / nt.max(1) as f64,
+                r.ranges.len(),
+                r.nodes.len(),
+                r.seconds
+            ));
+        }
+        if cells.len() > 20 {
+            out.say(format!("… and {} more cells", cells.len() - 20));
+        }
+        out.say(format!(
+            "{} cells, method {} at {}², mean PVS {:.0} of {} triangles, {:.3} s per cell, {:.2} s in all \
+             (+{:.2} s preparation), {} bytes{}",
+            cells.len(),
+            params.method.name(),
+            params.resolution,
+            mean_size,
+            nt,
+            mean_s,
+            total_s,
+            prep_s,
+            bytes.len(),
+            args.out
+                .as_ref()
+                .map_or(String::new(), |p| format!(" written to {}", p.display()))
+        ));
+    }
+    Ok(())
+}
+
+/// One row of the check: a method at a resolution.
+#[derive(Default)]
+struct Row {
+    misses: u64,
+    max_misses: u64,
+    pvs: Vec<f64>,
+    over_visible: Vec<f64>,
+    over_safe: Vec<f64>,
+    seconds: Vec<f64>,
+    bytes: Vec<f64>,
+}
+
+/// `--check N`: random cells against the exact checker.
+fn check(
+    args: &PvsArgs,
+    h: &Hierarchy,
+    height: Height,
+    n: usize,
+    safe_params: cull::SafeParams,
+    out: Output,
+) -> Result<()> {
+    ensure!(
+        args.cell_size.is_finite() && args.cell_size > 0.0,
+        "--cell-size must be positive, got {}",
+        args.cell_size
+    );
+    let tin = hierarchy_tin(h)?;
+    let truth = truth::GroundTruth::new(&tin);
+    let safe = SafeCuller::new(h, safe_params);
+    let patch = safe_params.patch as u32;
+    // Configurations: koltun at every resolution, regions, both at every resolution.
+    let mut configs: Vec<PvsParams> = args
+        .resolution
+        .iter()
+        .map(|&resolution| PvsParams {
+            method: Method::Koltun,
+            resolution,
+            patch,
+        })
+        .collect();
+    configs.push(PvsParams {
+        method: Method::Regions,
+        resolution: 1,
+        patch,
+    });
+    configs.extend(args.resolution.iter().map(|&resolution| PvsParams {
+        method: Method::Both,
+        resolution,
+        patch,
+    }));
+    let prep = Instant::now();
+    let computers: Vec<Pvs> = configs.iter().map(|&p| Pvs::new(h, p)).collect::<Result<_, _>>()?;
+    let prep_s = prep.elapsed().as_secs_f64();
+    // Random cells whose centre lies on the terrain.
+    let b = tin.bbox();
+    let s = args.cell_size;
+    ensure!(
+        b.max.x - b.min.x > s && b.max.y - b.min.y > s,
+        "--cell-size {s} does not fit in the footprint"
+    );
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(args.view_seed);
+    let mut cells = Vec::with_capacity(n);
+    let mut tries = 0;
+    while cells.len() < n {
+        tries += 1;
+        ensure!(
+            tries < 1000 * (n + 1),
+            "could not place {n} cells of {s} m on the terrain"
+        );
+        let x0 = rng.random_range(b.min.x..b.max.x - s);
+        let y0 = rng.random_range(b.min.y..b.max.y - s);
+        let centre = glam::DVec2::new(x0 + 0.5 * s, y0 + 0.5 * s);
+        if truth.locator().ground_height(&tin, centre).is_some() {
+            cells.push(ViewCell {
+                rect: [x0, y0, x0 + s, y0 + s],
+                height,
+            });
+        }
+    }
+    let nt = tin.num_triangles();
+    let mut rows: Vec<Row> = configs.iter().map(|_| Row::default()).collect();
+    let mut unions = (Vec::new(), Vec::new(), 0usize, 0.0f64);
+    let bar = out.progress(n as u64, "cells");
+    for (i, cell) in cells.iter().enumerate() {
+        let t = Instant::now();
+        let eyes = sample_eyes(&truth, cell, 7, args.view_seed.wrapping_add(i as u64));
+        let seen = check_cell(&truth, &safe, &eyes);
+        unions.3 += t.elapsed().as_secs_f64();
+        let (v, sd) = (seen.visible_count() as f64, seen.safe_count() as f64);
+        unions.0.push(v);
+        unions.1.push(sd);
+        unions.2 += eyes.len();
+        for (pvs, row) in computers.iter().zip(&mut rows) {
+            let r = pvs.compute(cell)?;
+            let misses = seen.misses(&r.mask(nt)).len() as u64;
+            row.misses += misses;
+            row.max_misses = row.max_misses.max(misses);
+            let size = r.triangles() as f64;
+            row.pvs.push(size);
+            row.over_visible.push(size / v.max(1.0));
+            row.over_safe.push(size / sd.max(1.0));
+            row.seconds.push(r.seconds);
+            row.bytes.push(CellRecord::new(*cell, &r).encoded_len() as f64);
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let rows_json: Vec<Value> = configs
+        .iter()
+        .zip(&rows)
+        .map(|(p, r)| {
+            json!({
+                "method": p.method.name(),
+                "resolution": if p.method == Method::Regions { Value::Null } else { json!(p.resolution) },
+                "misses": r.misses,
+                "max_misses_per_cell": r.max_misses,
+                "mean_pvs_triangles": mean(&r.pvs),
+                "mean_pvs_fraction": mean(&r.pvs) / nt.max(1) as f64,
+                "mean_pvs_over_visible": mean(&r.over_visible),
+                "mean_pvs_over_safe": mean(&r.over_safe),
+                "mean_seconds_per_cell": mean(&r.seconds),
+                "mean_bytes_per_cell": mean(&r.bytes),
+            })
+        })
+        .collect();
+    if out.json {
+        out.json(&json!({
+            "hierarchy": args.hierarchy,
+            "cells": n,
+            "cell_size": s,
+            "height": height,
+            "view_seed": args.view_seed,
+            "triangles": nt,
+            "sample_points": unions.2,
+            "mean_union_visible": mean(&unions.0),
+            "mean_union_safe_drawn": mean(&unions.1),
+            "truth_seconds": unions.3,
+            "prepare_seconds": prep_s,
+            "rows": rows_json,
+        }))?;
+    } else {
+        out.say(format!(
+            "{n} cells of {s} m ({height:?}), {} sample points; union of visible sets {:.0}, of safe drawn sets {:.0} \
+             of {nt} triangles",
+            unions.2,
+            mean(&unions.0),
+            mean(&unions.1)
+        ));
+        out.say("method   R    misses  PVS (tri)  PVS/visible  PVS/safe  s/cell   bytes/cell");
+        for (p, r) in configs.iter().zip(&rows) {
+            out.say(format!(
+                "{:<8} {:>4} {:>7} {:>10.0} {:>12.2} {:>9.2} {:>7.3} {:>11.0}",
+                p.method.name(),
+                if p.method == Method::Regions {
+                    "-".to_string()
+                } else {
+                    p.resolution.to_string()
+                },
+                r.misses,
+                mean(&r.pvs),
+                mean(&r.over_visible),
+                mean(&r.over_safe),
+                mean(&r.seconds),
+                mean(&r.bytes)
+            ));
+        }
+    }
+    Ok(())
+}
