@@ -13,6 +13,7 @@
 //! | ground-truth visibility, viewpoint sets, metrics | [`truth`] |
 //! | the whole build from a TIN to a hierarchy, grouped OBJ/MTL and JSON exports, the group palette | [`pipeline`] (also [`export`]) |
 //! | evaluation against ground truth, sweeps, the stability suite, failure maps | [`eval`] ([`evaluate`], [`sweep`], [`stress`]) |
+//! | from-region visibility: the PVS of viewcells (Koltun et al. 2001, adapted) and its binary form | [`pvs`] |
 //! | wgpu renders and the interactive viewer (feature `viewer`, on by default) | `viewer` |
 //! | the command line | [`cli`] |
 //!
@@ -24,6 +25,7 @@ pub use eval;
 pub use horizon;
 pub use occlusion;
 pub use pipeline;
+pub use pvs;
 pub use tin;
 pub use truth;
 #[cfg(feature = "viewer")]

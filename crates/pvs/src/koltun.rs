@@ -99,6 +99,10 @@ pub(crate) struct Scratch {
     cover: Vec<[u64; 4]>,
 }
 
+/// A connected set of wall pieces: its root, its number of pieces, and its extreme end points (score, point) in
+/// eight directions.
+type Component = (u32, usize, [(f64, [f64; 2]); 8]);
+
 /// Largest resolution of the ray-space bitmap.
 pub const MAX_RESOLUTION: u32 = 256;
 
@@ -436,19 +440,15 @@ impl Walls {
             [-1.0, -1.0],
         ];
         let n = sc.pieces.len();
-        let mut root_of = vec![0u32; n];
+        let mut comps: Vec<Component> = Vec::new();
+        let mut slot = vec![u32::MAX; n];
         for i in 0..n {
-            root_of[i] = find(&mut sc.parent, i as u32);
-        }
-        let mut comps: Vec<(u32, usize, [(f64, [f64; 2]); 8])> = Vec::new();
-        let mut slot = std::collections::HashMap::new();
-        for i in 0..n {
-            let root = root_of[i];
-            let idx = *slot.entry(root).or_insert_with(|| {
+            let root = find(&mut sc.parent, i as u32);
+            if slot[root as usize] == u32::MAX {
+                slot[root as usize] = comps.len() as u32;
                 comps.push((root, 0, [(f64::NEG_INFINITY, [0.0; 2]); 8]));
-                comps.len() - 1
-            });
-            let comp = &mut comps[idx];
+            }
+            let comp = &mut comps[slot[root as usize] as usize];
             comp.1 += 1;
             for p in sc.pieces[i] {
                 for (d, best) in DIRS.iter().zip(comp.2.iter_mut()) {
@@ -499,7 +499,7 @@ impl Walls {
         }
         // Coarse to fine: a pixel covered at resolution 16 has all its sub-pixels covered at any multiple of it (the
         // extremes over a sub-pixel are within those over the pixel), so "hidden" at 16 is "hidden" at R.
-        if res > 16 && res % 16 == 0 && rasterise(&sets, 16, tau, &mut sc.cover) {
+        if res > 16 && res.is_multiple_of(16) && rasterise(&sets, 16, tau, &mut sc.cover) {
             return true;
         }
         rasterise(&sets, res, tau, &mut sc.cover)

@@ -102,7 +102,7 @@ impl ViewCell {
     /// Checks the rectangle and the band (finite, non-empty, ordered).
     pub fn validate(&self) -> Result<(), PvsError> {
         let [x0, y0, x1, y1] = self.rect;
-        if !self.rect.iter().all(|v| v.is_finite()) || !(x0 < x1 && y0 < y1) {
+        if !(self.rect.iter().all(|v| v.is_finite()) && x0 < x1 && y0 < y1) {
             return Err(PvsError::BadCell(format!(
                 "the rectangle {x0},{y0},{x1},{y1} must be finite with x0 < x1 and y0 < y1"
             )));
@@ -166,9 +166,8 @@ impl CellPvs {
     pub fn mask(&self, n: usize) -> Vec<bool> {
         let mut m = vec![false; n];
         for r in &self.ranges {
-            for t in r[0] as usize..(r[1] as usize).min(n) {
-                m[t] = true;
-            }
+            let (a, b) = ((r[0] as usize).min(n), (r[1] as usize).min(n));
+            m[a..b.max(a)].iter_mut().for_each(|x| *x = true);
         }
         m
     }

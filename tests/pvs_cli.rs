@@ -1,0 +1,140 @@
+//! End-to-end tests of `tincull pvs`: one cell, a grid, the binary file, the check against ground truth, errors.
+
+mod common;
+
+use common::{fails_with, json, mesh, ok, s};
+use pvs::PvsFile;
+
+/// Builds the bundled 2k mesh's hierarchy in `dir`; returns its path and the footprint's centre.
+fn hierarchy(dir: &std::path::Path) -> (std::path::PathBuf, [f64; 2]) {
+    let tch = dir.join("j2k.tch");
+    ok(&[
+        "build",
+        s(&mesh("jacksboro-2k.obj")),
+        "-o",
+        s(&tch),
+        "--seeds",
+        "20",
+        "-q",
+    ]);
+    let bbox = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"])["bbox"].clone();
+    let c = |k: usize| (bbox["min"][k].as_f64().expect("min") + bbox["max"][k].as_f64().expect("max")) / 2.0;
+    (tch, [c(0), c(1)])
+}
+
+fn ranges(v: &serde_json::Value) -> Vec<[u32; 2]> {
+    v.as_array()
+        .expect("ranges")
+        .iter()
+        .map(|r| [r[0].as_u64().expect("start") as u32, r[1].as_u64().expect("end") as u32])
+        .collect()
+}
+
+#[test]
+fn one_cell_a_grid_and_the_binary_file_agree() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (tch, [cx, cy]) = hierarchy(dir.path());
+    let cell = format!("{},{},{},{}", cx - 150.0, cy - 150.0, cx + 150.0, cy + 150.0);
+    let file = dir.path().join("one.pvs");
+    let v = json(&[
+        "pvs",
+        s(&tch),
+        "--cell",
+        &cell,
+        "--above-ground",
+        "0,20",
+        "--resolution",
+        "32",
+        "-o",
+        s(&file),
+        "--json",
+    ]);
+    let nt = v["triangles"].as_u64().expect("triangles") as u32;
+    let c = &v["cells"][0];
+    let r = ranges(&c["ranges"]);
+    assert!(!r.is_empty(), "the cell sees at least the ground under it");
+    assert!(
+        r.windows(2).all(|w| w[0][1] < w[1][0]),
+        "ranges increasing and merged: {r:?}"
+    );
+    assert!(r.iter().all(|x| x[0] < x[1] && x[1] <= nt));
+    let size: u64 = r.iter().map(|x| u64::from(x[1] - x[0])).sum();
+    assert_eq!(c["triangles"].as_u64(), Some(size));
+    assert!(
+        size < u64::from(nt),
+        "a 300 m cell near the ground does not see the whole terrain"
+    );
+    let decoded = PvsFile::from_bytes(&std::fs::read(&file).expect("pvs file")).expect("a valid .pvs");
+    assert_eq!(decoded.cells.len(), 1);
+    assert_eq!(decoded.cells[0].ranges(), r);
+    assert_eq!(decoded.triangles, nt);
+
+    // The grid: deterministic, and its cell containing the one above has ranges of the same kind.
+    let (g1, g2) = (dir.path().join("g1.pvs"), dir.path().join("g2.pvs"));
+    let grid = json(&["pvs", s(&tch), "--grid", "4000", "-o", s(&g1), "--json", "-q"]);
+    let cells = grid["cells"].as_array().expect("cells");
+    assert!(cells.len() > 4, "a 4 km grid over a 30 km terrain");
+    for c in cells {
+        let r = ranges(&c["ranges"]);
+        assert!(r.windows(2).all(|w| w[0][1] < w[1][0]) && r.iter().all(|x| x[1] <= nt));
+        assert!(c["bytes"].as_u64().expect("bytes") > 0);
+    }
+    ok(&["pvs", s(&tch), "--grid", "4000", "-o", s(&g2), "-q"]);
+    assert_eq!(
+        std::fs::read(&g1).expect("g1"),
+        std::fs::read(&g2).expect("g2"),
+        "same input, same bytes"
+    );
+}
+
+#[test]
+fn the_check_finds_no_miss() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (tch, _) = hierarchy(dir.path());
+    let v = json(&[
+        "pvs",
+        s(&tch),
+        "--check",
+        "2",
+        "--cell-size",
+        "300",
+        "--above-ground",
+        "0,20",
+        "--resolution",
+        "16,64",
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(v["sample_points"].as_u64(), Some(128), "64 sample points per cell");
+    let rows = v["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 5, "koltun at 16 and 64, regions, both at 16 and 64");
+    let visible = v["mean_union_visible"].as_f64().expect("visible");
+    assert!(visible > 0.0);
+    for row in rows {
+        assert_eq!(row["misses"].as_u64(), Some(0), "{row}");
+        assert!(row["mean_pvs_over_visible"].as_f64().expect("ratio") >= 1.0, "{row}");
+    }
+}
+
+#[test]
+fn bad_arguments_give_clear_errors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (tch, [cx, cy]) = hierarchy(dir.path());
+    let cell = format!("{},{},{},{}", cx, cy, cx + 50.0, cy + 50.0);
+    fails_with(&["pvs", s(&tch), "--cell", &cell, "--resolution", "0"], "resolution");
+    fails_with(&["pvs", s(&tch), "--cell", &cell, "--resolution", "300"], "resolution");
+    fails_with(
+        &["pvs", s(&tch), "--cell", &cell, "--resolution", "16,32"],
+        "only with --check",
+    );
+    fails_with(&["pvs", s(&tch), "--cell", "10,0,5,5"], "x0 < x1");
+    fails_with(&["pvs", s(&tch), "--cell", "1,2,3"], "4 comma-separated");
+    fails_with(
+        &["pvs", s(&tch), "--cell", &cell, "--height-band", "5,1"],
+        "height band",
+    );
+    fails_with(&["pvs", s(&tch), "--cell", &cell, "--method", "exact"], "koltun");
+    fails_with(&["pvs", s(&tch), "--grid", "0"], "grid");
+    fails_with(&["pvs", s(&tch), "--check", "1", "--cell-size", "1e6"], "cell-size");
+    fails_with(&["pvs", "/no/such.tch", "--cell", &cell], "such.tch");
+}
