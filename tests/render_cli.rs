@@ -135,8 +135,9 @@ fn render_rejects_bad_options_with_clear_messages() {
     let obj = dir.path().join("t.obj");
     ok(&tincull(&["synth", "-o", p(&obj), "--vertices", "300", "-q"]));
     let png = dir.path().join("x.png");
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 5] = [
         (&["--view", "eye"], "--eye"),
+        (&["--pvs-cell", "0,0,10,10"], "hierarchy"),
         (&["--size", "0x10"], "size"),
         (&["--view", "map", "--compare"], "--compare"),
         (&["--colour", "groups"], "hierarchy"),
@@ -153,6 +154,66 @@ fn render_rejects_bad_options_with_clear_messages() {
         assert!(err.contains(needle), "{extra:?}: {err}");
     }
     assert!(!png.exists(), "no image is written on error");
+}
+
+/// `--pvs-cell` paints a viewcell's PVS: what it holds in the drawn colour, what it excludes in the culled colour,
+/// exactly as many of each as `tincull pvs` reports.
+#[test]
+fn render_paints_a_viewcell_pvs() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    let tch = dir.path().join("t.tch");
+    ok(&tincull(&["synth", "-o", p(&obj), "--vertices", "1200", "-q"]));
+    ok(&tincull(&["build", p(&obj), "-o", p(&tch), "-q"]));
+    let h = cull::Hierarchy::load(&tch).unwrap();
+    let (lo, hi) = h
+        .mesh
+        .positions
+        .iter()
+        .fold(([f64::MAX; 2], [f64::MIN; 2]), |(mut lo, mut hi), q| {
+            for k in 0..2 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+            (lo, hi)
+        });
+    let (w, d) = (hi[0] - lo[0], hi[1] - lo[1]);
+    let cell = format!(
+        "{},{},{},{}",
+        lo[0] + 0.2 * w,
+        lo[1] + 0.2 * d,
+        lo[0] + 0.25 * w,
+        lo[1] + 0.25 * d
+    );
+    let map = dir.path().join("pvs.png");
+    let out = tincull(&[
+        "render",
+        p(&tch),
+        "--out",
+        p(&map),
+        "--size",
+        "200x200",
+        "--pvs-cell",
+        &cell,
+    ]);
+    if gpu_missing(&out) {
+        return;
+    }
+    let text = ok(&out);
+    assert!(text.contains("PVS of cell"), "{text}");
+    let img = viewer::read_png(&map).unwrap();
+    let drawn = img.count(viewer::palette::to_rgba8(viewer::palette::DRAWN_COLOUR));
+    let culled = img.count(viewer::palette::to_rgba8(viewer::palette::CULLED_COLOUR));
+    let j: serde_json::Value =
+        serde_json::from_str(ok(&tincull(&["pvs", p(&tch), "--cell", &cell, "--json"])).trim()).unwrap();
+    let in_pvs = j["cells"][0]["triangles"].as_u64().unwrap();
+    assert!(in_pvs > 0);
+    assert!(drawn > 0, "the PVS is painted");
+    assert_eq!(
+        culled > 0,
+        in_pvs < h.num_triangles() as u64,
+        "what the PVS excludes is painted as culled"
+    );
 }
 
 #[test]

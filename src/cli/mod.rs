@@ -13,7 +13,7 @@ mod horizon_cmd;
 mod info;
 mod mesh_input;
 pub mod output;
-mod pvs_cmd;
+pub mod pvs_cmd;
 #[cfg(feature = "viewer")]
 mod render_cmd;
 mod stress_cmd;

@@ -66,13 +66,13 @@ pub struct PvsArgs {
 }
 
 /// Parses `x0,y0,x1,y1`.
-fn parse_rect(s: &str) -> Result<[f64; 4], String> {
+pub fn parse_rect(s: &str) -> Result<[f64; 4], String> {
     let v = parse_numbers(s, 4)?;
     Ok([v[0], v[1], v[2], v[3]])
 }
 
 /// Parses `a,b`.
-fn parse_pair(s: &str) -> Result<[f64; 2], String> {
+pub fn parse_pair(s: &str) -> Result<[f64; 2], String> {
     let v = parse_numbers(s, 2)?;
     Ok([v[0], v[1]])
 }

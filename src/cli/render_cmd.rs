@@ -11,6 +11,7 @@ use viewer::{ColourMode, Gpu, RenderOptions, Terrain, ViewKind};
 use super::cull_cmd::parse_point;
 use super::files::Outputs;
 use super::mesh_input::ImportArgs;
+use super::pvs_cmd::{parse_pair, parse_rect};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull render`.
@@ -59,6 +60,20 @@ pub struct RenderArgs {
     /// pixels (false culls on screen) and frame times.
     #[arg(long)]
     pub compare: bool,
+    /// Paint a viewcell's PVS (`tincull pvs`, method `both`): `x0,y0,x1,y1`; the triangles it excludes are painted
+    /// as culled (colour `visibility`), and the eye marker stands over the cell's centre unless --eye is given.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_rect, allow_hyphen_values = true)]
+    pub pvs_cell: Option<[f64; 4]>,
+    /// With --pvs-cell: the cell's absolute height band `z0,z1` (m).
+    #[arg(long, value_name = "Z0,Z1", value_parser = parse_pair, allow_hyphen_values = true,
+          requires = "pvs_cell", conflicts_with = "above_ground")]
+    pub height_band: Option<[f64; 2]>,
+    /// With --pvs-cell: the cell's band above the ground `h0,h1` (m) [default: 0,2].
+    #[arg(long, value_name = "H0,H1", value_parser = parse_pair, allow_hyphen_values = true, requires = "pvs_cell")]
+    pub above_ground: Option<[f64; 2]>,
+    /// With --pvs-cell: resolution R of the PVS's R × R ray-space bitmap, 1 to 256.
+    #[arg(long, default_value_t = 64, value_name = "R")]
+    pub resolution: u32,
     /// With --compare: timed repetitions of each frame (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub runs: u32,
@@ -114,9 +129,45 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         bail!("--compare works with --view eye");
     }
     let terrain = load_terrain(&args.input, &args.import, out)?;
+    let (pvs_mask, pvs_eye) = match args.pvs_cell {
+        Some(rect) => {
+            let h = terrain
+                .hierarchy
+                .as_ref()
+                .context("--pvs-cell needs a hierarchy (.tch), not a plain mesh")?;
+            let height = match (args.height_band, args.above_ground) {
+                (Some(z), _) => pvs::Height::Band(z),
+                (None, Some(a)) => pvs::Height::AboveGround(a),
+                (None, None) => pvs::Height::AboveGround([0.0, 2.0]),
+            };
+            let params = pvs::PvsParams {
+                method: pvs::Method::Both,
+                resolution: args.resolution,
+                patch: pvs::PvsParams::default().patch,
+            };
+            let cell = pvs::ViewCell { rect, height };
+            let result = pvs::Pvs::new(h, params)?
+                .compute(&cell)
+                .with_context(|| format!("--pvs-cell {rect:?}"))?;
+            out.say(format!(
+                "PVS of cell {rect:?}: {} of {} triangles ({:.3} s)",
+                result.triangles(),
+                h.num_triangles(),
+                result.seconds
+            ));
+            let centre = [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3]), result.ztop];
+            (Some(result.mask(h.num_triangles())), Some(centre))
+        }
+        None => (None, None),
+    };
+    let colour = if pvs_mask.is_some() {
+        colour.or(Some(ColourMode::Visibility))
+    } else {
+        colour
+    };
     let options = RenderOptions {
         view,
-        eye: args.eye,
+        eye: args.eye.or(pvs_eye),
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
         fov_deg: args.fov,
@@ -127,6 +178,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         compare: args.compare,
         timing_runs: args.runs,
         method: args.method,
+        pvs: pvs_mask,
     };
     viewer::validate(&terrain, &options)?;
     let mut files = Outputs::new();
@@ -156,7 +208,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     if let Some(s) = &result.cull {
         out.say(format!(
             "culled for eye {:?}: draw {} of {} triangles; {} nodes tested, {} culled by occlusion, {} by frustum",
-            args.eye.unwrap_or_default(),
+            options.eye.unwrap_or_default(),
             s.triangles_drawn,
             s.triangles_drawn + s.triangles_culled,
             s.nodes_tested,

@@ -70,6 +70,9 @@ pub struct RenderOptions {
     pub timing_runs: u32,
     /// The culling method (default: the safe culler).
     pub method: CullMethod,
+    /// A viewcell's PVS as a per-triangle mask (hierarchy order; crate `pvs`): with `ColourMode::Visibility` it
+    /// replaces the viewpoint's culling, painting what the PVS excludes as culled.
+    pub pvs: Option<Vec<bool>>,
 }
 
 impl Default for RenderOptions {
@@ -87,6 +90,7 @@ impl Default for RenderOptions {
             compare: false,
             timing_runs: 5,
             method: CullMethod::Safe,
+            pvs: None,
         }
     }
 }
@@ -157,6 +161,15 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
     if o.eye.is_some_and(|e| !e.iter().all(|c| c.is_finite())) {
         return bad("--eye must be finite".into());
     }
+    if let Some(m) = &o.pvs
+        && m.len() != terrain.num_triangles()
+    {
+        return bad(format!(
+            "the PVS mask has {} entries for {} triangles",
+            m.len(),
+            terrain.num_triangles()
+        ));
+    }
     if o.view == ViewKind::Eye && o.eye.is_none() {
         return bad("--view eye needs --eye x,y,z".into());
     }
@@ -191,7 +204,10 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
     } else {
         ColourMode::Height
     });
-    let mask = culled.as_ref().map(|(list, _, _)| list.mask(n as usize));
+    let mask = match &options.pvs {
+        Some(m) => Some(m.clone()),
+        None => culled.as_ref().map(|(list, _, _)| list.mask(n as usize)),
+    };
     if mode == ColourMode::Visibility && mask.is_none() {
         return Err(ViewerError::Invalid(
             "--colour visibility needs --eye and a hierarchy".into(),
