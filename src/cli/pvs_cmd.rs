@@ -31,7 +31,8 @@ pub struct PvsArgs {
     pub grid: Option<f64>,
     /// Check N random cells of `--cell-size` against the exact checker from 64 sample points each (corners, edges,
     /// interior, both heights): misses (target 0), PVS size against the union of the sampled visible sets and of the
-    /// safe culler's drawn sets, seconds and bytes per cell, per method and resolution.
+    /// safe culler's drawn sets, seconds and bytes per cell; for `koltun` at every `--resolution`, `regions`, and
+    /// `both` at the highest resolution.
     #[arg(long, value_name = "N")]
     pub check: Option<usize>,
     /// Side of the random cells of `--check` (m).
@@ -273,7 +274,7 @@ fn check(
     let truth = truth::GroundTruth::new(&tin);
     let safe = SafeCuller::new(h, safe_params);
     let patch = safe_params.patch as u32;
-    // Configurations: koltun at every resolution, regions, both at every resolution.
+    // Configurations: koltun at every resolution, regions, both at the highest resolution.
     let mut configs: Vec<PvsParams> = args
         .resolution
         .iter()
@@ -288,13 +289,17 @@ fn check(
         resolution: 1,
         patch,
     });
-    configs.extend(args.resolution.iter().map(|&resolution| PvsParams {
+    configs.extend(args.resolution.iter().max().map(|&resolution| PvsParams {
         method: Method::Both,
         resolution,
         patch,
     }));
     let prep = Instant::now();
-    let computers: Vec<Pvs> = configs.iter().map(|&p| Pvs::new(h, p)).collect::<Result<_, _>>()?;
+    let regions = std::sync::Arc::new(pvs::conservative_regions(h));
+    let computers: Vec<Pvs> = configs
+        .iter()
+        .map(|&p| Pvs::with_regions(h, p, (p.method != Method::Koltun).then(|| regions.clone())))
+        .collect::<Result<_, _>>()?;
     let prep_s = prep.elapsed().as_secs_f64();
     // Random cells whose centre lies on the terrain.
     let b = tin.bbox();

@@ -27,6 +27,7 @@ pub mod format;
 pub mod koltun;
 pub mod regions;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use cull::Hierarchy;
@@ -173,6 +174,12 @@ impl CellPvs {
     }
 }
 
+/// `h` with conservative regions (`pipeline::conservative_hierarchy`), as the regions test needs them: seconds at
+/// 10k vertices, minutes at 100k.
+pub fn conservative_regions(h: &Hierarchy) -> Hierarchy {
+    pipeline::conservative_hierarchy(h)
+}
+
 /// One node of the box tree.
 #[derive(Clone, Copy, Debug)]
 struct TreeNode {
@@ -191,13 +198,24 @@ pub struct Pvs<'a> {
     children: Vec<u32>,
     roots: Vec<u32>,
     walls: koltun::Walls,
-    conservative: Option<Hierarchy>,
+    conservative: Option<Arc<Hierarchy>>,
 }
 
 impl<'a> Pvs<'a> {
     /// Prepares the PVS computation over `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded
     /// file does). With the regions test, computes the conservative regions first (seconds on 100k vertices).
     pub fn new(h: &'a Hierarchy, params: PvsParams) -> Result<Pvs<'a>, PvsError> {
+        let needs = matches!(params.method, Method::Regions | Method::Both);
+        Pvs::with_regions(h, params, needs.then(|| Arc::new(conservative_regions(h))))
+    }
+
+    /// [`Pvs::new`] with the conservative regions already computed ([`conservative_regions`] of `h`), so that
+    /// several computers share them; without them the regions test hides nothing.
+    pub fn with_regions(
+        h: &'a Hierarchy,
+        params: PvsParams,
+        conservative: Option<Arc<Hierarchy>>,
+    ) -> Result<Pvs<'a>, PvsError> {
         if !(1..=MAX_RESOLUTION).contains(&params.resolution) {
             return Err(PvsError::BadResolution(params.resolution));
         }
@@ -205,8 +223,6 @@ impl<'a> Pvs<'a> {
             patch: params.patch.max(1),
             ..params
         };
-        let conservative =
-            matches!(params.method, Method::Regions | Method::Both).then(|| pipeline::conservative_hierarchy(h));
         let mut pvs = Pvs {
             h,
             params,
