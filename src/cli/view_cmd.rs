@@ -34,6 +34,10 @@ pub struct ViewArgs {
     /// Compute the ground truth for the initial viewpoint right away (after --rebuild), showing false culls in red.
     #[arg(long)]
     pub truth: bool,
+    /// Turn the viewcell PVS on at start, with cells of this side (m): the cell around the eye is outlined on the map
+    /// and what its PVS excludes is painted as culled (also a toggle in the side panel).
+    #[arg(long, value_name = "M")]
+    pub pvs_cell_size: Option<u32>,
     /// Write a screenshot of the window to this PNG after a few frames (and after --rebuild and --truth), then
     /// close.
     #[arg(long, value_name = "PNG")]
@@ -100,6 +104,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         startup: Startup {
             rebuild: args.rebuild,
             ground_truth: args.truth,
+            pvs_cell_size: args.pvs_cell_size,
         },
     })?;
     if let Some(path) = &args.screenshot {

@@ -100,6 +100,7 @@ fn child(out: &Path) {
         startup: Startup {
             rebuild: true,
             ground_truth: true,
+            pvs_cell_size: None,
         },
     });
     let summary = match result {

@@ -1,6 +1,7 @@
 //! The interactive viewer (eframe + egui on wgpu): the terrain drawn with the culler's ranges from a viewpoint, in a
 //! first-person (eye) or orbit view, with the groups, orphans and culled groups on screen, live culling statistics,
-//! ground truth on demand, exports, and a rebuild with new parameters in a background thread.
+//! ground truth on demand, exports, and a rebuild with new parameters in a background thread. A toggle shows the
+//! viewcell around the eye on the map and paints what its PVS (crate `pvs`) excludes.
 //!
 //! The 3-D view is rendered by [`crate::render::Renderer`] into its own texture (depth-tested, reversed Z) on the
 //! window's wgpu device and shown with egui's `register_native_texture`. Rebuilds run the `pipeline` crate
@@ -76,6 +77,8 @@ pub struct Startup {
     pub rebuild: bool,
     /// Press "Ground truth here" once the hierarchy is ready.
     pub ground_truth: bool,
+    /// Turn the viewcell PVS on, with cells of this side (m).
+    pub pvs_cell_size: Option<u32>,
 }
 
 /// What happened during a [`run`].
@@ -301,7 +304,12 @@ struct ViewerApp {
     culling: bool,
     show_orphans: bool,
     culled_wire: bool,
+    /// Paint a viewcell's PVS around the eye instead of the culler's verdicts.
+    pvs_on: bool,
+    /// Side of the viewcells (m): a grid over world coordinates, the eye's cell is shown.
+    pvs_size: f64,
     // State.
+    pvs: Option<PvsView>,
     list: DrawList,
     colours_key: Option<(ColourMode, u32, u64)>,
     map_dirty: bool,
@@ -320,6 +328,16 @@ struct ViewerApp {
 }
 
 const MAP_SIDE: u32 = 280;
+
+/// The PVS of the viewcell around the eye (crate `pvs`, Koltun's test at 64 × 64): the cell of a `pvs_size` grid over
+/// world coordinates that holds the eye, from the ground up to the eye's height above it.
+struct PvsView {
+    rect: [f64; 4],
+    band: [f64; 2],
+    mask: Vec<bool>,
+    triangles: u64,
+    seconds: f64,
+}
 
 impl ViewerApp {
     fn new(cc: &eframe::CreationContext<'_>, setup: Setup) -> Result<ViewerApp> {
@@ -379,6 +397,9 @@ impl ViewerApp {
             culling: true,
             show_orphans: true,
             culled_wire: true,
+            pvs_on: startup.pvs_cell_size.is_some(),
+            pvs_size: f64::from(startup.pvs_cell_size.unwrap_or(100).max(1)),
+            pvs: None,
             list: DrawList::default(),
             colours_key: Some((colour, 0, 0)),
             map_dirty: true,
@@ -440,7 +461,68 @@ impl ViewerApp {
         })
     }
 
+    /// Recomputes the viewcell PVS when the eye has left its cell or the band changed (when the PVS is on).
+    fn update_pvs(&mut self) {
+        let Some(h) = self.model.terrain.hierarchy.as_ref().filter(|_| self.pvs_on) else {
+            self.pvs = None;
+            return;
+        };
+        let size = self.pvs_size.max(1.0);
+        let (x0, y0) = ((self.eye[0] / size).floor() * size, (self.eye[1] / size).floor() * size);
+        let rect = [x0, y0, x0 + size, y0 + size];
+        let band = [0.0, self.eye_height];
+        if self.pvs.as_ref().is_some_and(|p| p.rect == rect && p.band == band) {
+            return;
+        }
+        let params = pvs::PvsParams {
+            method: pvs::Method::Koltun,
+            ..pvs::PvsParams::default()
+        };
+        let cell = pvs::ViewCell {
+            rect,
+            height: pvs::Height::AboveGround(band),
+        };
+        match pvs::Pvs::new(h, params).and_then(|p| p.compute(&cell)) {
+            Ok(r) => {
+                self.pvs = Some(PvsView {
+                    rect,
+                    band,
+                    mask: r.mask(h.num_triangles()),
+                    triangles: r.triangles(),
+                    seconds: r.seconds,
+                });
+            }
+            Err(e) => {
+                self.status = format!("PVS: {e}");
+                self.pvs_on = false;
+                self.pvs = None;
+            }
+        }
+    }
+
     fn update_colours(&mut self, fingerprint: u64) {
+        if let Some(p) = &self.pvs {
+            let fp = p
+                .rect
+                .iter()
+                .chain(&p.band)
+                .fold(0u64, |h, v| h.rotate_left(13) ^ v.to_bits());
+            let key = (ColourMode::Visibility, u32::MAX, fp);
+            if self.colours_key == Some(key) {
+                return;
+            }
+            match self.terrain().colours(ColourMode::Visibility, None, Some(&p.mask)) {
+                Ok(colours) => {
+                    if let Err(e) = self.scene.set_colours(&self.gpu, &colours) {
+                        self.status = e.to_string();
+                    }
+                    self.colours_key = Some(key);
+                    self.map_dirty = true;
+                }
+                Err(e) => self.status = e.to_string(),
+            }
+            return;
+        }
         let visibility_key = if self.colour == ColourMode::Visibility {
             fingerprint
         } else {
@@ -692,6 +774,7 @@ impl eframe::App for ViewerApp {
             self.truth = None;
         }
         let fingerprint = self.cull();
+        self.update_pvs();
         self.update_colours(fingerprint);
         egui::Panel::left("controls").default_size(330.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));

@@ -75,6 +75,31 @@ impl ViewerApp {
         ui.checkbox(&mut self.culling, "cull");
         ui.checkbox(&mut self.show_orphans, "orphans (always visible)");
         ui.checkbox(&mut self.culled_wire, "culled groups as wireframe");
+        ui.add_enabled_ui(self.model.terrain.hierarchy.is_some(), |ui| {
+            ui.checkbox(&mut self.pvs_on, "viewcell PVS: paint what it excludes");
+        });
+        if self.pvs_on {
+            ui.add(
+                egui::Slider::new(&mut self.pvs_size, 25.0..=2000.0)
+                    .logarithmic(true)
+                    .text("cell side (m)"),
+            );
+            if let Some(p) = &self.pvs {
+                let n = self.terrain().num_triangles();
+                ui.label(format!(
+                    "cell {:.0},{:.0}–{:.0},{:.0}, 0–{:.1} m above ground: PVS {} of {} triangles ({:.1}%), {:.2} s",
+                    p.rect[0],
+                    p.rect[1],
+                    p.rect[2],
+                    p.rect[3],
+                    p.band[1],
+                    p.triangles,
+                    n,
+                    100.0 * p.triangles as f64 / n.max(1) as f64,
+                    p.seconds
+                ));
+            }
+        }
         ui.separator();
         self.stats_ui(ui);
         ui.separator();
@@ -116,6 +141,16 @@ impl ViewerApp {
             }
         }
         let m = crate::palette::to_rgba8(crate::palette::MARKER_COLOUR);
+        if let Some(p) = &self.pvs {
+            let corner = |x: f64, y: f64| to_px(Vec3::from(self.terrain().to_local([x, y, 0.0])).truncate());
+            let (a, b) = (corner(p.rect[0], p.rect[1]), corner(p.rect[2], p.rect[3]));
+            ui.painter().rect_stroke(
+                egui::Rect::from_two_pos(a, b),
+                0.0,
+                egui::Stroke::new(1.5, egui::Color32::from_rgb(m[0], m[1], m[2])),
+                egui::StrokeKind::Outside,
+            );
+        }
         ui.painter().circle(
             centre,
             4.0,
