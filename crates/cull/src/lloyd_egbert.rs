@@ -38,7 +38,8 @@
 //!   pitch, so the view's azimuth range needs no widening);
 //! - *visible* when the camera's x,y is inside its box;
 //! - *hidden* when both triangles of its box's top face (raised by `μ`) are strictly below the horizon in every
-//!   column they touch; a hidden node is not drawn and its descendants are not looked at;
+//!   column they touch (tried first with the box's bounding disk at the face's height, which contains the face);
+//!   a hidden node is not drawn and its descendants are not looked at;
 //! - otherwise an inner node queues its children, and a leaf is drawn and the occluders on the edges of the grid
 //!   cells its box meets become pending.
 //!
@@ -493,9 +494,22 @@ fn sub(p: [f64; 3], eye: [f64; 3]) -> [f64; 3] {
     [p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]]
 }
 
-/// Whether both triangles of the top face of `node`'s box (raised by `mu`) are strictly below the horizon.
+/// Whether both triangles of the top face of `node`'s box (raised by `mu`) are strictly below the horizon. First the
+/// cheaper test of the box's bounding disk at the same height ([`Horizon`]'s disk test: one comparison per column):
+/// the top face lies inside it, so if every point of the disk is below the horizon in its columns, so is every point
+/// of the face (the face keeps its own distance `≥ d_min`, which is what the theorem asks of the occludee).
 fn box_top_hidden(horizon: &Horizon, node: &BoxNode, eye: [f64; 3], mu: f64) -> bool {
     let dz = node.zmax - eye[2];
+    let m = [
+        0.5 * (node.lo[0] + node.hi[0]) - eye[0],
+        0.5 * (node.lo[1] + node.hi[1]) - eye[1],
+    ];
+    // Half the diagonal, grown past the rounding of the centre and of the square root.
+    let r = 0.5 * (node.hi[0] - node.lo[0]).hypot(node.hi[1] - node.lo[1]);
+    let r = r * (1.0 + 1e-12) + 1e-12 * (node.lo[0].abs() + node.hi[0].abs() + node.lo[1].abs() + node.hi[1].abs());
+    if horizon.disk_hidden(m, r, dz + mu, false) {
+        return true;
+    }
     let corner = |x: f64, y: f64| -> Projected { project([x - eye[0], y - eye[1], dz], mu, NO_VERTEX) };
     let c = [
         corner(node.lo[0], node.lo[1]),
