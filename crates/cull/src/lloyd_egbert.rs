@@ -21,8 +21,8 @@
 //!   from the camera it is lower too.
 //!
 //! They are computed here, from the hierarchy's mesh, not stored in the `.tch`: a profile is exact and cheap
-//! (`precompute_time`, a few milliseconds at 100k triangles), the file stays what every method reads, and the grid
-//! can follow the hierarchy.
+//! (`precompute_time`: a fraction of a second at 100k triangles, one pass over the triangles), the file stays what
+//! every method reads, and the grid can follow the hierarchy.
 //!
 //! ## One cull (§4.1, §4.3–4.4)
 //!
@@ -40,8 +40,8 @@
 //! - *hidden* when both triangles of its box's top face (raised by `μ`) are strictly below the horizon in every
 //!   column they touch (tried first with the box's bounding disk at the face's height, which contains the face);
 //!   a hidden node is not drawn and its descendants are not looked at;
-//! - otherwise an inner node queues its children, and a leaf is drawn and the occluders on the edges of the grid
-//!   cells its box meets become pending.
+//! - otherwise an inner node queues its children, and a leaf is drawn and the occluders on the edges of its cell
+//!   become pending (over a crystal hierarchy: of the grid cells its box meets).
 //!
 //! The horizon has `4 w` columns (`w` per 90° face, the `columns` parameter): the cylindrical 360° buffer, used
 //! whatever the field of view (a view of `φ` radians spans about `w φ / (π/2)` of them, its image width).
@@ -115,6 +115,8 @@ struct BoxNode {
     zmax: f64,
     triangles: [u32; 2],
     kids: [u32; 2],
+    /// Over a quadtree: the grid cell of the node's first triangle's centroid (the leaf's own cell).
+    cell: Option<[usize; 2]>,
 }
 
 /// One occluder: a 3-D segment on or below the terrain, with the grid-corner ids of its ends ([`NO_VERTEX`] for an
@@ -284,12 +286,24 @@ impl LloydEgbertCuller {
                         zmax = zmax.max(p[2]);
                     }
                 }
+                let cell = match (h.build.grouping, h.mesh.triangles.get(s as usize)) {
+                    (Grouping::Quadtree { .. }, Some(t)) if s < e => {
+                        let [a, b, c] = t.map(|v| pos[v as usize]);
+                        let centroid = |k: usize| (a[k] + b[k] + c[k]) / 3.0;
+                        Some([
+                            grid.cells(0, centroid(0), centroid(0)).0,
+                            grid.cells(1, centroid(1), centroid(1)).0,
+                        ])
+                    }
+                    _ => None,
+                };
                 BoxNode {
                     lo,
                     hi,
                     zmax,
                     triangles: node.triangles,
                     kids: [0, 0],
+                    cell,
                 }
             })
             .collect::<Vec<_>>();
@@ -458,11 +472,14 @@ impl LloydEgbertCuller {
         out.le_scratch = s;
     }
 
-    /// Makes the occluders on the edges of the grid cells that `node`'s box meets pending (each edge once a cull).
+    /// Makes the occluders on the edges of the leaf's own cell (over a quadtree), or else of the grid cells that its
+    /// box meets, pending (each edge once a cull).
     fn queue_edges(&self, node: &BoxNode, eye: [f64; 3], s: &mut LeScratch) {
         let g = &self.grid;
-        let (x0, x1) = g.cells(0, node.lo[0], node.hi[0]);
-        let (y0, y1) = g.cells(1, node.lo[1], node.hi[1]);
+        let ((x0, x1), (y0, y1)) = match node.cell {
+            Some([ix, iy]) => ((ix, ix), (iy, iy)),
+            None => (g.cells(0, node.lo[0], node.hi[0]), g.cells(1, node.lo[1], node.hi[1])),
+        };
         let visit = |e: usize, s: &mut LeScratch| {
             if s.stamp[e] == s.round {
                 return;
