@@ -1,5 +1,6 @@
 //! End-to-end: Stewart's quadtree baseline through the CLI (`build --grouping quadtree`, `eval`, `cull --method
-//! stewart`), and the pairing of region methods with groupings.
+//! stewart`), the pairing of region methods with groupings, and Lloyd & Egbert's culler (`--method lloyd-egbert`) on
+//! both groupings.
 
 mod common;
 use common::{fails_with, mesh, ok, s};
@@ -92,12 +93,28 @@ fn quadtree_build_eval_and_cull() {
     assert!(csv.contains("\nstewart,ground,"), "{csv}");
     assert!(csv.contains("\nsafe,ground,"), "{csv}");
     assert!(!csv.contains("\nthesis,"), "{csv}");
+    // Lloyd & Egbert over the quadtree: 2 viewpoints, none with a false cull.
+    assert!(csv.contains("\nlloyd-egbert,ground,2,0,"), "{csv}");
+    assert!(csv.contains("\nlloyd-egbert,low,2,0,"), "{csv}");
 
     let eye = "0,0,100000";
     let out = ok(&["cull", s(&quad), "--method", "stewart", "--eye", eye, "--json"]);
     let c: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(c["method"], "stewart");
     ok(&["cull", s(&quad), "--method", "safe", "--eye", eye]);
+    let out = ok(&[
+        "cull",
+        s(&quad),
+        "--method",
+        "lloyd-egbert",
+        "--columns",
+        "1024",
+        "--eye",
+        eye,
+        "--json",
+    ]);
+    let c: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(c["method"], "lloyd-egbert");
     fails_with(
         &["cull", s(&quad), "--method", "thesis", "--eye", eye],
         "method `stewart`",
@@ -120,4 +137,6 @@ fn quadtree_build_eval_and_cull() {
         &["cull", s(&crystal), "--method", "stewart", "--eye", eye],
         "--grouping quadtree",
     );
+    // Lloyd & Egbert takes a crystal hierarchy too (a grid of about as many cells as leaf groups).
+    ok(&["cull", s(&crystal), "--method", "lloyd-egbert", "--eye", eye]);
 }

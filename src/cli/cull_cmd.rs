@@ -29,10 +29,12 @@ pub struct CullArgs {
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
     /// Culling method: `safe` (never culls a visible triangle), `thesis` (the thesis' region test over a crystal
-    /// hierarchy, not conservative) or `stewart` (the same test over a quadtree hierarchy, Stewart 1997).
+    /// hierarchy, not conservative), `stewart` (the same test over a quadtree hierarchy, Stewart 1997) or
+    /// `lloyd-egbert` (Lloyd & Egbert 2002: cell edges as occluders, never culls a visible triangle; meant for a
+    /// quadtree hierarchy).
     #[arg(long, default_value = "safe", value_parser = parse_method)]
     pub method: CullMethod,
-    /// The safe culler's parameters.
+    /// The horizon cullers' parameters.
     #[command(flatten)]
     pub safe: SafeArgs,
     /// Output flags.

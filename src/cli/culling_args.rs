@@ -1,4 +1,5 @@
-//! Options shared by the commands that cull: the safe culler's parameters, and files of eye positions.
+//! Options shared by the commands that cull: the horizon cullers' parameters (safe, lloyd-egbert), and files of eye
+//! positions.
 
 use std::path::Path;
 
@@ -8,10 +9,12 @@ use cull::SafeParams;
 
 use super::cull_cmd::parse_point;
 
-/// The safe culler's run-time parameters (nothing of them is stored in the `.tch`).
+/// The horizon cullers' run-time parameters (nothing of them is stored in the `.tch`): `--columns` for both `safe`
+/// and `lloyd-egbert`, the others for `safe` alone.
 #[derive(Clone, Debug, Args)]
 pub struct SafeArgs {
-    /// Safe culler: horizon columns per 90° face, a power of two from 2 to 65536 (more: finer horizon, slower).
+    /// Safe and lloyd-egbert cullers: horizon columns per 90° face, a power of two from 2 to 65536 (more: finer
+    /// horizon, slower).
     #[arg(long, default_value_t = 256, value_name = "N")]
     pub columns: usize,
     /// Safe culler: largest patch (triangles) it tests and draws below the hierarchy's leaves, 1 to 64.

@@ -39,7 +39,7 @@ pub struct EvalArgs {
     /// `--classes` and `--viewpoints`).
     #[arg(long, value_name = "FILE")]
     pub eyes: Option<PathBuf>,
-    /// The safe culler's parameters.
+    /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
     #[command(flatten)]
     pub safe: SafeArgs,
     /// Write the whole evaluation (rows and every viewpoint) as JSON here.

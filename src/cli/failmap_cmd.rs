@@ -17,7 +17,8 @@ use super::files::Outputs;
 pub struct FailmapArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
-    /// Culling method to map: `safe` (never culls a visible triangle) or `thesis` (where its false culls are).
+    /// Culling method to map: `safe` or `lloyd-egbert` (never cull a visible triangle), `thesis` or `stewart` (where
+    /// their false culls are).
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
     /// Eye height above the ground at each cell centre (m).

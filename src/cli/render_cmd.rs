@@ -19,7 +19,8 @@ use super::{Output, OutputArgs};
 pub struct RenderArgs {
     /// A hierarchy (.tch) or a terrain mesh (.obj; coloured by height, no culling).
     pub input: PathBuf,
-    /// Culling method for a viewpoint: `safe` (never culls a visible triangle) or `thesis` (not conservative).
+    /// Culling method for a viewpoint: `safe` or `lloyd-egbert` (never cull a visible triangle), `thesis` or
+    /// `stewart` (not conservative).
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
     /// The PNG to write.

@@ -16,7 +16,7 @@ use super::cull_cmd::parse_point;
 pub struct ViewArgs {
     /// A hierarchy (.tch) or a terrain mesh (.obj).
     pub input: PathBuf,
-    /// Culling method at start (switchable in the side panel): `safe` or `thesis`.
+    /// Culling method at start (switchable in the side panel): `safe`, `thesis`, `stewart` or `lloyd-egbert`.
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
     /// Initial viewpoint `x,y,z` in world coordinates (m) [default: the centre, 20 m above the ground].

@@ -18,7 +18,7 @@ use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy, HierarchyError};
 
 /// ABI version: `major << 16 | minor`. The major part changes when a function, struct or constant changes
 /// incompatibly; the minor part when something is added.
-pub const TC_ABI_VERSION: u32 = 1 << 16;
+pub const TC_ABI_VERSION: u32 = (1 << 16) | 1;
 
 /// Success.
 pub const TC_OK: i32 = 0;
@@ -41,6 +41,9 @@ pub const TC_METHOD_SAFE: u32 = 0;
 pub const TC_METHOD_THESIS: u32 = 1;
 /// Stewart's region test over a quadtree-grouped hierarchy (`tincull build --grouping quadtree`; not conservative).
 pub const TC_METHOD_STEWART: u32 = 2;
+/// Lloyd & Egbert's horizon culler (2002; conservative: never culls a visible triangle), meant for a quadtree-grouped
+/// hierarchy; it takes the default horizon of `tincull cull --method lloyd-egbert` (256 columns per face).
+pub const TC_METHOD_LLOYD_EGBERT: u32 = 3;
 
 /// A loaded hierarchy with its culler and working memory (opaque to C).
 pub struct TcCuller {
@@ -137,9 +140,13 @@ fn method(m: u32) -> Result<CullMethod, Failure> {
         TC_METHOD_SAFE => Ok(CullMethod::Safe),
         TC_METHOD_THESIS => Ok(CullMethod::Thesis),
         TC_METHOD_STEWART => Ok(CullMethod::Stewart),
+        TC_METHOD_LLOYD_EGBERT => Ok(CullMethod::LloydEgbert),
         _ => fail(
             TC_ERR_INVALID,
-            format!("unknown method {m}: expected TC_METHOD_SAFE (0), TC_METHOD_THESIS (1) or TC_METHOD_STEWART (2)"),
+            format!(
+                "unknown method {m}: expected TC_METHOD_SAFE (0), TC_METHOD_THESIS (1), TC_METHOD_STEWART (2) or \
+                 TC_METHOD_LLOYD_EGBERT (3)"
+            ),
         ),
     }
 }
@@ -356,6 +363,7 @@ pub unsafe extern "C" fn tc_info(culler: *const TcCuller, out: *mut TcInfo) -> i
                 CullMethod::Safe => TC_METHOD_SAFE,
                 CullMethod::Thesis => TC_METHOD_THESIS,
                 CullMethod::Stewart => TC_METHOD_STEWART,
+                CullMethod::LloydEgbert => TC_METHOD_LLOYD_EGBERT,
             },
             origin: h.origin,
         };

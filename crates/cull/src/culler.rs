@@ -87,6 +87,8 @@ pub struct DrawList {
     pub stats: CullStats,
     /// Working memory of the safe culler, kept between calls.
     pub(crate) scratch: crate::safe::SafeScratch,
+    /// Working memory of the Lloyd & Egbert culler, kept between calls.
+    pub(crate) le_scratch: crate::lloyd_egbert::LeScratch,
 }
 
 impl DrawList {

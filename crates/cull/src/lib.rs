@@ -8,6 +8,7 @@
 //! | culler | module | verdict "hidden" |
 //! | --- | --- | --- |
 //! | [`SafeCuller`] (the default) | [`safe`], over the conservative horizon of [`horizon`] | a theorem: every point of the culled triangles is below the terrain's horizon seen from the camera (proof in the modules' docs) |
+//! | [`LloydEgbertCuller`] (`lloyd-egbert`) | [`lloyd_egbert`], cell-edge occluders over the same horizon | the same theorem, with occluders on or below the terrain's exact profile along the cell edges and the node's bounding box as occludee |
 //! | [`Culler`] (`thesis`) | [`culler`] | the thesis' test of the camera against the precomputed sector regions; not conservative unless the regions are (see `occlusion::conservative`) |
 #![warn(missing_docs)]
 
@@ -16,6 +17,7 @@ pub mod error;
 pub mod file;
 pub mod hierarchy;
 pub mod horizon;
+pub mod lloyd_egbert;
 pub mod method;
 pub mod safe;
 pub mod sector;
@@ -24,6 +26,7 @@ pub use culler::{Camera, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
 pub use file::{FORMAT_VERSION, MAGIC, OLDEST_READABLE_VERSION};
 pub use hierarchy::{BuildInfo, Grouping, Hierarchy, Mesh, Node, StoredRegion};
+pub use lloyd_egbert::LloydEgbertCuller;
 pub use method::{AnyCuller, CullMethod};
 pub use safe::{SafeCuller, SafeParams};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};

@@ -3,7 +3,10 @@
 //! `thesis` and `stewart` are the same test — one region test per node, over the sectors that the node's bounding
 //! circle spans from the camera ([`Culler`]) — meant for different groupings: `thesis` for crystal hierarchies,
 //! `stewart` for quadtree ones (Stewart 1997, §5.3 and §5.4; [`Grouping`]). [`CullMethod::check`] refuses the
-//! other pairing, so that a report's method name always says which hierarchy was culled. `safe` works on both.
+//! other pairing, so that a report's method name always says which hierarchy was culled. `safe` works on both, and
+//! so does `lloyd-egbert` ([`LloydEgbertCuller`]): Lloyd & Egbert's method is meant for a quadtree, whose leaf cells
+//! give its occluder grid, but its verdicts do not depend on the grid, so over a crystal hierarchy it uses a grid
+//! with about as many cells as leaf groups.
 //!
 //! Stewart takes the sector range from the four corners of the quad (§5.3): the directions from the quad's points to
 //! the camera lie between those from its corners. A node's triangles are those whose centroid lies in the cell, so
@@ -15,6 +18,7 @@
 use crate::culler::{Camera, Culler, DrawList};
 use crate::error::HierarchyError;
 use crate::hierarchy::{Grouping, Hierarchy};
+use crate::lloyd_egbert::LloydEgbertCuller;
 use crate::safe::{SafeCuller, SafeParams};
 
 /// A run-time culling method over a [`Hierarchy`].
@@ -29,11 +33,19 @@ pub enum CullMethod {
     /// [`Culler`] over a quadtree hierarchy: Stewart's hierarchical visibility (1997, §5.3–5.4), one region test per
     /// cell, cells without stored regions visible (not conservative either).
     Stewart,
+    /// [`LloydEgbertCuller`]: Lloyd & Egbert's (2002) run-time horizon culling, cell edges as occluders and node
+    /// boxes as occludees over the same conservative horizon; never culls a visible triangle.
+    LloydEgbert,
 }
 
 impl CullMethod {
     /// Every method, the default first.
-    pub const ALL: [CullMethod; 3] = [CullMethod::Safe, CullMethod::Thesis, CullMethod::Stewart];
+    pub const ALL: [CullMethod; 4] = [
+        CullMethod::Safe,
+        CullMethod::Thesis,
+        CullMethod::Stewart,
+        CullMethod::LloydEgbert,
+    ];
 
     /// The method's name on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -41,11 +53,12 @@ impl CullMethod {
             CullMethod::Safe => "safe",
             CullMethod::Thesis => "thesis",
             CullMethod::Stewart => "stewart",
+            CullMethod::LloydEgbert => "lloyd-egbert",
         }
     }
 
     /// Whether the method applies to `h`: `thesis` needs a crystal hierarchy and `stewart` a quadtree one (see the
-    /// module documentation); `safe` takes both.
+    /// module documentation); `safe` and `lloyd-egbert` take both.
     pub fn check(self, h: &Hierarchy) -> Result<(), HierarchyError> {
         let grouping = h.build.grouping;
         let wrong = |needs: &str, build: &str| {
@@ -95,6 +108,8 @@ pub enum AnyCuller {
     Thesis(Culler),
     /// The region culler over a quadtree (Stewart's method).
     Stewart(Culler),
+    /// Lloyd & Egbert's horizon culler.
+    LloydEgbert(LloydEgbertCuller),
 }
 
 impl AnyCuller {
@@ -104,12 +119,14 @@ impl AnyCuller {
         AnyCuller::with_params(h, method, SafeParams::default())
     }
 
-    /// Prepares `method` over `h`; `safe` are the safe culler's parameters (the other methods have none).
+    /// Prepares `method` over `h`; `safe` are the safe culler's parameters (`lloyd-egbert` takes its horizon columns
+    /// per face from them; the other methods have none).
     pub fn with_params(h: &Hierarchy, method: CullMethod, safe: SafeParams) -> AnyCuller {
         match method {
             CullMethod::Safe => AnyCuller::Safe(SafeCuller::new(h, safe)),
             CullMethod::Thesis => AnyCuller::Thesis(Culler::new(h)),
             CullMethod::Stewart => AnyCuller::Stewart(Culler::new(h)),
+            CullMethod::LloydEgbert => AnyCuller::LloydEgbert(LloydEgbertCuller::new(h, safe.columns_per_face)),
         }
     }
 
@@ -125,6 +142,7 @@ impl AnyCuller {
             AnyCuller::Safe(_) => CullMethod::Safe,
             AnyCuller::Thesis(_) => CullMethod::Thesis,
             AnyCuller::Stewart(_) => CullMethod::Stewart,
+            AnyCuller::LloydEgbert(_) => CullMethod::LloydEgbert,
         }
     }
 
@@ -133,6 +151,7 @@ impl AnyCuller {
         match self {
             AnyCuller::Safe(c) => c.cull_into(camera, out),
             AnyCuller::Thesis(c) | AnyCuller::Stewart(c) => c.cull_into(camera, out),
+            AnyCuller::LloydEgbert(c) => c.cull_into(camera, out),
         }
     }
 

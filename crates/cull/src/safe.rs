@@ -42,12 +42,12 @@
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
 use crate::horizon::{Horizon, Projected, project};
-use crate::sector::azimuth;
+use crate::sector::circle_outside_view;
 
 /// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -391,7 +391,7 @@ impl SafeCuller {
             let _ = dmin_key;
             tested += 1;
             if let Some((yaw, half_fov)) = frustum
-                && outside_view(node, eye, dist, yaw, half_fov)
+                && outside_view(node, eye, yaw, half_fov)
             {
                 out.stats.culled_by_frustum += 1;
                 continue;
@@ -466,12 +466,7 @@ impl SafeCuller {
 }
 
 /// Whether every direction from the eye to the node's circle misses the horizontal view `yaw ± half_fov`.
-fn outside_view(node: &TreeNode, eye: [f64; 3], dist: f64, yaw: f64, half_fov: f64) -> bool {
-    if dist <= node.radius {
-        return false;
-    }
-    let half = (node.radius / dist).min(1.0).asin() * (1.0 + 1e-12) + 1e-12;
-    let to_node = azimuth(node.centre[0] - eye[0], node.centre[1] - eye[1]);
-    let gap = (to_node - yaw + PI).rem_euclid(TAU) - PI;
-    gap.abs() > half_fov + half
+fn outside_view(node: &TreeNode, eye: [f64; 3], yaw: f64, half_fov: f64) -> bool {
+    let centre = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
+    circle_outside_view(centre, node.radius, yaw, half_fov)
 }

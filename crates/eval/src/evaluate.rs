@@ -39,8 +39,9 @@ use pipeline::{per_triangle_hierarchy, triangle_regions};
 
 /// The methods an evaluation compares, in report order. The region test of a hierarchy is named `thesis` over crystal
 /// groups and `stewart` over a quadtree ([`CullMethod::regions_for`]).
-pub const METHODS: [&str; 7] = [
+pub const METHODS: [&str; 8] = [
     "safe",
+    "lloyd-egbert",
     "safe_regions",
     "thesis",
     "stewart",
@@ -324,6 +325,11 @@ pub fn standard_methods<'a>(
         Method {
             name: "safe",
             culler: Some(AnyCuller::with_params(h, CullMethod::Safe, safe)),
+            order,
+        },
+        Method {
+            name: CullMethod::LloydEgbert.name(),
+            culler: Some(AnyCuller::with_params(h, CullMethod::LloydEgbert, safe)),
             order,
         },
         Method {

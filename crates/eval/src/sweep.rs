@@ -465,7 +465,7 @@ mod tests {
         );
         // evaluate() still runs end to end on the exported hierarchy.
         let e = evaluate(&b.hierarchy, &htin, &opts, &|_, _| {}).unwrap();
-        // safe, safe_regions, thesis, per_triangle, frustum_only, none.
-        assert_eq!(e.rows.len(), 6 * 3);
+        // safe, lloyd-egbert, safe_regions, thesis, per_triangle, frustum_only, none.
+        assert_eq!(e.rows.len(), 7 * 3);
     }
 }

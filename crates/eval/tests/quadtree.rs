@@ -41,12 +41,19 @@ fn jacksboro_2k_quadtree_is_safe_and_scored_as_stewart() {
         methods.dedup();
         assert_eq!(
             methods,
-            ["safe", "safe_regions", "stewart", "frustum_only", "none"],
+            [
+                "safe",
+                "lloyd-egbert",
+                "safe_regions",
+                "stewart",
+                "frustum_only",
+                "none"
+            ],
             "{s}x{k} depth {depth}"
         );
         for v in &e.viewpoints {
             for (method, m, _) in &v.methods {
-                if method == "safe" || method == "safe_regions" {
+                if method == "safe" || method == "lloyd-egbert" || method == "safe_regions" {
                     assert_eq!(m.false_culls, 0, "{s}x{k} depth {depth}: false culls from {:?}", v.eye);
                 }
             }
