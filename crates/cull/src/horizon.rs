@@ -141,6 +141,14 @@ pub(crate) struct Projected {
     pub face: [Proj; FACES],
 }
 
+/// What writing the triangles or edges over a set of projected vertices can reach, per face: the columns their `u`
+/// span (`[1, 0]` for none) and their highest lowered `v`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach {
+    columns: [[u32; 2]; FACES],
+    v: [f64; FACES],
+}
+
 /// No vertex: covers that end here never meet another one exactly.
 pub(crate) const NO_VERTEX: u32 = u32::MAX;
 
@@ -230,6 +238,8 @@ struct Top {
     /// Mesh vertices at `ua` and `uc`.
     ida: u32,
     idc: u32,
+    /// A segment: `top` is `AC` alone.
+    segment: bool,
 }
 
 impl Top {
@@ -259,6 +269,7 @@ impl Top {
             uc: c.0,
             ida: a.2,
             idc: c.2,
+            segment: false,
         })
     }
 
@@ -276,6 +287,7 @@ impl Top {
             uc: c.0,
             ida: a.2,
             idc: c.2,
+            segment: true,
         })
     }
 
@@ -370,26 +382,69 @@ impl Horizon {
         }
     }
 
+    /// Whether `v` is strictly below the bar ([`Horizon::bar`]) of every column `j0..=j1` of face `k`.
+    #[inline(always)]
+    fn below_all(&self, k: usize, j0: usize, j1: usize, v: f64, with_potential: bool) -> bool {
+        let base = k * self.w;
+        if with_potential {
+            (base + j0..=base + j1).all(|c| v < self.h[c].max(self.potential[c]))
+        } else {
+            self.h[base + j0..=base + j1].iter().all(|&h| v < h)
+        }
+    }
+
     /// Raises the potential of the columns that the projected vertices `verts` span in each face to their highest
     /// lowered `v` there: no triangle or edge over these vertices can write more (its writes are lower bounds of its
     /// top, whose highest point is a vertex).
+    #[allow(dead_code)] // the safe culler keeps the reach ([`Horizon::raise_potential_reach`])
     pub(crate) fn raise_potential(&mut self, verts: &[Projected]) {
-        for k in 0..FACES {
-            let (mut u_min, mut u_max, mut v_max) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
-            for p in verts.iter().filter(|p| p.mask & (1 << k) != 0) {
-                let q = p.face[k];
-                u_min = u_min.min(q.u);
-                u_max = u_max.max(q.u);
-                v_max = v_max.max(q.lo);
-            }
-            let Some([j0, j1]) = self.columns(u_min, u_max) else {
-                continue;
-            };
-            let base = k * self.w;
-            for p in &mut self.potential[base + j0..=base + j1] {
-                *p = p.max(v_max);
+        self.raise_potential_reach(verts);
+    }
+
+    /// [`Horizon::raise_potential`], returning per face the columns raised and the value raised to.
+    pub(crate) fn raise_potential_reach(&mut self, verts: &[Projected]) -> Reach {
+        let mut u_min = [f64::INFINITY; FACES];
+        let mut u_max = [f64::NEG_INFINITY; FACES];
+        let mut v_max = [f64::NEG_INFINITY; FACES];
+        for p in verts {
+            for k in 0..FACES {
+                if p.mask & (1 << k) != 0 {
+                    let q = p.face[k];
+                    u_min[k] = u_min[k].min(q.u);
+                    u_max[k] = u_max[k].max(q.u);
+                    v_max[k] = v_max[k].max(q.lo);
+                }
             }
         }
+        let mut reach = Reach {
+            columns: [[1, 0]; FACES],
+            v: v_max,
+        };
+        for k in 0..FACES {
+            let Some([j0, j1]) = self.columns(u_min[k], u_max[k]) else {
+                continue;
+            };
+            reach.columns[k] = [j0 as u32, j1 as u32];
+            let base = k * self.w;
+            for p in &mut self.potential[base + j0..=base + j1] {
+                *p = p.max(v_max[k]);
+            }
+        }
+        reach
+    }
+
+    /// Whether writing triangles or edges over the vertices that gave `reach` could raise a column: not when their
+    /// highest lowered vertex is at most `H` in every column they span, in every face (a write is a lower bound of a
+    /// `top`, whose highest point is a vertex; and a partial cover pairs with another one to the lower of the two).
+    pub(crate) fn can_raise(&self, reach: &Reach) -> bool {
+        (0..FACES).any(|k| {
+            let [j0, j1] = reach.columns[k];
+            let base = k * self.w;
+            j0 <= j1
+                && !self.h[base + j0 as usize..=base + j1 as usize]
+                    .iter()
+                    .all(|&h| reach.v[k] <= h)
+        })
     }
 
     /// The columns of one face that `[u_min, u_max]` meets (none when it misses the face or is empty).
@@ -489,12 +544,24 @@ impl Horizon {
         let (first_c, end_c) = (first.clamp(0, w), end.clamp(0, w));
         let base = k * self.w;
         if first_c < end_c {
-            let mut prev = top.low(self.boundary(first_c as usize));
-            for j in first_c..end_c {
-                let next = top.low(self.boundary(j as usize + 1));
-                let slot = &mut self.h[base + j as usize];
-                *slot = slot.max(prev.min(next));
-                prev = next;
+            if top.segment {
+                // One line: its value at the boundaries, lowered by its margin.
+                let (e, h) = (&top.ac, &mut self.h);
+                let mut prev = e.at(-1.0 + first_c as f64 * self.step) - e.margin;
+                for j in first_c..end_c {
+                    let next = e.at(-1.0 + (j + 1) as f64 * self.step) - e.margin;
+                    let slot = &mut h[base + j as usize];
+                    *slot = slot.max(prev.min(next));
+                    prev = next;
+                }
+            } else {
+                let mut prev = top.low(self.boundary(first_c as usize));
+                for j in first_c..end_c {
+                    let next = top.low(self.boundary(j as usize + 1));
+                    let slot = &mut self.h[base + j as usize];
+                    *slot = slot.max(prev.min(next));
+                    prev = next;
+                }
             }
         }
         // Partial columns at both ends (only when the triangle does not fit inside one column).
@@ -602,8 +669,7 @@ impl Horizon {
                 let last = self.w as isize - 1;
                 let j0 = floor(self.column_of(lo_u)).clamp(0, last) as usize;
                 let j1 = floor(self.column_of(hi_u)).clamp(0, last) as usize;
-                let base = k * self.w;
-                if (base + j0..=base + j1).all(|c| v_max < self.bar(c, with_potential)) {
+                if self.below_all(k, j0, j1, v_max, with_potential) {
                     continue;
                 }
                 if j0 == j1 {
@@ -687,8 +753,7 @@ impl Horizon {
             let last = self.w as isize - 1;
             let j0 = floor(self.column_of(lo_u)).clamp(0, last) as usize;
             let j1 = floor(self.column_of(hi_u)).clamp(0, last) as usize;
-            let base = k * self.w;
-            if !(base + j0..=base + j1).all(|c| v_max < self.bar(c, with_potential)) {
+            if !self.below_all(k, j0, j1, v_max, with_potential) {
                 return false;
             }
         }
@@ -765,8 +830,7 @@ impl Horizon {
             let last = self.w as isize - 1;
             let j0 = floor(self.column_of(u_lo.max(-1.0))).clamp(0, last) as usize;
             let j1 = floor(self.column_of(u_hi.min(1.0))).clamp(0, last) as usize;
-            let base = k * self.w;
-            if !(base + j0..=base + j1).all(|c| v < self.bar(c, with_potential)) {
+            if !self.below_all(k, j0, j1, v, with_potential) {
                 return false;
             }
         }
@@ -870,6 +934,56 @@ mod tests {
         // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
         assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu, false));
         assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0, false));
+    }
+
+    #[test]
+    fn a_ridge_of_segments_hides_what_is_below_it_and_no_more() {
+        let mu = 1e-6;
+        let mut h = Horizon::new(64);
+        // A ridge line across face 0 at x = 10, 5 m above the camera, as two edges meeting at a vertex.
+        let a = project([10.0, -50.0, 5.0], mu, 0);
+        let b = project([10.0, 0.5, 5.0], mu, 1);
+        let c = project([10.0, 50.0, 5.0], mu, 2);
+        h.write_segment([&a, &b]);
+        h.write_segment([&b, &c]);
+        assert!(
+            h.values()[..64].iter().all(|&v| v > 0.49 && v < 0.5),
+            "{:?}",
+            &h.values()[..64]
+        );
+        let tri = |p: [[f64; 3]; 3]| p.map(|d| project(d, mu, NO_VERTEX));
+        // Behind it and below the sight line: hidden, by the vertex bound and triangle by triangle.
+        let behind = tri([[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]]);
+        assert!(h.triangle_hidden([&behind[0], &behind[1], &behind[2]], false));
+        assert!(h.vertices_hidden(&behind, false));
+        assert!(!h.vertex_above(&behind, false));
+        // One vertex above the sight line: visible in every test.
+        let above = tri([[20.0, -1.0, 10.5], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]]);
+        assert!(!h.triangle_hidden([&above[0], &above[1], &above[2]], false));
+        assert!(!h.vertices_hidden(&above, false));
+        assert!(h.vertex_above(&above, false));
+        // A set of vertices reaching past the ridge's end: not hidden.
+        let aside = tri([[20.0, 0.0, 0.0], [30.0, 70.0, 0.0], [25.0, 60.0, 0.0]]);
+        assert!(!h.vertices_hidden(&aside, false));
+    }
+
+    #[test]
+    fn a_vertex_bound_spanning_three_faces_is_not_trusted() {
+        use std::f64::consts::FRAC_PI_4;
+        let mu = 1e-6;
+        let mut h = Horizon::new(8);
+        // A high wall all around the camera, its corners between the faces' diagonals.
+        for k in 0..8 {
+            let (a0, a1) = ((k as f64 + 0.5) * FRAC_PI_4, (k as f64 + 1.5) * FRAC_PI_4);
+            let p = project([5.0 * a0.cos(), 5.0 * a0.sin(), 100.0], mu, k);
+            let q = project([5.0 * a1.cos(), 5.0 * a1.sin(), 100.0], mu, (k + 1) % 8);
+            h.write_segment([&p, &q]);
+        }
+        // Low vertices behind it in the wedges of faces 0, 1 and 2: three wedges are more than a set of triangles
+        // that do not contain the camera is known to stay within, so the bound is not used; two adjacent ones are.
+        let verts = [[20.0, 10.0, 0.0], [10.0, 20.0, 0.0], [-20.0, 10.0, 0.0]].map(|d| project(d, mu, NO_VERTEX));
+        assert!(!h.vertices_hidden(&verts, false));
+        assert!(h.vertices_hidden(&verts[..2], false));
     }
 
     #[test]

@@ -56,7 +56,7 @@ use std::f64::consts::{PI, TAU};
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
-use crate::horizon::{Horizon, Projected, project};
+use crate::horizon::{Horizon, Projected, Reach, project};
 use crate::sector::azimuth;
 
 /// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
@@ -105,8 +105,9 @@ pub struct SafeScratch {
     pending: BinaryHeap<Reverse<(u64, u32, u32)>>,
     projected: Vec<Projected>,
     drawn: Vec<[u32; 2]>,
-    /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected)`.
-    eligible: Vec<(u32, u32)>,
+    /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected, what it can
+    /// write)`.
+    eligible: Vec<(u32, u32, Reach)>,
 }
 
 impl PartialEq for SafeScratch {
@@ -130,6 +131,8 @@ pub struct SafeCuller {
     /// Patch edges `[a, b, t1, t2]` (local vertices and triangles): `a → b` runs along the winding of triangle `t1`,
     /// `t2` is the patch's other triangle on the edge ([`NO_TRIANGLE`] on the patch boundary).
     edges: Vec<[u8; 4]>,
+    /// Normal `(b − a) × (c − a)` of every entry of `tris`.
+    normals: Vec<[f64; 3]>,
     triangles: u32,
     origin: [f64; 3],
     extent: f64,
@@ -164,6 +167,7 @@ impl SafeCuller {
             vids: Vec::new(),
             tris: Vec::new(),
             edges: Vec::new(),
+            normals: Vec::new(),
             triangles: h.mesh.triangles.len() as u32,
             origin: h.origin,
             extent: 0.0,
@@ -258,6 +262,16 @@ impl SafeCuller {
                 };
                 tri[k] = at;
             }
+            let [a, b, c] = t.map(|v| h.mesh.positions[v as usize]);
+            let (u, w) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+            );
+            self.normals.push([
+                u[1] * w[2] - u[2] * w[1],
+                u[2] * w[0] - u[0] * w[2],
+                u[0] * w[1] - u[1] * w[0],
+            ]);
             self.tris.push(tri);
         }
         // The patch's edges, each once, with the triangles on both sides.
@@ -327,31 +341,33 @@ impl SafeCuller {
     /// with a patch triangle on each side of it in the image (both facing the camera, or both facing away) is
     /// covered above by one of them, so only the patch's boundary and silhouette edges with the patch below them
     /// are written. Which edges are written only decides how much is culled (every TIN edge lies on the terrain).
+    /// A patch whose highest lowered vertex is at most `H` in every column it spans is skipped: it could raise none.
     fn flush(
         &self,
         horizon: &mut Horizon,
-        eligible: &mut Vec<(u32, u32)>,
+        eligible: &mut Vec<(u32, u32, Reach)>,
         projected: &[Projected],
         eye: [f64; 3],
         written: &mut usize,
     ) {
         let mut facing = [0.0f64; 64];
-        for &(patch, at) in eligible.iter() {
-            let p = &self.nodes[patch as usize];
-            let base = at as usize;
+        for (patch, at, reach) in eligible.iter() {
+            // Nothing of a patch that cannot raise any column needs looking at.
+            if !horizon.can_raise(reach) {
+                continue;
+            }
+            let p = &self.nodes[*patch as usize];
+            let base = *at as usize;
             let verts = &self.verts[p.verts[0] as usize..p.verts[1] as usize];
             let off = |i: u8| {
                 let v = verts[i as usize];
                 [v[0] - eye[0], v[1] - eye[1], v[2] - eye[2]]
             };
-            for (f, t) in facing
-                .iter_mut()
-                .zip(&self.tris[p.tris[0] as usize..p.tris[1] as usize])
-            {
-                let (a, b, c) = (off(t[0]), off(t[1]), off(t[2]));
+            let tris = p.tris[0] as usize..p.tris[1] as usize;
+            for ((f, t), n) in facing.iter_mut().zip(&self.tris[tris.clone()]).zip(&self.normals[tris]) {
                 // Negative when the camera sees the upper side of the (counter-clockwise) triangle.
-                *f = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                    + a[2] * (b[0] * c[1] - b[1] * c[0]);
+                let a = off(t[0]);
+                *f = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
             }
             for e in &self.edges[p.edges[0] as usize..p.edges[1] as usize] {
                 if *written >= self.params.occluder_budget {
@@ -447,8 +463,8 @@ impl SafeCuller {
                 scratch.pending.pop();
                 let p = &self.nodes[patch as usize];
                 let n = (p.verts[1] - p.verts[0]) as usize;
-                horizon.raise_potential(&scratch.projected[at as usize..at as usize + n]);
-                scratch.eligible.push((patch, at));
+                let reach = horizon.raise_potential_reach(&scratch.projected[at as usize..at as usize + n]);
+                scratch.eligible.push((patch, at, reach));
             }
             let _ = dmin_key;
             tested += 1;
