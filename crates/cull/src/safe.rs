@@ -66,7 +66,7 @@ pub struct SafeParams {
     pub columns_per_face: usize,
     /// Largest patch (triangles) below the hierarchy's leaves, at most 64.
     pub patch: usize,
-    /// Most occluder triangles written into the horizon per cull, nearest first: bounds the cost of views that
+    /// Most occluder edges written into the horizon per cull, nearest first: bounds the cost of views that
     /// see much of the terrain (fewer occluders only cull less, never wrongly).
     pub occluder_budget: usize,
 }
