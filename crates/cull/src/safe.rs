@@ -21,10 +21,10 @@
 //! are written decides only how much is culled: every TIN edge lies on the terrain, so any of them is an occluder
 //! (an orientation computed wrongly by rounding writes an edge too many or too few, nothing worse).
 //!
-//! They are written lazily: each eligible patch raises a per-column bound `P` of what it could write (its highest lowered vertex over the
-//! columns its vertices span), and the eligible patches are written only when a test would pass against `max(H, P)`
-//! but not against `H` alone. Writing fewer occluders only makes the horizon lower, so this changes how much is
-//! culled, never whether a verdict is right. A node is then
+//! They are written lazily: each eligible patch raises a per-column bound `P` of what it could write (its highest
+//! lowered vertex over the columns its vertices span), and the eligible patches are written only when a test would
+//! pass against `max(H, P)` but not against `H` alone. Writing fewer occluders only makes the horizon lower, so this
+//! changes how much is culled, never whether a verdict is right. A node is then
 //!
 //! - *visible* if the camera's x,y is inside its circle;
 //! - *hidden* if its bounding cylinder (circle, height up to its highest vertex plus `μ`) is below the horizon in
