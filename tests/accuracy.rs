@@ -91,13 +91,13 @@ fn synth_5k_accuracy_is_pinned() {
 }
 
 const JACKSBORO_2K: &[Row] = &[
-    ("safe", "ground", 0, 0, 0, Some(0.867257)),
-    ("safe", "low", 0, 0, 0, Some(0.808334)),
-    ("safe", "high", 0, 0, 0, Some(0.589226)),
-    ("safe", "valley", 0, 0, 0, Some(0.927036)),
-    ("safe", "ridge", 0, 0, 0, Some(0.707004)),
-    ("safe", "sky", 0, 0, 0, Some(0.222262)),
-    ("safe", "all", 0, 0, 0, Some(0.686853)),
+    ("safe", "ground", 0, 0, 0, Some(0.862222)),
+    ("safe", "low", 0, 0, 0, Some(0.805472)),
+    ("safe", "high", 0, 0, 0, Some(0.587339)),
+    ("safe", "valley", 0, 0, 0, Some(0.917902)),
+    ("safe", "ridge", 0, 0, 0, Some(0.710339)),
+    ("safe", "sky", 0, 0, 0, Some(0.223777)),
+    ("safe", "all", 0, 0, 0, Some(0.684509)),
     ("lloyd-egbert", "ground", 0, 0, 0, Some(0.067256)),
     ("lloyd-egbert", "low", 0, 0, 0, Some(0.026827)),
     ("lloyd-egbert", "high", 0, 0, 0, Some(0.010838)),
@@ -143,13 +143,13 @@ const JACKSBORO_2K: &[Row] = &[
 ];
 
 const JACKSBORO_10K: &[Row] = &[
-    ("safe", "ground", 0, 0, 0, Some(0.972316)),
-    ("safe", "low", 0, 0, 0, Some(0.857956)),
-    ("safe", "high", 0, 0, 0, Some(0.688319)),
-    ("safe", "valley", 0, 0, 0, Some(0.977564)),
-    ("safe", "ridge", 0, 0, 0, Some(0.797520)),
-    ("safe", "sky", 0, 0, 0, Some(0.424773)),
-    ("safe", "all", 0, 0, 0, Some(0.786408)),
+    ("safe", "ground", 0, 0, 0, Some(0.954451)),
+    ("safe", "low", 0, 0, 0, Some(0.855257)),
+    ("safe", "high", 0, 0, 0, Some(0.687924)),
+    ("safe", "valley", 0, 0, 0, Some(0.974944)),
+    ("safe", "ridge", 0, 0, 0, Some(0.795553)),
+    ("safe", "sky", 0, 0, 0, Some(0.422250)),
+    ("safe", "all", 0, 0, 0, Some(0.781730)),
     ("lloyd-egbert", "ground", 0, 0, 0, Some(0.266633)),
     ("lloyd-egbert", "low", 0, 0, 0, Some(0.244302)),
     ("lloyd-egbert", "high", 0, 0, 0, Some(0.086986)),
@@ -195,13 +195,13 @@ const JACKSBORO_10K: &[Row] = &[
 ];
 
 const SYNTH_5K: &[Row] = &[
-    ("safe", "ground", 0, 0, 0, Some(0.884338)),
-    ("safe", "low", 0, 0, 0, Some(0.815159)),
-    ("safe", "high", 0, 0, 0, Some(0.484035)),
-    ("safe", "valley", 0, 0, 0, Some(0.927130)),
-    ("safe", "ridge", 0, 0, 0, Some(0.776697)),
-    ("safe", "sky", 0, 0, 0, Some(0.573380)),
-    ("safe", "all", 0, 0, 0, Some(0.743457)),
+    ("safe", "ground", 0, 0, 0, Some(0.876612)),
+    ("safe", "low", 0, 0, 0, Some(0.815598)),
+    ("safe", "high", 0, 0, 0, Some(0.484146)),
+    ("safe", "valley", 0, 0, 0, Some(0.928115)),
+    ("safe", "ridge", 0, 0, 0, Some(0.778025)),
+    ("safe", "sky", 0, 0, 0, Some(0.571869)),
+    ("safe", "all", 0, 0, 0, Some(0.742394)),
     ("lloyd-egbert", "ground", 0, 0, 0, Some(0.138135)),
     ("lloyd-egbert", "low", 0, 0, 0, Some(0.110298)),
     ("lloyd-egbert", "high", 0, 0, 0, Some(0.000000)),

@@ -20,7 +20,7 @@ pub struct SafeArgs {
     /// Safe culler: largest patch (triangles) it tests and draws below the hierarchy's leaves, 1 to 64.
     #[arg(long, default_value_t = 16, value_name = "N")]
     pub patch: usize,
-    /// Safe culler: most occluder triangles written per cull, nearest first (bounds the cost of views that see
+    /// Safe culler: most occluder edges written per cull, nearest first (bounds the cost of views that see
     /// much terrain; fewer occluders cull less, never wrongly). Unlimited by default.
     #[arg(long, value_name = "N")]
     pub occluder_budget: Option<usize>,

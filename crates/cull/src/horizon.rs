@@ -43,6 +43,10 @@
 //! the two image edges that span `u` (the long edge `AC` and `AB` or `BC`); it is a point of the occluder. `top` is concave on `[u_A, u_C]` (the
 //! upper boundary of a triangle), so its minimum over an interval is at one of the interval's ends.
 //!
+//! A TIN edge lowered by `μ` is an occluder too (the terrain along an edge is exactly the segment between its end
+//! vertices): a degenerate triangle `A C` whose image is the segment of its projected ends, with `top` that segment
+//! (linear, so concave) and no middle vertex ([`Horizon::write_segment`]). Everything below holds for it unchanged.
+//!
 //! - *Full columns*: for a column with `[a_j, a_{j+1}] ⊆ [u_A, u_C]`, `H_j ← max(H_j, min(top(a_j), top(a_{j+1})))`.
 //! - *Partial columns*: the column containing `u_A` is covered by the occluder on `[u_A, a_{j+1}]` with the lower
 //!   bound `min(top(u_A), top(a_{j+1}))`, and the column containing `u_C` on `[a_j, u_C]`. Such a right-anchored
@@ -57,6 +61,16 @@
 //! largest of `top` at the two ends of `[max(a_j, u_A), min(a_{j+1}, u_C)]` and at the middle vertex's `u` when
 //! inside (the only corner of the concave `top`). A triangle that touches a face in which it cannot be projected
 //! is not hidden.
+//!
+//! *Vertex bound.* Every point of the image is a convex combination of the projected vertices (P1), so its `u` lies in
+//! `[min u, max u]` of the vertices and its `v` is at most their largest `v`. Hence the triangle is hidden in face `k`
+//! if that largest `v` is below `H_j` in every column `j` meeting `[min u, max u]`; this is tried first (no division),
+//! and when the vertices lie in one column it is all that `top` could tell, so the triangle is then left visible. For
+//! a set of triangles at once (a patch, [`Horizon::vertices_hidden`]) take the range and the maximum over all their
+//! vertices: if the union of the vertices' wedges is one face or two adjacent ones and every vertex has `f > 0` in
+//! each of them, every triangle of the set meets the conditions above with its own (smaller) range and maximum, so
+//! the set is hidden when the bound over all vertices is below the horizon in every column of each face. A vertex
+//! with a NaN `u` or `v` makes the answer "not hidden".
 //!
 //! A disk of radius `r` around `m` (x,y) with every point at most at height `z_max` (a node's bounding cylinder) whose
 //! distance `δ = |m − c|` exceeds `r`: in face `k`, its points inside the face's wedge have `f ≥ f_lo =
@@ -79,8 +93,10 @@
 //!   from the operands' errors and its own four operations, is below `8ε (|P.v| + |Q.v| + |κ| (|P.u| + |Q.u| + 2))`
 //!   for `u` within `[−1, 1]` and the edge; it is moved by `REL` times that sum;
 //! - column indices: `u` values carry a relative error below `3ε`; full and partial covers are shrunk and occludee
-//!   spans widened by `REL (1 + |u|)` before they are turned into columns; column boundaries `a_j` are exact dyadic
-//!   numbers;
+//!   spans (of a triangle, or of a set of vertices for the vertex bound) widened by `REL (1 + |u|)` before they are
+//!   turned into columns; column boundaries `a_j` are exact dyadic numbers;
+//! - the vertex bound compares the vertices' raised values `hi` themselves (each above the exact `v` of the raised
+//!   vertex, see above) with `H_j`: no further arithmetic;
 //! - disks: `f_lo` is decreased and `f_hi` increased by `REL` relative; the tangent values `u±` are computed from a
 //!   square root and a division, each correctly rounded, and moved outward by `1e-9 (1 + |u|)` (also covering the
 //!   cancellation in `m_f² − r²`, which is why a disk with `m_f < (1 + 1e-6) r` takes the whole face).
@@ -119,8 +135,18 @@ pub(crate) struct Proj {
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Projected {
     pub mask: u8,
+    /// [`wedge_of`] this vertex.
+    pub wedge: u8,
     pub id: u32,
     pub face: [Proj; FACES],
+}
+
+/// What writing the triangles or edges over a set of projected vertices can reach, per face: the columns their `u`
+/// span (`[1, 0]` for none) and their highest lowered `v`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach {
+    columns: [[u32; 2]; FACES],
+    v: [f64; FACES],
 }
 
 /// No vertex: covers that end here never meet another one exactly.
@@ -149,6 +175,7 @@ pub(crate) fn project(d: [f64; 3], mu: f64, id: u32) -> Projected {
             };
         }
     }
+    out.wedge = wedge_of(&out);
     out
 }
 
@@ -162,6 +189,7 @@ struct Edge {
 }
 
 impl Edge {
+    #[inline(always)]
     fn new(p: (f64, f64), q: (f64, f64)) -> Option<Edge> {
         let (p, q) = if p.0 <= q.0 { (p, q) } else { (q, p) };
         if q.0 <= p.0 {
@@ -185,69 +213,102 @@ impl Edge {
     }
 }
 
+/// An edge that is never there: its value is `−∞` everywhere (for a triangle whose short edges both lack width).
+const NO_EDGE: Edge = Edge {
+    u0: 0.0,
+    v0: f64::NEG_INFINITY,
+    slope: 0.0,
+    margin: 0.0,
+};
+
 /// A projected triangle's upper boundary `top(u)` over `[ua, uc]`, with its middle vertex's `u`. With the vertices
 /// sorted by `u` as `A, B, C`, the vertical section at `u` lies between the long edge `AC` and the edge `AB`
-/// (`u ≤ u_B`) or `BC` (`u ≥ u_B`), so `top(u)` is the larger of those two edges' values.
+/// (`u ≤ u_B`) or `BC` (`u ≥ u_B`), so `top(u)` is the larger of those two edges' values. Where one short edge has no
+/// width the other one stands for both (`left` and `right` below); where neither has, only `AC` counts ([`NO_EDGE`]).
 #[derive(Clone, Copy, Debug)]
 struct Top {
     ac: Edge,
-    ab: Option<Edge>,
-    bc: Option<Edge>,
+    /// The short edge used up to `u_B` (`AB`, or `BC` where `AB` has no width).
+    left: Edge,
+    /// The short edge used beyond `u_B` (`BC`, or `AB` where `BC` has no width).
+    right: Edge,
     ua: f64,
     ub: f64,
     uc: f64,
     /// Mesh vertices at `ua` and `uc`.
     ida: u32,
     idc: u32,
+    /// A segment: `top` is `AC` alone.
+    segment: bool,
 }
 
 impl Top {
+    #[inline(always)]
     fn new(p: [(f64, f64, u32); 3]) -> Option<Top> {
-        let mut q = p;
-        q.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        let [a, b, c] = q;
+        // Sorting network on `u` (NaNs end up anywhere; `Edge::new` then refuses the long edge).
+        let [mut a, mut b, mut c] = p;
+        if b.0 < a.0 {
+            std::mem::swap(&mut a, &mut b);
+        }
+        if c.0 < b.0 {
+            std::mem::swap(&mut b, &mut c);
+        }
+        if b.0 < a.0 {
+            std::mem::swap(&mut a, &mut b);
+        }
         let (a2, b2, c2) = ((a.0, a.1), (b.0, b.1), (c.0, c.1));
         let ac = Edge::new(a2, c2)?;
+        let ab = Edge::new(a2, b2);
+        let bc = Edge::new(b2, c2);
         Some(Top {
             ac,
-            ab: Edge::new(a2, b2),
-            bc: Edge::new(b2, c2),
+            left: ab.or(bc).unwrap_or(NO_EDGE),
+            right: bc.or(ab).unwrap_or(NO_EDGE),
             ua: a.0,
             ub: b.0,
             uc: c.0,
             ida: a.2,
             idc: c.2,
+            segment: false,
+        })
+    }
+
+    /// A lowered segment `P Q` as a degenerate triangle: `top` is the segment itself (`AC`), with no short edges.
+    #[inline(always)]
+    fn segment(p: (f64, f64, u32), q: (f64, f64, u32)) -> Option<Top> {
+        let (a, c) = if q.0 < p.0 { (q, p) } else { (p, q) };
+        let ac = Edge::new((a.0, a.1), (c.0, c.1))?;
+        Some(Top {
+            ac,
+            left: NO_EDGE,
+            right: NO_EDGE,
+            ua: a.0,
+            ub: c.0,
+            uc: c.0,
+            ida: a.2,
+            idc: c.2,
+            segment: true,
         })
     }
 
     /// The short edge spanning `u` (`AB` up to `u_B`, then `BC`; the other one where one of them has no width).
     #[inline(always)]
-    fn piece(&self, u: f64) -> Option<Edge> {
-        if u <= self.ub {
-            self.ab.or(self.bc)
-        } else {
-            self.bc.or(self.ab)
-        }
+    fn piece(&self, u: f64) -> &Edge {
+        if u <= self.ub { &self.left } else { &self.right }
     }
 
     /// A lower bound of `top(u)` for `u` in `[ua, uc]` (occluders).
     #[inline(always)]
     fn low(&self, u: f64) -> f64 {
-        let mut v = self.ac.at(u) - self.ac.margin;
-        if let Some(e) = self.piece(u) {
-            v = v.max(e.at(u) - e.margin);
-        }
-        v
+        let e = self.piece(u);
+        (self.ac.at(u) - self.ac.margin).max(e.at(u) - e.margin)
     }
 
     /// An upper bound of `top(u)` for `u` in `[ua, uc]` (occludees).
     #[inline(always)]
     fn high(&self, u: f64) -> f64 {
-        let mut v = self.ac.at(u) + self.ac.margin;
-        if let Some(e) = self.piece(u) {
-            v = v.max(e.at(u) + e.margin);
-        }
-        v
+        let e = self.piece(u);
+        (self.ac.at(u) + self.ac.margin).max(e.at(u) + e.margin)
     }
 }
 
@@ -321,29 +382,81 @@ impl Horizon {
         }
     }
 
+    /// Whether `v` is strictly below the bar ([`Horizon::bar`]) of every column `j0..=j1` of face `k`.
+    #[inline(always)]
+    fn below_all(&self, k: usize, j0: usize, j1: usize, v: f64, with_potential: bool) -> bool {
+        let base = k * self.w;
+        if with_potential {
+            (base + j0..=base + j1).all(|c| v < self.h[c].max(self.potential[c]))
+        } else {
+            self.h[base + j0..=base + j1].iter().all(|&h| v < h)
+        }
+    }
+
     /// Raises the potential of the columns that the projected vertices `verts` span in each face to their highest
-    /// lowered `v` there: no triangle over these vertices can write more (its writes are lower bounds of its top,
-    /// whose highest point is a vertex).
+    /// lowered `v` there: no triangle or edge over these vertices can write more (its writes are lower bounds of its
+    /// top, whose highest point is a vertex).
+    #[allow(dead_code)] // the safe culler keeps the reach ([`Horizon::raise_potential_reach`])
     pub(crate) fn raise_potential(&mut self, verts: &[Projected]) {
-        for k in 0..FACES {
-            let (mut u_min, mut u_max, mut v_max) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
-            for p in verts.iter().filter(|p| p.mask & (1 << k) != 0) {
-                let q = p.face[k];
-                u_min = u_min.min(q.u);
-                u_max = u_max.max(q.u);
-                v_max = v_max.max(q.lo);
-            }
-            if !(u_min <= u_max) || u_max <= -1.0 || u_min >= 1.0 {
-                continue;
-            }
-            let last = self.w as isize - 1;
-            let j0 = floor(self.column_of(u_min)).clamp(0, last) as usize;
-            let j1 = floor(self.column_of(u_max)).clamp(0, last) as usize;
-            let base = k * self.w;
-            for p in &mut self.potential[base + j0..=base + j1] {
-                *p = p.max(v_max);
+        self.raise_potential_reach(verts);
+    }
+
+    /// [`Horizon::raise_potential`], returning per face the columns raised and the value raised to.
+    pub(crate) fn raise_potential_reach(&mut self, verts: &[Projected]) -> Reach {
+        let mut u_min = [f64::INFINITY; FACES];
+        let mut u_max = [f64::NEG_INFINITY; FACES];
+        let mut v_max = [f64::NEG_INFINITY; FACES];
+        for p in verts {
+            for k in 0..FACES {
+                if p.mask & (1 << k) != 0 {
+                    let q = p.face[k];
+                    u_min[k] = u_min[k].min(q.u);
+                    u_max[k] = u_max[k].max(q.u);
+                    v_max[k] = v_max[k].max(q.lo);
+                }
             }
         }
+        let mut reach = Reach {
+            columns: [[1, 0]; FACES],
+            v: v_max,
+        };
+        for k in 0..FACES {
+            let Some([j0, j1]) = self.columns(u_min[k], u_max[k]) else {
+                continue;
+            };
+            reach.columns[k] = [j0 as u32, j1 as u32];
+            let base = k * self.w;
+            for p in &mut self.potential[base + j0..=base + j1] {
+                *p = p.max(v_max[k]);
+            }
+        }
+        reach
+    }
+
+    /// Whether writing triangles or edges over the vertices that gave `reach` could raise a column: not when their
+    /// highest lowered vertex is at most `H` in every column they span, in every face (a write is a lower bound of a
+    /// `top`, whose highest point is a vertex; and a partial cover pairs with another one to the lower of the two).
+    pub(crate) fn can_raise(&self, reach: &Reach) -> bool {
+        (0..FACES).any(|k| {
+            let [j0, j1] = reach.columns[k];
+            let base = k * self.w;
+            j0 <= j1
+                && !self.h[base + j0 as usize..=base + j1 as usize]
+                    .iter()
+                    .all(|&h| reach.v[k] <= h)
+        })
+    }
+
+    /// The columns of one face that `[u_min, u_max]` meets (none when it misses the face or is empty).
+    #[inline(always)]
+    fn columns(&self, u_min: f64, u_max: f64) -> Option<[usize; 2]> {
+        if !(u_min <= u_max) || u_max <= -1.0 || u_min >= 1.0 {
+            return None;
+        }
+        let last = self.w as isize - 1;
+        let j0 = floor(self.column_of(u_min)).clamp(0, last) as usize;
+        let j1 = floor(self.column_of(u_max)).clamp(0, last) as usize;
+        Some([j0, j1])
     }
 
     /// Left boundary `a_j` of column `j` (exact).
@@ -359,6 +472,7 @@ impl Horizon {
     }
 
     /// Writes the lowered triangle `tri` (three projected vertices) into every face where it can be projected.
+    #[allow(dead_code)] // the safe culler writes segments; whole triangles stay available to other methods
     pub(crate) fn write_triangle(&mut self, tri: [&Projected; 3]) {
         let faces = tri[0].mask & tri[1].mask & tri[2].mask;
         for k in 0..FACES {
@@ -378,7 +492,7 @@ impl Horizon {
             let j1 = floor(self.column_of(u_max)).clamp(0, last) as usize;
             let v_max = p[0].lo.max(p[1].lo).max(p[2].lo);
             let base = k * self.w;
-            if j0 == j1 || (j1 - j0 < 16 && self.h[base + j0..=base + j1].iter().all(|&h| v_max <= h)) {
+            if j0 == j1 || self.h[base + j0..=base + j1].iter().all(|&h| v_max <= h) {
                 continue;
             }
             let Some(top) = Top::new([
@@ -386,6 +500,31 @@ impl Horizon {
                 (p[1].u, p[1].lo, tri[1].id),
                 (p[2].u, p[2].lo, tri[2].id),
             ]) else {
+                continue;
+            };
+            self.write_top(k, &top);
+        }
+    }
+
+    /// Writes the lowered segment `seg` (two projected vertices: a TIN edge, which lies on the terrain) into every
+    /// face where it can be projected.
+    pub(crate) fn write_segment(&mut self, seg: [&Projected; 2]) {
+        let faces = seg[0].mask & seg[1].mask;
+        for k in 0..FACES {
+            if faces & (1 << k) == 0 {
+                continue;
+            }
+            let (p, q) = (seg[0].face[k], seg[1].face[k]);
+            let Some([j0, j1]) = self.columns(p.u.min(q.u), p.u.max(q.u)) else {
+                continue;
+            };
+            // As for triangles: inside one column, or nowhere above the horizon, a segment adds nothing.
+            let v_max = p.lo.max(q.lo);
+            let base = k * self.w;
+            if j0 == j1 || self.h[base + j0..=base + j1].iter().all(|&h| v_max <= h) {
+                continue;
+            }
+            let Some(top) = Top::segment((p.u, p.lo, seg[0].id), (q.u, q.lo, seg[1].id)) else {
                 continue;
             };
             self.write_top(k, &top);
@@ -405,12 +544,24 @@ impl Horizon {
         let (first_c, end_c) = (first.clamp(0, w), end.clamp(0, w));
         let base = k * self.w;
         if first_c < end_c {
-            let mut prev = top.low(self.boundary(first_c as usize));
-            for j in first_c..end_c {
-                let next = top.low(self.boundary(j as usize + 1));
-                let slot = &mut self.h[base + j as usize];
-                *slot = slot.max(prev.min(next));
-                prev = next;
+            if top.segment {
+                // One line: its value at the boundaries, lowered by its margin.
+                let (e, h) = (&top.ac, &mut self.h);
+                let mut prev = e.at(-1.0 + first_c as f64 * self.step) - e.margin;
+                for j in first_c..end_c {
+                    let next = e.at(-1.0 + (j + 1) as f64 * self.step) - e.margin;
+                    let slot = &mut h[base + j as usize];
+                    *slot = slot.max(prev.min(next));
+                    prev = next;
+                }
+            } else {
+                let mut prev = top.low(self.boundary(first_c as usize));
+                for j in first_c..end_c {
+                    let next = top.low(self.boundary(j as usize + 1));
+                    let slot = &mut self.h[base + j as usize];
+                    *slot = slot.max(prev.min(next));
+                    prev = next;
+                }
             }
         }
         // Partial columns at both ends (only when the triangle does not fit inside one column).
@@ -433,7 +584,8 @@ impl Horizon {
     }
 
     fn add_left_anchored(&mut self, col: usize, cover: (f64, f64, u32)) {
-        if cover.0 == f64::NEG_INFINITY {
+        // A cover no higher than the column can raise it in no pair (a pair raises it to the lower of two bounds).
+        if !(cover.0 > self.h[col]) {
             return;
         }
         let p = &mut self.partial[col];
@@ -447,7 +599,8 @@ impl Horizon {
     }
 
     fn add_right_anchored(&mut self, col: usize, cover: (f64, f64, u32)) {
-        if cover.0 == f64::NEG_INFINITY {
+        // A cover no higher than the column can raise it in no pair (a pair raises it to the lower of two bounds).
+        if !(cover.0 > self.h[col]) {
             return;
         }
         let p = &mut self.partial[col];
@@ -488,10 +641,7 @@ impl Horizon {
         // The wedges the triangle touches: those of its vertices when they are one wedge or two adjacent ones (a
         // triangle that does not contain the camera spans less than 180° of azimuth, so it stays within them);
         // anything else is left visible.
-        let mut touched = 0u8;
-        for v in tri {
-            touched |= wedge_of(v);
-        }
+        let touched = tri[0].wedge | tri[1].wedge | tri[2].wedge;
         if !matches!(
             touched,
             0b0001 | 0b0010 | 0b0100 | 0b1000 | 0b0011 | 0b0110 | 0b1100 | 0b1001
@@ -506,6 +656,26 @@ impl Horizon {
                 continue;
             }
             let p = [tri[0].face[k], tri[1].face[k], tri[2].face[k]];
+            // First the bound of the whole triangle by its highest vertex over its columns (every point of its image
+            // is a convex combination of the projected vertices); inside one column that is all `top` could say.
+            let (u_min, u_max) = (p[0].u.min(p[1].u).min(p[2].u), p[0].u.max(p[1].u).max(p[2].u));
+            let v_max = p[0].hi.max(p[1].hi).max(p[2].hi);
+            if p.iter().all(|q| !q.u.is_nan() && !q.hi.is_nan()) {
+                let lo_u = u_min - REL * (1.0 + u_min.abs());
+                let hi_u = u_max + REL * (1.0 + u_max.abs());
+                if hi_u < -1.0 || lo_u > 1.0 {
+                    continue;
+                }
+                let last = self.w as isize - 1;
+                let j0 = floor(self.column_of(lo_u)).clamp(0, last) as usize;
+                let j1 = floor(self.column_of(hi_u)).clamp(0, last) as usize;
+                if self.below_all(k, j0, j1, v_max, with_potential) {
+                    continue;
+                }
+                if j0 == j1 {
+                    return false;
+                }
+            }
             let Some(top) = Top::new([
                 (p[0].u, p[0].hi, NO_VERTEX),
                 (p[1].u, p[1].hi, NO_VERTEX),
@@ -514,6 +684,76 @@ impl Horizon {
                 return false;
             };
             if !self.top_hidden(k, &top, with_potential) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether one of the raised projected vertices `verts` is not below the horizon in its column: then a triangle
+    /// over it is not hidden either (its test reads that column and bounds it by at least this value). A shortcut to
+    /// "visible", which needs no proof.
+    pub(crate) fn vertex_above(&self, verts: &[Projected], with_potential: bool) -> bool {
+        let last = self.w as isize - 1;
+        verts.iter().any(|v| {
+            (0..FACES).any(|k| {
+                let q = v.face[k];
+                v.wedge & v.mask & (1 << k) != 0
+                    && q.u.abs() <= 1.0
+                    && !(q.hi
+                        < self.bar(
+                            k * self.w + floor(self.column_of(q.u)).clamp(0, last) as usize,
+                            with_potential,
+                        ))
+            })
+        })
+    }
+
+    /// Whether every triangle over the raised projected vertices `verts` is strictly below the horizon in every
+    /// column it touches, judged from the vertices alone (their highest `v` over the span of their `u`, face by
+    /// face). The triangles must not contain the camera's x,y. It answers "not hidden" more often than
+    /// [`Horizon::triangle_hidden`] on each triangle, never "hidden" when one of those would not.
+    pub(crate) fn vertices_hidden(&self, verts: &[Projected], with_potential: bool) -> bool {
+        let (mut touched, mut faces) = (0u8, 0b1111u8);
+        for v in verts {
+            touched |= v.wedge;
+            faces &= v.mask;
+        }
+        if verts.is_empty()
+            || !matches!(
+                touched,
+                0b0001 | 0b0010 | 0b0100 | 0b1000 | 0b0011 | 0b0110 | 0b1100 | 0b1001
+            )
+            || touched & !faces != 0
+        {
+            return false;
+        }
+        for k in 0..FACES {
+            if touched & (1 << k) == 0 {
+                continue;
+            }
+            let (mut u_min, mut u_max, mut v_max) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+            for v in verts {
+                let q = v.face[k];
+                if q.u.is_nan() || q.hi.is_nan() {
+                    return false;
+                }
+                u_min = u_min.min(q.u);
+                u_max = u_max.max(q.u);
+                v_max = v_max.max(q.hi);
+            }
+            if !(u_min <= u_max && v_max > f64::NEG_INFINITY) {
+                return false;
+            }
+            let lo_u = u_min - REL * (1.0 + u_min.abs());
+            let hi_u = u_max + REL * (1.0 + u_max.abs());
+            if hi_u < -1.0 || lo_u > 1.0 {
+                continue;
+            }
+            let last = self.w as isize - 1;
+            let j0 = floor(self.column_of(lo_u)).clamp(0, last) as usize;
+            let j1 = floor(self.column_of(hi_u)).clamp(0, last) as usize;
+            if !self.below_all(k, j0, j1, v_max, with_potential) {
                 return false;
             }
         }
@@ -590,8 +830,7 @@ impl Horizon {
             let last = self.w as isize - 1;
             let j0 = floor(self.column_of(u_lo.max(-1.0))).clamp(0, last) as usize;
             let j1 = floor(self.column_of(u_hi.min(1.0))).clamp(0, last) as usize;
-            let base = k * self.w;
-            if !(base + j0..=base + j1).all(|c| v < self.bar(c, with_potential)) {
+            if !self.below_all(k, j0, j1, v, with_potential) {
                 return false;
             }
         }
@@ -695,6 +934,56 @@ mod tests {
         // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
         assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu, false));
         assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0, false));
+    }
+
+    #[test]
+    fn a_ridge_of_segments_hides_what_is_below_it_and_no_more() {
+        let mu = 1e-6;
+        let mut h = Horizon::new(64);
+        // A ridge line across face 0 at x = 10, 5 m above the camera, as two edges meeting at a vertex.
+        let a = project([10.0, -50.0, 5.0], mu, 0);
+        let b = project([10.0, 0.5, 5.0], mu, 1);
+        let c = project([10.0, 50.0, 5.0], mu, 2);
+        h.write_segment([&a, &b]);
+        h.write_segment([&b, &c]);
+        assert!(
+            h.values()[..64].iter().all(|&v| v > 0.49 && v < 0.5),
+            "{:?}",
+            &h.values()[..64]
+        );
+        let tri = |p: [[f64; 3]; 3]| p.map(|d| project(d, mu, NO_VERTEX));
+        // Behind it and below the sight line: hidden, by the vertex bound and triangle by triangle.
+        let behind = tri([[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]]);
+        assert!(h.triangle_hidden([&behind[0], &behind[1], &behind[2]], false));
+        assert!(h.vertices_hidden(&behind, false));
+        assert!(!h.vertex_above(&behind, false));
+        // One vertex above the sight line: visible in every test.
+        let above = tri([[20.0, -1.0, 10.5], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]]);
+        assert!(!h.triangle_hidden([&above[0], &above[1], &above[2]], false));
+        assert!(!h.vertices_hidden(&above, false));
+        assert!(h.vertex_above(&above, false));
+        // A set of vertices reaching past the ridge's end: not hidden.
+        let aside = tri([[20.0, 0.0, 0.0], [30.0, 70.0, 0.0], [25.0, 60.0, 0.0]]);
+        assert!(!h.vertices_hidden(&aside, false));
+    }
+
+    #[test]
+    fn a_vertex_bound_spanning_three_faces_is_not_trusted() {
+        use std::f64::consts::FRAC_PI_4;
+        let mu = 1e-6;
+        let mut h = Horizon::new(8);
+        // A high wall all around the camera, its corners between the faces' diagonals.
+        for k in 0..8 {
+            let (a0, a1) = ((k as f64 + 0.5) * FRAC_PI_4, (k as f64 + 1.5) * FRAC_PI_4);
+            let p = project([5.0 * a0.cos(), 5.0 * a0.sin(), 100.0], mu, k);
+            let q = project([5.0 * a1.cos(), 5.0 * a1.sin(), 100.0], mu, (k + 1) % 8);
+            h.write_segment([&p, &q]);
+        }
+        // Low vertices behind it in the wedges of faces 0, 1 and 2: three wedges are more than a set of triangles
+        // that do not contain the camera is known to stay within, so the bound is not used; two adjacent ones are.
+        let verts = [[20.0, 10.0, 0.0], [10.0, 20.0, 0.0], [-20.0, 10.0, 0.0]].map(|d| project(d, mu, NO_VERTEX));
+        assert!(!h.vertices_hidden(&verts, false));
+        assert!(h.vertices_hidden(&verts[..2], false));
     }
 
     #[test]

@@ -14,18 +14,28 @@
 //!
 //! Nodes are taken nearest first (by the least horizontal distance `d_min` of their circle from the camera). Before
 //! a node is tested, every drawn patch whose greatest distance `d_max` is below the node's `d_min` becomes
-//! *eligible*: its triangles (lowered by `μ`) may be written into the horizon as occluders. They are written lazily:
-//! each eligible patch raises a per-column bound `P` of what it could write (its highest lowered vertex over the
-//! columns its vertices span), and the eligible patches are written only when a test would pass against `max(H, P)`
-//! but not against `H` alone. Writing fewer occluders only makes the horizon lower, so this changes how much is
-//! culled, never whether a verdict is right. A node is then
+//! *eligible*: its edges (TIN edges, lowered by `μ`) may be written into the horizon as occluders. Only the edges
+//! that can bound the patch's image from above are written: its boundary edges with the patch's triangle below them
+//! in the image, and its silhouette edges (one triangle facing the camera, the other not); an inner edge with its two
+//! triangles on either side of it in the image is covered above by one of them, so it would add little. Which edges
+//! are written decides only how much is culled: every TIN edge lies on the terrain, so any of them is an occluder
+//! (an orientation computed wrongly by rounding writes an edge too many or too few, nothing worse).
+//!
+//! They are written lazily: each eligible patch raises a per-column bound `P` of what it could write (its highest
+//! lowered vertex over the columns its vertices span), and the eligible patches are written only when a test would
+//! pass against `max(H, P)` but not against `H` alone. Writing fewer occluders only makes the horizon lower, so this
+//! changes how much is culled, never whether a verdict is right. A node is then
 //!
 //! - *visible* if the camera's x,y is inside its circle;
 //! - *hidden* if its bounding cylinder (circle, height up to its highest vertex plus `μ`) is below the horizon in
 //!   every column it touches ([`crate::horizon`]'s theorem with `D = d_min`: every occluder written so far lies
 //!   nearer than `d_min`). A hidden node is not drawn and none of its descendants is looked at;
-//! - for a patch that passes the cylinder test: hidden if each of its triangles (raised by `μ`) is below the horizon
-//!   in every column it touches (the same theorem, triangle by triangle);
+//! - for a patch that passes the cylinder test: visible at once if one of its vertices (raised by `μ`) is not below
+//!   the horizon in its column (its triangles' tests would fail there; no proof needed for "visible"); hidden if its
+//!   vertices bound all its triangles below the horizon ([`crate::horizon`]'s vertex bound for a set of triangles:
+//!   the camera is outside the patch's circle, hence outside each of its triangles); else hidden if each of its
+//!   triangles (raised by `μ`) is below the horizon in every column it touches (the same theorem, triangle by
+//!   triangle);
 //! - otherwise visible: an inner node queues its children, a patch is drawn and queued as an occluder.
 //!
 //! Every "hidden" is thus an instance of the theorem, whatever the order, the tree or the parameters; the order and
@@ -46,7 +56,7 @@ use std::f64::consts::TAU;
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
-use crate::horizon::{Horizon, Projected, project};
+use crate::horizon::{Horizon, Projected, Reach, project};
 use crate::sector::circle_outside_view;
 
 /// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
@@ -56,7 +66,7 @@ pub struct SafeParams {
     pub columns_per_face: usize,
     /// Largest patch (triangles) below the hierarchy's leaves, at most 64.
     pub patch: usize,
-    /// Most occluder triangles written into the horizon per cull, nearest first: bounds the cost of views that
+    /// Most occluder edges written into the horizon per cull, nearest first: bounds the cost of views that
     /// see much of the terrain (fewer occluders only cull less, never wrongly).
     pub occluder_budget: usize,
 }
@@ -83,6 +93,8 @@ struct TreeNode {
     /// For a patch: its vertices in `verts[v[0]..v[1]]` and triangles in `tris[t[0]..t[1]]` (local indices).
     verts: [u32; 2],
     tris: [u32; 2],
+    /// For a patch: its edges in `edges[e[0]..e[1]]`.
+    edges: [u32; 2],
 }
 
 /// Per-call working memory of [`SafeCuller`], kept in the [`DrawList`] between calls.
@@ -93,8 +105,9 @@ pub struct SafeScratch {
     pending: BinaryHeap<Reverse<(u64, u32, u32)>>,
     projected: Vec<Projected>,
     drawn: Vec<[u32; 2]>,
-    /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected)`.
-    eligible: Vec<(u32, u32)>,
+    /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected, what it can
+    /// write)`.
+    eligible: Vec<(u32, u32, Reach)>,
 }
 
 impl PartialEq for SafeScratch {
@@ -115,11 +128,19 @@ pub struct SafeCuller {
     /// Mesh vertex index of every entry of `verts`.
     vids: Vec<u32>,
     tris: Vec<[u8; 3]>,
+    /// Patch edges `[a, b, t1, t2]` (local vertices and triangles): `a → b` runs along the winding of triangle `t1`,
+    /// `t2` is the patch's other triangle on the edge ([`NO_TRIANGLE`] on the patch boundary).
+    edges: Vec<[u8; 4]>,
+    /// Normal `(b − a) × (c − a)` of every entry of `tris`.
+    normals: Vec<[f64; 3]>,
     triangles: u32,
     origin: [f64; 3],
     extent: f64,
     zabs: f64,
 }
+
+/// No triangle on this side of a patch edge.
+const NO_TRIANGLE: u8 = u8::MAX;
 
 /// Orders non-negative distances as integers (their bit patterns are monotone).
 #[inline]
@@ -145,6 +166,8 @@ impl SafeCuller {
             verts: Vec::new(),
             vids: Vec::new(),
             tris: Vec::new(),
+            edges: Vec::new(),
+            normals: Vec::new(),
             triangles: h.mesh.triangles.len() as u32,
             origin: h.origin,
             extent: 0.0,
@@ -239,11 +262,36 @@ impl SafeCuller {
                 };
                 tri[k] = at;
             }
+            let [a, b, c] = t.map(|v| h.mesh.positions[v as usize]);
+            let (u, w) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+            );
+            self.normals.push([
+                u[1] * w[2] - u[2] * w[1],
+                u[2] * w[0] - u[0] * w[2],
+                u[0] * w[1] - u[1] * w[0],
+            ]);
             self.tris.push(tri);
+        }
+        // The patch's edges, each once, with the triangles on both sides.
+        let e0 = self.edges.len();
+        for (i, t) in self.tris[t0 as usize..].iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                match self.edges[e0..]
+                    .iter_mut()
+                    .find(|e| e[0] == b && e[1] == a && e[3] == NO_TRIANGLE)
+                {
+                    Some(e) => e[3] = i as u8,
+                    None => self.edges.push([a, b, i as u8, NO_TRIANGLE]),
+                }
+            }
         }
         let node = &mut self.nodes[id as usize];
         node.verts = [v0, self.verts.len() as u32];
         node.tris = [t0, self.tris.len() as u32];
+        node.edges = [e0 as u32, self.edges.len() as u32];
     }
 
     /// The bounds of the triangles `range` (f64, from the mesh): circle around the x,y box's centre through the
@@ -283,30 +331,60 @@ impl SafeCuller {
             kids: [0, 0],
             verts: [0, 0],
             tris: [0, 0],
+            edges: [0, 0],
         }
     }
 
     /// Writes every eligible occluder patch into the horizon (within the budget) and forgets them.
+    ///
+    /// A patch is written as those of its edges that can bound its image from above: seen from the camera, an edge
+    /// with a patch triangle on each side of it in the image (both facing the camera, or both facing away) is
+    /// covered above by one of them, so only the patch's boundary and silhouette edges with the patch below them
+    /// are written. Which edges are written only decides how much is culled (every TIN edge lies on the terrain).
+    /// A patch whose highest lowered vertex is at most `H` in every column it spans is skipped: it could raise none.
     fn flush(
         &self,
         horizon: &mut Horizon,
-        eligible: &mut Vec<(u32, u32)>,
+        eligible: &mut Vec<(u32, u32, Reach)>,
         projected: &[Projected],
+        eye: [f64; 3],
         written: &mut usize,
     ) {
-        for &(patch, at) in eligible.iter() {
-            let p = &self.nodes[patch as usize];
-            let base = at as usize;
-            for t in &self.tris[p.tris[0] as usize..p.tris[1] as usize] {
+        let mut facing = [0.0f64; 64];
+        for (patch, at, reach) in eligible.iter() {
+            // Nothing of a patch that cannot raise any column needs looking at.
+            if !horizon.can_raise(reach) {
+                continue;
+            }
+            let p = &self.nodes[*patch as usize];
+            let base = *at as usize;
+            let verts = &self.verts[p.verts[0] as usize..p.verts[1] as usize];
+            let off = |i: u8| {
+                let v = verts[i as usize];
+                [v[0] - eye[0], v[1] - eye[1], v[2] - eye[2]]
+            };
+            let tris = p.tris[0] as usize..p.tris[1] as usize;
+            for ((f, t), n) in facing.iter_mut().zip(&self.tris[tris.clone()]).zip(&self.normals[tris]) {
+                // Negative when the camera sees the upper side of the (counter-clockwise) triangle.
+                let a = off(t[0]);
+                *f = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+            }
+            for e in &self.edges[p.edges[0] as usize..p.edges[1] as usize] {
                 if *written >= self.params.occluder_budget {
                     break;
                 }
+                let (a, b) = (off(e[0]), off(e[1]));
+                // Positive when a → b turns counter-clockwise around the camera (u grows).
+                let dir = a[0] * b[1] - a[1] * b[0];
+                // Triangle t (with a → b along its winding when `s` is 1) lies below the edge in the image.
+                let below = |t: u8, s: f64| facing[t as usize] * dir * s < 0.0;
+                let top = below(e[2], 1.0) && (e[3] == NO_TRIANGLE || below(e[3], -1.0));
+                let flat = facing[e[2] as usize] == 0.0 || dir == 0.0;
+                if !(top || flat) {
+                    continue;
+                }
                 *written += 1;
-                horizon.write_triangle([
-                    &projected[base + t[0] as usize],
-                    &projected[base + t[1] as usize],
-                    &projected[base + t[2] as usize],
-                ]);
+                horizon.write_segment([&projected[base + e[0] as usize], &projected[base + e[1] as usize]]);
             }
         }
         eligible.clear();
@@ -385,8 +463,8 @@ impl SafeCuller {
                 scratch.pending.pop();
                 let p = &self.nodes[patch as usize];
                 let n = (p.verts[1] - p.verts[0]) as usize;
-                horizon.raise_potential(&scratch.projected[at as usize..at as usize + n]);
-                scratch.eligible.push((patch, at));
+                let reach = horizon.raise_potential_reach(&scratch.projected[at as usize..at as usize + n]);
+                scratch.eligible.push((patch, at, reach));
             }
             let _ = dmin_key;
             tested += 1;
@@ -402,7 +480,7 @@ impl SafeCuller {
                 let dz = node.zmax - eye[2] + mu;
                 let mut hidden = horizon.disk_hidden(m, node.radius, dz, false);
                 if !hidden && !scratch.eligible.is_empty() && horizon.disk_hidden(m, node.radius, dz, true) {
-                    self.flush(horizon, &mut scratch.eligible, &scratch.projected, &mut written);
+                    self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut written);
                     hidden = horizon.disk_hidden(m, node.radius, dz, false);
                 }
                 if hidden {
@@ -426,21 +504,26 @@ impl SafeCuller {
                     .push(project([p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]], mu, v));
             }
             let tris = &self.tris[node.tris[0] as usize..node.tris[1] as usize];
+            let nv = node.verts[1] as usize - node.verts[0] as usize;
             let all_hidden = |horizon: &Horizon, projected: &[Projected], with_potential: bool| {
-                tris.iter().all(|t| {
-                    horizon.triangle_hidden(
-                        [
-                            &projected[at + t[0] as usize],
-                            &projected[at + t[1] as usize],
-                            &projected[at + t[2] as usize],
-                        ],
-                        with_potential,
-                    )
-                })
+                // The patch's vertices first (cheap, and enough for most hidden patches), then triangle by triangle.
+                let verts = &projected[at..at + nv];
+                !horizon.vertex_above(verts, with_potential)
+                    && (horizon.vertices_hidden(verts, with_potential)
+                        || tris.iter().all(|t| {
+                            horizon.triangle_hidden(
+                                [
+                                    &projected[at + t[0] as usize],
+                                    &projected[at + t[1] as usize],
+                                    &projected[at + t[2] as usize],
+                                ],
+                                with_potential,
+                            )
+                        }))
             };
             let mut hidden = !inside && all_hidden(horizon, &scratch.projected, false);
             if !inside && !hidden && !scratch.eligible.is_empty() && all_hidden(horizon, &scratch.projected, true) {
-                self.flush(horizon, &mut scratch.eligible, &scratch.projected, &mut written);
+                self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut written);
                 hidden = all_hidden(horizon, &scratch.projected, false);
             }
             let all_hidden = hidden;
