@@ -2,7 +2,7 @@
  * Culls a tincull hierarchy from C through the cull-capi library (crates/cull-capi).
  *
  *   cc examples/cull.c -I crates/cull-capi/include target/release/libtincull_cull.a -lpthread -ldl -lm -o cull
- *   ./cull FILE.tch safe|thesis|stewart X,Y,Z[,YAW,FOV] ...
+ *   ./cull FILE.tch safe|thesis|stewart|lloyd-egbert X,Y,Z[,YAW,FOV] ...
  *
  * For every eye it prints one line, the ranges to draw as `start-end` pairs (half-open), the same ranges as
  * `tincull cull FILE.tch --method M --eye X,Y,Z --yaw YAW --fov FOV --json` (YAW 0 and FOV 360 when not given).
@@ -45,9 +45,10 @@ int main(int argc, char **argv) {
                 tc_abi_version() & 0xffff, TC_ABI_VERSION >> 16, TC_ABI_VERSION & 0xffff);
         return 1;
     }
-    uint32_t method = strcmp(argv[2], "thesis") == 0    ? TC_METHOD_THESIS
-                      : strcmp(argv[2], "stewart") == 0 ? TC_METHOD_STEWART
-                                                        : TC_METHOD_SAFE;
+    uint32_t method = strcmp(argv[2], "thesis") == 0         ? TC_METHOD_THESIS
+                      : strcmp(argv[2], "stewart") == 0      ? TC_METHOD_STEWART
+                      : strcmp(argv[2], "lloyd-egbert") == 0 ? TC_METHOD_LLOYD_EGBERT
+                                                             : TC_METHOD_SAFE;
 
     TcCuller *by_path = NULL, *by_buffer = NULL;
     int32_t st = tc_load_path(argv[1], method, &by_path);

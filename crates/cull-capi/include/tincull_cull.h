@@ -11,7 +11,7 @@
  * ABI version: `major << 16 | minor`. The major part changes when a function, struct or constant changes
  * incompatibly; the minor part when something is added.
  */
-#define TC_ABI_VERSION (1 << 16)
+#define TC_ABI_VERSION ((1 << 16) | 1)
 
 /**
  * Success.
@@ -62,6 +62,12 @@
  * Stewart's region test over a quadtree-grouped hierarchy (`tincull build --grouping quadtree`; not conservative).
  */
 #define TC_METHOD_STEWART 2
+
+/**
+ * Lloyd & Egbert's horizon culler (2002; conservative: never culls a visible triangle), meant for a quadtree-grouped
+ * hierarchy; it takes the default horizon of `tincull cull --method lloyd-egbert` (256 columns per face).
+ */
+#define TC_METHOD_LLOYD_EGBERT 3
 
 /**
  * A loaded hierarchy with its culler and working memory (opaque to C).
