@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Chart of from-region visibility (`tincull pvs --check`): PVS size over the union of the sampled visible sets, and
-seconds per cell, against the ray-space resolution, per cell size and height band.
+"""Chart of from-region visibility (`tincull pvs --check`): mean PVS size over the mean union of the sampled visible
+sets (log scale), and seconds per cell, against the ray-space resolution, per cell size and height band.
 
 Reads the JSON reports in docs/pvs/ (one `tincull pvs FILE.tch --check N --cell-size S --above-ground H0,H1
 --resolution 16,32,64,128,256 --json` per file, named MESH_SIZE_H0,H1.json) and writes docs/pvs.png. Needs
@@ -31,22 +31,24 @@ for row, (mesh, title) in zip(axes, present):
         kol = [r for r in d["rows"] if r["method"] == "koltun"]
         reg = [r for r in d["rows"] if r["method"] == "regions"]
         res = [r["resolution"] for r in kol]
-        row[0].plot(res, [r["mean_pvs_over_visible"] for r in kol], style, marker="o", color=colours.get(size),
+        visible = d["mean_union_visible"]
+        row[0].plot(res, [r["mean_pvs_triangles"] / visible for r in kol], style, marker="o", color=colours.get(size),
                     label=label)
         if reg:
-            row[0].plot([res[0], res[-1]], [reg[0]["mean_pvs_over_visible"]] * 2, style, color=colours.get(size),
-                        alpha=0.35, linewidth=3)
+            row[0].plot([res[0], res[-1]], [reg[0]["mean_pvs_triangles"] / visible] * 2, style,
+                        color=colours.get(size), alpha=0.35, linewidth=3)
         row[1].plot(res, [r["mean_seconds_per_cell"] for r in kol], style, marker="o", color=colours.get(size),
                     label=label)
         for r in kol + reg:
             if r["misses"]:
-                row[0].annotate(f"{r['misses']} misses", (r["resolution"] or res[0], r["mean_pvs_over_visible"]),
-                                color="red")
+                row[0].annotate(f"{r['misses']} misses", (r["resolution"] or res[0],
+                                r["mean_pvs_triangles"] / visible), color="red")
+    row[0].set_yscale("log")
     for ax in row:
         ax.set_xscale("log", base=2)
         ax.set_xlabel("ray-space resolution R (R × R)")
         ax.grid(alpha=0.3)
-    row[0].set_ylabel("PVS / union of sampled visible sets")
+    row[0].set_ylabel("mean PVS / mean union of sampled visible sets")
     row[0].set_title(f"{title}: PVS size (Koltun; thick pale line: regions test)")
     row[1].set_ylabel("seconds per cell (Koltun)")
     row[1].set_title(f"{title}: time per cell")

@@ -135,6 +135,7 @@ fn bad_arguments_give_clear_errors() {
     );
     fails_with(&["pvs", s(&tch), "--cell", &cell, "--method", "exact"], "koltun");
     fails_with(&["pvs", s(&tch), "--grid", "0"], "grid");
+    fails_with(&["pvs", s(&tch), "--cell", &cell, "--patch", "0"], "--patch");
     fails_with(&["pvs", s(&tch), "--check", "1", "--cell-size", "1e6"], "cell-size");
     fails_with(&["pvs", "/no/such.tch", "--cell", &cell], "such.tch");
 }

@@ -12,7 +12,6 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
-use super::culling_args::SafeArgs;
 use super::files::Outputs;
 use super::{Output, OutputArgs};
 use eval::evaluate::hierarchy_tin;
@@ -55,9 +54,11 @@ pub struct PvsArgs {
     /// Resolution R of the R × R ray-space bitmap, 1 to 256; with `--check` a comma-separated list.
     #[arg(long, value_delimiter = ',', default_value = "64", value_name = "R")]
     pub resolution: Vec<u32>,
-    /// The safe culler's parameters (`--check` compares with it); `--patch` is also the PVS's patch size.
-    #[command(flatten)]
-    pub safe: SafeArgs,
+    /// Largest patch (triangles) of the halving trees below the hierarchy's leaves, 1 to 64: the PVS's unit below
+    /// the leaves (smaller: a tighter PVS, more boxes to test), and the patch of the safe culler that `--check`
+    /// compares with (its other parameters are its defaults).
+    #[arg(long, default_value_t = 16, value_name = "N")]
+    pub patch: usize,
     /// Write the PVS of every cell here, in the compact binary form (`.pvs`).
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -114,7 +115,15 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         args.check.is_some() || args.resolution.len() == 1,
         "--resolution takes a list only with --check"
     );
-    let safe_params = args.safe.params()?;
+    ensure!(
+        (1..=64).contains(&args.patch),
+        "--patch must be from 1 to 64, got {}",
+        args.patch
+    );
+    let safe_params = cull::SafeParams {
+        patch: args.patch,
+        ..cull::SafeParams::default()
+    };
     let mut files = Outputs::new();
     if let Some(path) = &args.out {
         files.check(path)?;

@@ -39,6 +39,12 @@
 //! directly (Koltun's "shrunk trapezes", without the √2 slack). Every ray of a covered pixel is blocked. `B` is hidden
 //! when every pixel is covered, for one separating axis (two are tried).
 //!
+//! **What is only speed.** Walls are gathered from a grid over the quadrilateral between `s1` and `s2` (plus a margin
+//! for connectivity), skipping grid cells whose edges all stay under the plane; a ray that no component blocks answers
+//! "visible" at once (its pixel can never be covered); resolution 16 is tried first when it divides `R` (a pixel
+//! covered at 16 has every sub-pixel covered at `R`). Dropping walls and answering "visible" are always safe, so none
+//! of this can make a verdict wrong.
+//!
 //! **Rounding.** All geometry is in world f64 coordinates (no shift: the inputs are exact). `W = 1 + max |x|, |y|`
 //! over the mesh and the boxes; `S = (lateral extent) / (X2 − X1)` bounds the lines' slopes in the slab.
 //! - `μ = 1e-7 (1 + extent + max |z|)`: walls' tops; far above the checker's tolerance.
