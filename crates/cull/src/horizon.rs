@@ -395,13 +395,7 @@ impl Horizon {
 
     /// Raises the potential of the columns that the projected vertices `verts` span in each face to their highest
     /// lowered `v` there: no triangle or edge over these vertices can write more (its writes are lower bounds of its
-    /// top, whose highest point is a vertex).
-    #[allow(dead_code)] // the safe culler keeps the reach ([`Horizon::raise_potential_reach`])
-    pub(crate) fn raise_potential(&mut self, verts: &[Projected]) {
-        self.raise_potential_reach(verts);
-    }
-
-    /// [`Horizon::raise_potential`], returning per face the columns raised and the value raised to.
+    /// top, whose highest point is a vertex). Returns per face the columns raised and the value raised to.
     pub(crate) fn raise_potential_reach(&mut self, verts: &[Projected]) -> Reach {
         let mut u_min = [f64::INFINITY; FACES];
         let mut u_max = [f64::NEG_INFINITY; FACES];
@@ -472,7 +466,7 @@ impl Horizon {
     }
 
     /// Writes the lowered triangle `tri` (three projected vertices) into every face where it can be projected.
-    #[allow(dead_code)] // the safe culler writes segments; whole triangles stay available to other methods
+    #[cfg(test)] // the cullers write segments (TIN edges); the tests write whole triangles
     pub(crate) fn write_triangle(&mut self, tri: [&Projected; 3]) {
         let faces = tri[0].mask & tri[1].mask & tri[2].mask;
         for k in 0..FACES {

@@ -432,7 +432,7 @@ impl LloydEgbertCuller {
                 let o = &self.occluders[o as usize];
                 let pa = project(sub(o.a, eye), mu, o.ida);
                 let pb = project(sub(o.b, eye), mu, o.idb);
-                horizon.write_triangle([&pa, &pb, &pb]);
+                horizon.write_segment([&pa, &pb]);
             }
             tested += 1;
             if let Some((yaw, half_fov)) = frustum {
