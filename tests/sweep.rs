@@ -67,13 +67,13 @@ fn sweep_writes_every_combination_and_resumes() {
             .unwrap_or_else(|| panic!("no {name}"))
     };
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    // 4 combinations x 5 methods (safe, thesis, per_triangle, frustum_only, none) x (2 classes + all).
-    assert_eq!(rows.len(), 4 * 5 * 3);
+    // 4 combinations x 6 methods (safe, lloyd-egbert, thesis, per_triangle, frustum_only, none) x (2 classes + all).
+    assert_eq!(rows.len(), 4 * 6 * 3);
     assert!(rows.iter().all(|r| r.len() == header.len()));
     let combos: Vec<(&str, &str)> = rows.iter().map(|r| (r[col("sectors")], r[col("subsectors")])).collect();
     let mut expected = Vec::new();
     for c in [("4", "1"), ("4", "2"), ("8", "1"), ("8", "2")] {
-        expected.extend(std::iter::repeat_n(c, 15));
+        expected.extend(std::iter::repeat_n(c, 18));
     }
     assert_eq!(combos, expected, "rows in key order");
     for r in &rows {
@@ -96,7 +96,7 @@ fn sweep_writes_every_combination_and_resumes() {
                     assert_eq!(num("occlusion_captured_mean"), 0.0);
                 }
             }
-            "safe" | "thesis" | "per_triangle" | "frustum_only" => {
+            "safe" | "lloyd-egbert" | "thesis" | "per_triangle" | "frustum_only" => {
                 assert!(num("triangles_drawn_mean") <= num("triangles"));
                 assert!(num("cull_ns") > 0.0);
             }
@@ -130,7 +130,7 @@ fn sweep_writes_every_combination_and_resumes() {
     assert_eq!(v["ran"], 2);
     assert_eq!(v["skipped"], 4);
     let wider = std::fs::read_to_string(&small).expect("csv");
-    assert_eq!(wider.lines().count(), 1 + 6 * 15);
+    assert_eq!(wider.lines().count(), 1 + 6 * 18);
     let old: Vec<&str> = text.lines().collect();
     assert!(
         old.iter().all(|l| wider.lines().any(|w| w == *l)),
@@ -151,13 +151,13 @@ fn sweep_writes_every_combination_and_resumes() {
 }
 
 #[test]
-fn sweep_without_per_triangle_has_four_methods() {
+fn sweep_without_per_triangle_has_five_methods() {
     let dir = tempfile::tempdir().expect("temp dir");
     let csv = dir.path().join("s.csv");
     let v = sweep(&csv, &["--sectors", "4", "--subsectors", "1", "--no-per-triangle"]);
     assert_eq!(v["ran"], 1);
     let text = std::fs::read_to_string(&csv).expect("csv");
-    assert_eq!(text.lines().count(), 1 + 4 * 3);
+    assert_eq!(text.lines().count(), 1 + 5 * 3);
     assert!(!text.contains("per_triangle"));
 }
 

@@ -51,6 +51,19 @@ pub fn for_each_sector_in(sectors: u32, centre: f64, half: f64, mut f: impl FnMu
     (0..count).all(|k| f((first + k) % sectors))
 }
 
+/// Whether every direction from the camera to a circle (centre offset `centre` from the camera in x,y, `radius`)
+/// misses the horizontal view `yaw ± half_fov` (a camera inside the circle sees it).
+pub(crate) fn circle_outside_view(centre: [f64; 2], radius: f64, yaw: f64, half_fov: f64) -> bool {
+    let dist = centre[0].hypot(centre[1]);
+    if dist <= radius {
+        return false;
+    }
+    let half = (radius / dist).min(1.0).asin() * (1.0 + 1e-12) + 1e-12;
+    let to_node = azimuth(centre[0], centre[1]);
+    let gap = (to_node - yaw + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
+    gap.abs() > half_fov + half
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,17 +99,4 @@ mod tests {
         }));
         assert_eq!(calls, 1);
     }
-}
-
-/// Whether every direction from the camera to a circle (centre offset `centre` from the camera in x,y, `radius`)
-/// misses the horizontal view `yaw ± half_fov` (a camera inside the circle sees it).
-pub(crate) fn circle_outside_view(centre: [f64; 2], radius: f64, yaw: f64, half_fov: f64) -> bool {
-    let dist = centre[0].hypot(centre[1]);
-    if dist <= radius {
-        return false;
-    }
-    let half = (radius / dist).min(1.0).asin() * (1.0 + 1e-12) + 1e-12;
-    let to_node = azimuth(centre[0], centre[1]);
-    let gap = (to_node - yaw + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
-    gap.abs() > half_fov + half
 }

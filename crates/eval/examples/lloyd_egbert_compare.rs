@@ -22,6 +22,10 @@ use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy, SafeParams};
 use eval::evaluate::{EvalOptions, GroundTruthSet, Leaves, Method, score};
 use pipeline::{BuildParams, QuadtreeParams, build, export_quadtree};
 
+/// One hierarchy to cull: grouping, quadtree depth (0 for crystals), the hierarchy, its triangle order in the scored
+/// TIN, and the methods with their horizon columns per face.
+type Run = (String, u32, Hierarchy, Vec<u32>, Vec<(CullMethod, usize)>);
+
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
     if !(5..=6).contains(&args.len()) {
@@ -53,7 +57,7 @@ fn main() -> Result<()> {
         "grouping,depth,nodes,leaves,method,columns,class,viewpoints,viewpoints_with_false_culls,false_culls_max,\
          captured,leaf_limit,cull_ns,nodes_tested,prepare_ms"
     );
-    let mut runs: Vec<(String, u32, Hierarchy, Vec<u32>, Vec<(CullMethod, usize)>)> = vec![(
+    let mut runs: Vec<Run> = vec![(
         "crystal".into(),
         0,
         b.hierarchy.clone(),
