@@ -22,6 +22,77 @@
 use std::path::Path;
 
 use crate::error::HierarchyError;
+
+/// Bytes before the payload in a framed file: magic, version, payload length, checksum.
+pub const HEADER_LEN: usize = 8 + 4 + 8 + 4;
+
+/// Why framed bytes were refused by [`unframe`] (the caller names the file and checks the version).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameError {
+    /// The bytes do not start with the expected magic number.
+    BadMagic,
+    /// Fewer bytes than the header, or than the payload length it states.
+    Truncated {
+        /// Bytes needed.
+        expected: u64,
+        /// Bytes present.
+        found: u64,
+    },
+    /// This many bytes follow the payload.
+    Trailing(u64),
+    /// The payload's CRC-32 differs from the stored one.
+    Checksum {
+        /// Checksum in the header.
+        stored: u32,
+        /// Checksum of the payload.
+        found: u32,
+    },
+}
+
+/// Frames `payload` as a file of this layout: `magic`, `version`, payload length, CRC-32 (IEEE) of the payload, the
+/// payload (little-endian). Shared by every binary file of tincull (`.tch` here, `.pvs` in the `pvs` crate).
+pub fn frame(magic: &[u8; 8], version: u32, payload: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER_LEN + payload.len());
+    out.extend_from_slice(magic);
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    out.extend_from_slice(payload);
+    out
+}
+
+/// The version and payload of bytes written by [`frame`] with `magic`, after checking the magic, the length (no
+/// byte missing, none after the payload) and the checksum.
+pub fn unframe<'a>(bytes: &'a [u8], magic: &[u8; 8]) -> Result<(u32, &'a [u8]), FrameError> {
+    if bytes.len() < magic.len() || bytes[..magic.len()] != magic[..] {
+        return Err(FrameError::BadMagic);
+    }
+    if bytes.len() < HEADER_LEN {
+        return Err(FrameError::Truncated {
+            expected: HEADER_LEN as u64,
+            found: bytes.len() as u64,
+        });
+    }
+    let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let mut len = [0u8; 8];
+    len.copy_from_slice(&bytes[12..20]);
+    let len = u64::from_le_bytes(len);
+    let payload = &bytes[HEADER_LEN..];
+    if (payload.len() as u64) < len {
+        return Err(FrameError::Truncated {
+            expected: len,
+            found: payload.len() as u64,
+        });
+    }
+    if payload.len() as u64 > len {
+        return Err(FrameError::Trailing(payload.len() as u64 - len));
+    }
+    let (stored, found) = (word(20), crc32fast::hash(payload));
+    if found != stored {
+        return Err(FrameError::Checksum { stored, found });
+    }
+    Ok((word(8), payload))
+}
 use crate::hierarchy::Hierarchy;
 
 /// The magic number that starts every `.tch` file.
@@ -30,60 +101,27 @@ pub const MAGIC: [u8; 8] = *b"TINCULL\x1a";
 pub const FORMAT_VERSION: u32 = 2;
 /// The oldest format version this build reads.
 pub const OLDEST_READABLE_VERSION: u32 = 1;
-const HEADER_LEN: usize = 8 + 4 + 8 + 4;
 
 impl Hierarchy {
     /// Encodes the hierarchy as `.tch` bytes.
     pub fn to_bytes(&self) -> Result<Vec<u8>, HierarchyError> {
         let payload = postcard::to_stdvec(self).map_err(|e| HierarchyError::Decode(e.to_string()))?;
-        let mut out = Vec::with_capacity(HEADER_LEN + payload.len());
-        out.extend_from_slice(&MAGIC);
-        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-        out.extend_from_slice(&payload);
-        Ok(out)
+        Ok(frame(&MAGIC, FORMAT_VERSION, &payload))
     }
 
     /// Decodes `.tch` bytes, checking magic, version, length, checksum and every structural invariant.
     pub fn from_bytes(bytes: &[u8]) -> Result<Hierarchy, HierarchyError> {
-        if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
-            return Err(HierarchyError::BadMagic);
-        }
-        if bytes.len() < HEADER_LEN {
-            return Err(HierarchyError::Truncated {
-                expected: HEADER_LEN as u64,
-                found: bytes.len() as u64,
-            });
-        }
-        let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
-        let version = word(8);
+        let (version, payload) = unframe(bytes, &MAGIC).map_err(|e| match e {
+            FrameError::BadMagic => HierarchyError::BadMagic,
+            FrameError::Truncated { expected, found } => HierarchyError::Truncated { expected, found },
+            FrameError::Trailing(extra) => HierarchyError::Invalid(format!("{extra} unexpected bytes after the data")),
+            FrameError::Checksum { stored, found } => HierarchyError::Checksum { stored, found },
+        })?;
         if !(OLDEST_READABLE_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(HierarchyError::UnsupportedVersion {
                 found: version,
                 supported: FORMAT_VERSION,
             });
-        }
-        let mut len = [0u8; 8];
-        len.copy_from_slice(&bytes[12..20]);
-        let len = u64::from_le_bytes(len);
-        let stored = word(20);
-        let payload = &bytes[HEADER_LEN..];
-        if (payload.len() as u64) < len {
-            return Err(HierarchyError::Truncated {
-                expected: len,
-                found: payload.len() as u64,
-            });
-        }
-        if payload.len() as u64 > len {
-            return Err(HierarchyError::Invalid(format!(
-                "{} unexpected bytes after the data",
-                payload.len() as u64 - len
-            )));
-        }
-        let found = crc32fast::hash(payload);
-        if found != stored {
-            return Err(HierarchyError::Checksum { stored, found });
         }
         let upgraded;
         let payload = if version == 1 {

@@ -364,6 +364,25 @@ impl Horizon {
         &self.h
     }
 
+    /// The horizon as directions from the camera, for plots and overlays: per column, its centre's azimuth (degrees
+    /// counter-clockwise from +x, in `[0, 360)`) and the elevation angle of its value (degrees; `None` where nothing
+    /// covers the column), sorted by azimuth.
+    pub fn profile(&self) -> Vec<(f64, Option<f64>)> {
+        let mut out: Vec<(f64, Option<f64>)> = (0..FACES * self.w)
+            .map(|c| {
+                let (k, j) = (c / self.w, c % self.w);
+                // Column j of face k spans u in [-1 + j step, -1 + (j + 1) step]; u = tan(azimuth - 90° k) and the
+                // value is height over forward distance, so the elevation is atan(v / sqrt(1 + u²)).
+                let u = -1.0 + (j as f64 + 0.5) * self.step;
+                let azimuth = (90.0 * k as f64 + u.atan().to_degrees()).rem_euclid(360.0);
+                let v = self.h[c];
+                (azimuth, v.is_finite().then(|| (v / u.hypot(1.0)).atan().to_degrees()))
+            })
+            .collect();
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out
+    }
+
     /// Forgets every occluder.
     pub fn clear(&mut self) {
         self.h.fill(f64::NEG_INFINITY);
@@ -887,6 +906,29 @@ fn disk_meets_wedge(mf: f64, ml: f64, r: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_profile_turns_column_values_into_directions() {
+        let mut h = Horizon::new(8);
+        // Face 1 (azimuth 45°–135°) covered at height over forward distance 1: 45° straight ahead, lower sideways.
+        for c in 8..16 {
+            h.h[c] = 1.0;
+        }
+        let p = h.profile();
+        assert_eq!(p.len(), 32);
+        assert!(p.windows(2).all(|w| w[0].0 <= w[1].0), "sorted by azimuth");
+        for &(azimuth, elevation) in &p {
+            let offset = azimuth - 90.0;
+            if offset.abs() < 45.0 {
+                let u = offset.to_radians().tan();
+                let want = (1.0 / u.hypot(1.0)).atan().to_degrees();
+                let got = elevation.expect("a covered column");
+                assert!((got - want).abs() < 1e-9, "azimuth {azimuth}: {got} vs {want}");
+            } else {
+                assert_eq!(elevation, None, "azimuth {azimuth}");
+            }
+        }
+    }
 
     #[test]
     fn faces_cover_the_plane_counter_clockwise() {

@@ -11,7 +11,9 @@
 //!
 //! Lloyd & Egbert's culler (`lloyd-egbert`) runs over the default quadtree build of the same mesh (`tincull build
 //! --grouping quadtree`), with 256, 1024 and 4096 horizon columns per face (`lloyd-egbert_w256`, …), after the same
-//! check against ground truth; its preparation time, occluder count and nodes tested per cull are printed.
+//! check against ground truth; its preparation time, occluder count and nodes tested per cull are printed. Both it
+//! (`lloyd-egbert_w1024_fov90`) and the safe culler (`safe_w1024_fov90`) are also timed in the paper's setting: a 90°
+//! frustum of 1,024 columns (the image's width), turning east, north, west and south over the same viewpoints.
 //!
 //! Before timing, each culler's draw lists are checked against the straightforward reference culler of the `cull`
 //! crate's tests, for 20 viewpoints of every class, with and without a frustum (this also runs under
@@ -143,6 +145,41 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // The paper's setting: a 90° frustum whose 1,024 columns are the image's width (one face's worth), looking
+    // east, north, west and south in turn from each viewpoint.
+    let frustums: Vec<Camera> = eyes
+        .iter()
+        .enumerate()
+        .map(|(k, e)| Camera {
+            position: e.to_array(),
+            yaw: (k % 4) as f64 * std::f64::consts::FRAC_PI_2,
+            hfov: std::f64::consts::FRAC_PI_2,
+        })
+        .collect();
+    let le = LloydEgbertCuller::new(&hq, 1024);
+    let safe_1024 = SafeCuller::new(
+        &h,
+        SafeParams {
+            columns_per_face: 1024,
+            ..SafeParams::default()
+        },
+    );
+    let mut i = 0;
+    group.bench_function("lloyd-egbert_w1024_fov90", |b| {
+        b.iter(|| {
+            le.cull_into(black_box(&frustums[i % frustums.len()]), &mut list);
+            i += 1;
+            black_box(list.stats.triangles_drawn)
+        })
+    });
+    let mut i = 0;
+    group.bench_function("safe_w1024_fov90", |b| {
+        b.iter(|| {
+            safe_1024.cull_into(black_box(&frustums[i % frustums.len()]), &mut list);
+            i += 1;
+            black_box(list.stats.triangles_drawn)
+        })
+    });
     for (method, hierarchy) in [("thesis", &h), ("per_triangle", &per_triangle)] {
         let culler = Culler::new(hierarchy);
         check_against_reference(method, hierarchy, &culler, &checks);

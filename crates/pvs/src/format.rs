@@ -1,11 +1,12 @@
 //! The `.pvs` file: the PVS of many viewcells in a compact, versioned, checksummed binary form.
 //!
-//! Layout (little-endian): 8 bytes magic [`MAGIC`], 4 bytes format version ([`FORMAT_VERSION`]), 8 bytes payload
-//! length `n`, 4 bytes CRC-32 (IEEE) of the payload, then the payload: a [`PvsFile`] encoded with postcard. Node ids
+//! Layout: the frame of `.tch` files ([`cull::file::frame`]) with magic [`MAGIC`] and version [`FORMAT_VERSION`]; the
+//! payload is a [`PvsFile`] encoded with postcard. Node ids
 //! are stored as differences from the previous one and ranges as (gap from the previous end, length) pairs, all
 //! postcard varints, so a PVS of a few hundred ranges takes a few hundred bytes. This crate encodes and decodes; the
 //! writer is the caller's (tincull's is the `outfile` crate).
 
+use cull::file::{FrameError, frame, unframe};
 use serde::{Deserialize, Serialize};
 
 use crate::{CellPvs, PvsError, PvsParams, ViewCell};
@@ -14,7 +15,6 @@ use crate::{CellPvs, PvsError, PvsParams, ViewCell};
 pub const MAGIC: [u8; 8] = *b"TINCPVS\x1a";
 /// The format version this build writes and reads.
 pub const FORMAT_VERSION: u32 = 1;
-const HEADER_LEN: usize = 8 + 4 + 8 + 4;
 
 /// One viewcell's PVS as stored.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -105,36 +105,24 @@ impl PvsFile {
     /// Encodes the file's bytes.
     pub fn to_bytes(&self) -> Result<Vec<u8>, PvsError> {
         let payload = postcard::to_stdvec(self).map_err(|e| PvsError::BadFile(e.to_string()))?;
-        let mut out = Vec::with_capacity(HEADER_LEN + payload.len());
-        out.extend_from_slice(&MAGIC);
-        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-        out.extend_from_slice(&payload);
-        Ok(out)
+        Ok(frame(&MAGIC, FORMAT_VERSION, &payload))
     }
 
     /// Decodes a file's bytes, checking magic, version, length, checksum and that every range lies within the
     /// triangles.
     pub fn from_bytes(bytes: &[u8]) -> Result<PvsFile, PvsError> {
         let bad = |m: String| Err(PvsError::BadFile(m));
-        if bytes.len() < HEADER_LEN || bytes[..8] != MAGIC {
-            return bad("it does not start with the PVS magic number".into());
-        }
-        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        let (version, payload) = match unframe(bytes, &MAGIC) {
+            Ok(framed) => framed,
+            Err(FrameError::BadMagic) => return bad("it does not start with the PVS magic number".into()),
+            Err(FrameError::Truncated { expected, found }) => {
+                return bad(format!("truncated: {found} bytes where {expected} are needed"));
+            }
+            Err(FrameError::Trailing(extra)) => return bad(format!("{extra} unexpected bytes after the data")),
+            Err(FrameError::Checksum { .. }) => return bad("checksum mismatch".into()),
+        };
         if version != FORMAT_VERSION {
             return bad(format!("format version {version}, this build reads {FORMAT_VERSION}"));
-        }
-        let mut len = [0u8; 8];
-        len.copy_from_slice(&bytes[12..20]);
-        let len = u64::from_le_bytes(len);
-        let payload = &bytes[HEADER_LEN..];
-        if payload.len() as u64 != len {
-            return bad(format!("payload of {} bytes, the header says {len}", payload.len()));
-        }
-        let crc = u32::from_le_bytes([bytes[20], bytes[21], bytes[22], bytes[23]]);
-        if crc32fast::hash(payload) != crc {
-            return bad("checksum mismatch".into());
         }
         let file: PvsFile = postcard::from_bytes(payload).map_err(|e| PvsError::BadFile(e.to_string()))?;
         for (i, c) in file.cells.iter().enumerate() {

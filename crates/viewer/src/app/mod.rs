@@ -304,6 +304,8 @@ struct ViewerApp {
     culling: bool,
     show_orphans: bool,
     culled_wire: bool,
+    /// Plot the Lloyd & Egbert culler's horizon buffer in the side panel.
+    show_horizon: bool,
     /// Paint a viewcell's PVS around the eye instead of the culler's verdicts.
     pvs_on: bool,
     /// Side of the viewcells (m): a grid over world coordinates, the eye's cell is shown.
@@ -397,6 +399,7 @@ impl ViewerApp {
             culling: true,
             show_orphans: true,
             culled_wire: true,
+            show_horizon: false,
             pvs_on: startup.pvs_cell_size.is_some(),
             pvs_size: f64::from(startup.pvs_cell_size.unwrap_or(100).max(1)),
             pvs: None,

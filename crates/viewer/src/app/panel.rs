@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use cull::AnyCuller;
 use eframe::egui;
 use glam::{Vec2, Vec3};
 use pipeline::export::{mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
@@ -200,6 +201,14 @@ impl ViewerApp {
                 self.list.ranges.len()
             ));
             ui.label(format!("cull {:.1} µs", self.cull_us.0.unwrap_or(0.0)));
+            if let Some(AnyCuller::LloydEgbert(le)) = &self.model.culler {
+                ui.checkbox(&mut self.show_horizon, "horizon buffer");
+                if self.show_horizon {
+                    let profile = le.horizon_after(&self.camera()).profile();
+                    let view = (self.fov_deg < 360.0).then_some((self.yaw_deg, self.fov_deg));
+                    horizon_plot(ui, &profile, view);
+                }
+            }
         } else {
             ui.label("no hierarchy: Rebuild to cull");
         }
@@ -329,4 +338,60 @@ fn write_grouped_obj(h: &cull::Hierarchy, obj: &std::path::Path) -> std::result:
         .add(obj, |w| write_grouped_obj_to(h, &name, w))
         .map_err(|e| e.to_string())?;
     batch.commit().map_err(|e| e.to_string())
+}
+
+/// Plots a horizon buffer (azimuth 0–360° across, elevation up; uncovered columns left out) with the view's edges
+/// when it is narrower than 360° (`(yaw, fov)` in degrees).
+fn horizon_plot(ui: &mut egui::Ui, profile: &[(f64, Option<f64>)], view: Option<(f64, f64)>) {
+    let size = egui::vec2(ui.available_width(), 90.0);
+    let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 0.0, egui::Color32::from_gray(245));
+    let (lo, hi) = profile
+        .iter()
+        .filter_map(|p| p.1)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), e| (lo.min(e), hi.max(e)));
+    if lo > hi {
+        painter.text(
+            rect.center(),
+            egui::Align2::CENTER_CENTER,
+            "horizon buffer empty",
+            egui::FontId::proportional(12.0),
+            egui::Color32::DARK_GRAY,
+        );
+        return;
+    }
+    let pad = ((hi - lo) * 0.1).max(0.5);
+    let (lo, hi) = (lo - pad, hi + pad);
+    let x = |azimuth: f64| rect.left() + (azimuth / 360.0) as f32 * rect.width();
+    let y = |elevation: f64| rect.bottom() - ((elevation - lo) / (hi - lo)) as f32 * rect.height();
+    let stroke = egui::Stroke::new(1.0, egui::Color32::from_rgb(40, 90, 200));
+    for pair in profile.windows(2) {
+        if let ((a0, Some(e0)), (a1, Some(e1))) = (pair[0], pair[1]) {
+            painter.line_segment([egui::pos2(x(a0), y(e0)), egui::pos2(x(a1), y(e1))], stroke);
+        }
+    }
+    if let Some((yaw, fov)) = view {
+        for edge in [yaw - fov / 2.0, yaw + fov / 2.0] {
+            let a = x(edge.rem_euclid(360.0));
+            painter.line_segment(
+                [egui::pos2(a, rect.top()), egui::pos2(a, rect.bottom())],
+                egui::Stroke::new(1.0, egui::Color32::BLACK),
+            );
+        }
+    }
+    painter.text(
+        rect.left_top() + egui::vec2(3.0, 2.0),
+        egui::Align2::LEFT_TOP,
+        format!("{hi:.1}°"),
+        egui::FontId::proportional(10.0),
+        egui::Color32::DARK_GRAY,
+    );
+    painter.text(
+        rect.left_bottom() + egui::vec2(3.0, -2.0),
+        egui::Align2::LEFT_BOTTOM,
+        format!("{lo:.1}°"),
+        egui::FontId::proportional(10.0),
+        egui::Color32::DARK_GRAY,
+    );
 }
