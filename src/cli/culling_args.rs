@@ -24,6 +24,20 @@ pub struct SafeArgs {
     /// much terrain; fewer occluders cull less, never wrongly). Unlimited by default.
     #[arg(long, value_name = "N")]
     pub occluder_budget: Option<usize>,
+    /// Safe culler: most work units per cull (nodes tested while refining, occluder edges and chains written; a
+    /// count, so culls stay reproducible). Once spent, the nodes still queued are tested against the horizon as it
+    /// stands, largest first, split up to N more times and otherwise drawn whole: the cost of a cull is bounded
+    /// whatever the view, at the price of drawing more in views that see much terrain (never of culling a visible
+    /// triangle). The default is reached only by the most open views of 100k-vertex meshes and by high and sky
+    /// views of 1M-vertex ones; about 2000 keeps a cull near 1 ms at any mesh size, drawing much more.
+    #[arg(long, default_value_t = cull::DEFAULT_WORK_BUDGET, value_name = "N")]
+    pub work_budget: usize,
+    /// Safe culler: a visible node whose circle spans fewer than N horizon columns is drawn whole instead of being
+    /// refined down to its patches, and writes only its two crests (bottleneck paths of its TIN edges, across x and
+    /// across y) as occluders: cheaper culls of views that see much distant terrain, drawing more. 0 (the default)
+    /// refines every visible node.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub coarse_columns: usize,
 }
 
 impl SafeArgs {
@@ -43,6 +57,8 @@ impl SafeArgs {
             columns_per_face: self.columns,
             patch: self.patch,
             occluder_budget: self.occluder_budget.unwrap_or(usize::MAX),
+            work_budget: self.work_budget,
+            coarse_columns: self.coarse_columns,
         })
     }
 }

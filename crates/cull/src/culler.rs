@@ -75,6 +75,11 @@ pub struct CullStats {
     pub triangles_drawn: u32,
     /// Triangles not drawn.
     pub triangles_culled: u32,
+    /// Safe culler: work units spent ([`crate::SafeParams::work_budget`]: nodes tested while refining, occluder edges
+    /// and chains written); 0 for the other cullers.
+    pub work: u32,
+    /// Safe culler: occluder edges written into the horizon; 0 for the other cullers.
+    pub occluder_edges: u32,
 }
 
 /// The result of a cull: half-open triangle ranges to draw (ascending, adjacent ranges merged) and counters.

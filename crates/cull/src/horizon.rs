@@ -47,6 +47,17 @@
 //! vertices): a degenerate triangle `A C` whose image is the segment of its projected ends, with `top` that segment
 //! (linear, so concave) and no middle vertex ([`Horizon::write_segment`]). Everything below holds for it unchanged.
 //!
+//! A *chain* of lowered TIN edges is an occluder too, taken as a whole ([`Horizon::write_flat`]): a set `C` of edges
+//! that is connected (as a graph over their end vertices) and whose vertices all have `f > 0` in face `k`. Every point of
+//! `C` then has `f > 0` (the half-space is convex), `u` is continuous on `C`, and `C` is connected, so the `u` of its
+//! points fill the interval `[u_min, u_max]` spanned by its vertices; and every point of an edge has, by (P1), a `v` at
+//! least the lower of its two ends'. Hence every `u` in `[u_min, u_max]` has a point `q` of `C` on its half-plane with
+//! `v(q) ≥ b`, `b` the least lowered `v` of `C`'s vertices: the chain is written as the constant `top(u) = b` over
+//! `[u_min, u_max]` (a segment of slope 0 from the vertex at `u_min` to the vertex at `u_max`, which also names the end
+//! vertices of its partial covers). Edge by edge, a chain crossing a column in several edges shorter than the column
+//! covers it nowhere (only its first and last edge reach a column boundary, and their covers end at different
+//! vertices); as a whole it covers it at `b`.
+//!
 //! - *Full columns*: for a column with `[a_j, a_{j+1}] ⊆ [u_A, u_C]`, `H_j ← max(H_j, min(top(a_j), top(a_{j+1})))`.
 //! - *Partial columns*: the column containing `u_A` is covered by the occluder on `[u_A, a_{j+1}]` with the lower
 //!   bound `min(top(u_A), top(a_{j+1}))`, and the column containing `u_C` on `[a_j, u_C]`. Such a right-anchored
@@ -542,6 +553,26 @@ impl Horizon {
             };
             self.write_top(k, &top);
         }
+    }
+
+    /// Writes a flat cover into face `k`: every `u` of `[a.0, b.0]` has, on its vertical half-plane, a point of the
+    /// occluders with lowered `v` at least `bound` (a connected set of lowered TIN edges whose vertices all lie in
+    /// front of the camera in face `k`, spanning the `u` of its vertices from `a` to `b`, with `bound` the least lowered
+    /// `v` of its vertices; see the module documentation). `a` and `b` (in either order) carry the mesh vertices at
+    /// the ends.
+    pub(crate) fn write_flat(&mut self, k: usize, a: (f64, u32), b: (f64, u32), bound: f64) {
+        let (a, b) = if b.0 < a.0 { (b, a) } else { (a, b) };
+        let Some([j0, j1]) = self.columns(a.0, b.0) else {
+            return;
+        };
+        let base = k * self.w;
+        if j0 == j1 || self.h[base + j0..=base + j1].iter().all(|&h| bound <= h) {
+            return;
+        }
+        let Some(top) = Top::segment((a.0, bound, a.1), (b.0, bound, b.1)) else {
+            return;
+        };
+        self.write_top(k, &top);
     }
 
     fn write_top(&mut self, k: usize, top: &Top) {

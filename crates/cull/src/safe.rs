@@ -21,6 +21,11 @@
 //! are written decides only how much is culled: every TIN edge lies on the terrain, so any of them is an occluder
 //! (an orientation computed wrongly by rounding writes an edge too many or too few, nothing worse).
 //!
+//! The edges written of one patch that are connected to each other (*chains*, found by a union-find over the patch's
+//! vertices) are also written as one flat cover each ([`crate::horizon`]'s chains: the least lowered `v` of the chain's
+//! vertices over the `u` its vertices span): far away, where a TIN edge is shorter than a column, edge by edge a chain
+//! covers no column it crosses, as a whole it does.
+//!
 //! They are written lazily: each eligible patch raises a per-column bound `P` of what it could write (its highest
 //! lowered vertex over the columns its vertices span), and the eligible patches are written only when a test would
 //! pass against `max(H, P)` but not against `H` alone. Writing fewer occluders only makes the horizon lower, so this
@@ -37,6 +42,44 @@
 //!   triangles (raised by `μ`) is below the horizon in every column it touches (the same theorem, triangle by
 //!   triangle);
 //! - otherwise visible: an inner node queues its children, a patch is drawn and queued as an occluder.
+//!
+//! ## Coarse nodes
+//!
+//! With [`SafeParams::coarse_columns`] `n > 0`, a visible inner node (not containing the camera) whose circle is small
+//! on screen (`radius · w < n · distance`, `w` the columns per face: about `n` columns) is drawn whole instead of
+//! refined, and queued as an occluder like a drawn patch (from its greatest distance `d_max`). Its occluders are its
+//! *crests*, computed once when the culler is prepared (for nodes of at most 2,048 triangles): for x and for y, the
+//! bottleneck path of its TIN edges between its vertices in the first and the last quarter of its extent, stored as
+//! the path's two end vertices `a`, `b` and the least height `z*` of its vertices (edges taken by decreasing lower
+//! end into a union-find until one component holds a vertex of each quarter). The path is a connected set of TIN
+//! edges at heights `≥ z*` inside the node's circle; lowered by `μ`, it is a chain in the sense of
+//! [`crate::horizon`] in every face `k` whose half-plane `f > 0` holds the whole circle (`m_f − r > 0`, `m` the
+//! circle's centre less the camera): its `u` fill `[u_a, u_b]`, and each of its points has `f` in
+//! `[m_f − r, m_f + r]` and height `≥ z* − μ`, so `v ≥ (z* − μ − c.z) / (m_f + r)` when that numerator is `≥ 0`, else
+//! `≥ (z* − μ − c.z) / (m_f − r)`; this bound (the radius grown for the rounding of `m`, `f` moved outward and the
+//! quotient lowered by `REL`, as for disks) is written as a flat cover over `[u_a, u_b]`. Drawing a node whole draws
+//! a superset of what refining it would; the crests only raise the horizon by what the theorem allows.
+//!
+//! ## The work budget
+//!
+//! Refining costs what the view sees: every visible patch is projected, tested and written. [`SafeParams::work_budget`]
+//! bounds it by a count (not a time: culls stay byte-identical across runs and machines) of *work units*: one per node
+//! tested while refining, one per occluder edge written, one per chain or crest written. Each unit is checked before it is
+//! spent, so a cull spends at most `B` of them. Once they are spent:
+//!
+//! - nothing more is written, and no node is refined any more. Every node still queued (and each descendant taken
+//!   below) is at least as far as every node tested so far (its points are at least at its queue key `d_min`, the keys
+//!   of its queued ancestors, and the queue pops keys in order), so every occluder in the horizon lies nearer than every
+//!   one of its points, as when that occluder was written: the theorem applies to them against the horizon as it stands;
+//! - the queued nodes are taken largest first (by triangles): each is culled if its cylinder is hidden (the same test
+//!   as above, `H` only), else split into its children while fewer than `B` nodes were split this way, else drawn whole.
+//!   Drawing a node whole draws a superset of what refining it would have drawn.
+//!
+//! Hence at most `B` refining tests (each pushing at most `c` children, `c` the most children of a node: 2 in a crystal
+//! hierarchy and its halving trees), at most `B` splits pushing `c` each, and every pushed node tested once: at most
+//! `(1 + 2c) B + r` nodes tested (`r` roots), and at most `B` edges and chains written. The verdicts "hidden" are the
+//! same theorem's; with a spent budget the culler draws more, never less, than without one (its horizon is never
+//! higher when any node is tested).
 //!
 //! Every "hidden" is thus an instance of the theorem, whatever the order, the tree or the parameters; the order and
 //! the parameters only decide how much is culled. With a horizontal field of view below 360°, a node entirely
@@ -56,8 +99,13 @@ use std::f64::consts::TAU;
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
-use crate::horizon::{Horizon, Projected, Reach, project};
+use crate::horizon::{FACES, Horizon, Projected, REL, Reach, face_coords, project};
 use crate::sector::circle_outside_view;
+
+/// The default [`SafeParams::work_budget`]: far above what any view of the bundled 10k-vertex meshes needs (at most
+/// about 20,000 units), reached by the most open views (the sky) of 100k-vertex meshes and by high and sky views of
+/// 1M-vertex ones.
+pub const DEFAULT_WORK_BUDGET: usize = 200_000;
 
 /// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -69,6 +117,13 @@ pub struct SafeParams {
     /// Most occluder edges written into the horizon per cull, nearest first: bounds the cost of views that
     /// see much of the terrain (fewer occluders only cull less, never wrongly).
     pub occluder_budget: usize,
+    /// Most work units per cull: nodes tested while refining, occluder edges and chains written. Once spent, the
+    /// culler stops refining and writing: every node still queued is tested once against the horizon as it stands
+    /// and drawn whole unless hidden. A count, not a time, so culls are reproducible; see the module documentation.
+    pub work_budget: usize,
+    /// A visible inner node whose circle spans fewer than this many columns (about `radius · columns / distance`)
+    /// is drawn whole instead of refined, and writes its crests as occluders; 0 refines every visible node.
+    pub coarse_columns: usize,
 }
 
 impl Default for SafeParams {
@@ -77,6 +132,8 @@ impl Default for SafeParams {
             columns_per_face: 256,
             patch: 16,
             occluder_budget: usize::MAX,
+            work_budget: DEFAULT_WORK_BUDGET,
+            coarse_columns: 0,
         }
     }
 }
@@ -95,7 +152,25 @@ struct TreeNode {
     tris: [u32; 2],
     /// For a patch: its edges in `edges[e[0]..e[1]]`.
     edges: [u32; 2],
+    /// For an inner node with [`SafeParams::coarse_columns`]: its crests in `crests[c[0]..c[1]]`.
+    crests: [u32; 2],
 }
+
+/// A crest of a node: two of its vertices joined by a path of its TIN edges whose vertices all lie at height `z` or
+/// higher (the highest such `z`: a bottleneck path), one near each end of the node along x or along y.
+#[derive(Clone, Copy, Debug)]
+struct Crest {
+    a: [f64; 3],
+    b: [f64; 3],
+    ids: [u32; 2],
+    z: f64,
+}
+
+/// Largest node (triangles) given crests: larger ones are never small enough on screen to be drawn whole.
+const CREST_MAX: u32 = 2048;
+
+/// No crest entry: a pending patch's offset in `projected` never takes this value.
+const CRESTS: u32 = u32::MAX;
 
 /// Per-call working memory of [`SafeCuller`], kept in the [`DrawList`] between calls.
 #[derive(Clone, Debug, Default)]
@@ -103,6 +178,8 @@ pub struct SafeScratch {
     horizon: Option<Horizon>,
     queue: BinaryHeap<Reverse<(u64, u32)>>,
     pending: BinaryHeap<Reverse<(u64, u32, u32)>>,
+    /// Nodes left when the work budget is spent, largest first: `(triangles, node)`.
+    by_size: BinaryHeap<(u32, u32)>,
     projected: Vec<Projected>,
     drawn: Vec<[u32; 2]>,
     /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected, what it can
@@ -128,6 +205,7 @@ pub struct SafeCuller {
     /// Mesh vertex index of every entry of `verts`.
     vids: Vec<u32>,
     tris: Vec<[u8; 3]>,
+    crests: Vec<Crest>,
     /// Patch edges `[a, b, t1, t2]` (local vertices and triangles): `a → b` runs along the winding of triangle `t1`,
     /// `t2` is the patch's other triangle on the edge ([`NO_TRIANGLE`] on the patch boundary).
     edges: Vec<[u8; 4]>,
@@ -137,6 +215,98 @@ pub struct SafeCuller {
     origin: [f64; 3],
     extent: f64,
     zabs: f64,
+}
+
+/// The work of one cull, in the units of [`SafeParams::work_budget`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Count {
+    /// Nodes tested while refining.
+    tests: usize,
+    /// Occluder edges written.
+    edges: usize,
+    /// Flat covers (chains) written.
+    flats: usize,
+    /// Nodes split after the budget was spent.
+    splits: usize,
+}
+
+impl Count {
+    /// Work units spent.
+    #[inline]
+    fn work(&self) -> usize {
+        self.tests + self.edges + self.flats
+    }
+
+    /// Whether an occluder may still be written: the occluder budget and the work budget both left.
+    #[inline]
+    fn can_write(&self, params: &SafeParams) -> bool {
+        self.edges < params.occluder_budget && self.work() < params.work_budget
+    }
+}
+
+/// A connected set of written edges of one patch (a chain), summed up per face for a flat cover: the faces in front
+/// of all its vertices, their least and greatest `u` (with the vertices there) and least lowered `v`.
+#[derive(Clone, Copy, Debug)]
+struct Chain {
+    vertices: usize,
+    mask: u8,
+    lo: [(f64, u32); FACES],
+    hi: [(f64, u32); FACES],
+    bound: [f64; FACES],
+}
+
+impl Default for Chain {
+    fn default() -> Self {
+        Chain {
+            vertices: 0,
+            mask: 0b1111,
+            lo: [(f64::INFINITY, 0); FACES],
+            hi: [(f64::NEG_INFINITY, 0); FACES],
+            bound: [f64::INFINITY; FACES],
+        }
+    }
+}
+
+impl Chain {
+    fn add(&mut self, p: &Projected) {
+        self.vertices += 1;
+        self.mask &= p.mask;
+        for k in 0..FACES {
+            let q = p.face[k];
+            if q.u < self.lo[k].0 {
+                self.lo[k] = (q.u, p.id);
+            }
+            if q.u > self.hi[k].0 {
+                self.hi[k] = (q.u, p.id);
+            }
+            // A NaN makes the bound NaN for good, which writes nothing.
+            self.bound[k] = if q.u.is_nan() || q.lo.is_nan() || self.bound[k].is_nan() {
+                f64::NAN
+            } else {
+                self.bound[k].min(q.lo)
+            };
+        }
+    }
+
+    /// Writes the chain as a flat cover into every face in front of all its vertices.
+    fn write(&self, horizon: &mut Horizon) {
+        for k in 0..FACES {
+            if self.mask & (1 << k) != 0 {
+                horizon.write_flat(k, self.lo[k], self.hi[k], self.bound[k]);
+            }
+        }
+    }
+}
+
+/// The root of `v` in a patch's union-find (path halving).
+#[inline]
+fn find(parent: &mut [u8], mut v: u8) -> u8 {
+    while parent[v as usize] != v {
+        let up = parent[parent[v as usize] as usize];
+        parent[v as usize] = up;
+        v = up;
+    }
+    v
 }
 
 /// No triangle on this side of a patch edge.
@@ -156,6 +326,8 @@ impl SafeCuller {
             columns_per_face: params.columns_per_face.clamp(2, 1 << 16).next_power_of_two(),
             patch: params.patch.clamp(1, 64),
             occluder_budget: params.occluder_budget,
+            work_budget: params.work_budget,
+            coarse_columns: params.coarse_columns,
         };
         let pos = &h.mesh.positions;
         let mut c = SafeCuller {
@@ -166,6 +338,7 @@ impl SafeCuller {
             verts: Vec::new(),
             vids: Vec::new(),
             tris: Vec::new(),
+            crests: Vec::new(),
             edges: Vec::new(),
             normals: Vec::new(),
             triangles: h.mesh.triangles.len() as u32,
@@ -208,7 +381,49 @@ impl SafeCuller {
             roots.push(c.halving_tree(h, [a, b]));
         }
         c.roots = roots;
+        if c.params.coarse_columns > 0 {
+            for id in 0..c.nodes.len() {
+                let node = c.nodes[id];
+                let [s, e] = node.triangles;
+                if node.kids[0] < node.kids[1] && e - s <= CREST_MAX {
+                    let start = c.crests.len() as u32;
+                    crests_of(h, node.triangles, &mut c.crests);
+                    c.nodes[id].crests = [start, c.crests.len() as u32];
+                }
+            }
+        }
         c
+    }
+
+    /// Writes the crests of node `id` into the horizon as flat covers, in every face whose half-plane `f > 0` holds
+    /// the node's whole circle (see the module documentation).
+    fn write_crests(&self, horizon: &mut Horizon, id: u32, eye: [f64; 3], mu: f64, count: &mut Count) {
+        let node = &self.nodes[id as usize];
+        let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
+        let dist = (m[0] * m[0] + m[1] * m[1]).sqrt();
+        // The offset carries a rounding error below ε |m|: grow the circle by more.
+        let r = node.radius + 1e-15 * dist;
+        for crest in &self.crests[node.crests[0] as usize..node.crests[1] as usize] {
+            if !count.can_write(&self.params) {
+                return;
+            }
+            count.flats += 1;
+            let off = |p: [f64; 3]| [p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]];
+            let pa = project(off(crest.a), mu, crest.ids[0]);
+            let pb = project(off(crest.b), mu, crest.ids[1]);
+            let num = crest.z - eye[2] - mu;
+            for k in 0..FACES {
+                let (mf, _) = face_coords(k, m[0], m[1]);
+                if !(mf - r > 0.0) || pa.mask & pb.mask & (1 << k) == 0 {
+                    continue;
+                }
+                // Every point of the node has f in [mf − r, mf + r].
+                let (f_lo, f_hi) = ((mf - r) * (1.0 - REL), (mf + r) * (1.0 + REL));
+                let v = if num >= 0.0 { num / f_hi } else { num / f_lo };
+                let v = v - REL * v.abs();
+                horizon.write_flat(k, (pa.face[k].u, pa.id), (pb.face[k].u, pb.id), v);
+            }
+        }
     }
 
     /// The children of hierarchy leaf `i` in its halving tree (empty when the leaf is small enough to be a patch,
@@ -332,6 +547,7 @@ impl SafeCuller {
             verts: [0, 0],
             tris: [0, 0],
             edges: [0, 0],
+            crests: [0, 0],
         }
     }
 
@@ -348,10 +564,16 @@ impl SafeCuller {
         eligible: &mut Vec<(u32, u32, Reach)>,
         projected: &[Projected],
         eye: [f64; 3],
-        written: &mut usize,
+        count: &mut Count,
     ) {
         let mut facing = [0.0f64; 64];
+        // Union-find over a patch's local vertices (at most 3 · 64), joined by the edges written.
+        let mut parent = [0u8; 192];
+        let mut touched = [false; 192];
         for (patch, at, reach) in eligible.iter() {
+            if !count.can_write(&self.params) {
+                break;
+            }
             // Nothing of a patch that cannot raise any column needs looking at.
             if !horizon.can_raise(reach) {
                 continue;
@@ -359,6 +581,7 @@ impl SafeCuller {
             let p = &self.nodes[*patch as usize];
             let base = *at as usize;
             let verts = &self.verts[p.verts[0] as usize..p.verts[1] as usize];
+            let nv = verts.len();
             let off = |i: u8| {
                 let v = verts[i as usize];
                 [v[0] - eye[0], v[1] - eye[1], v[2] - eye[2]]
@@ -369,8 +592,13 @@ impl SafeCuller {
                 let a = off(t[0]);
                 *f = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
             }
+            for (i, (q, t)) in parent.iter_mut().zip(touched.iter_mut()).take(nv).enumerate() {
+                *q = i as u8;
+                *t = false;
+            }
+            let mut joined = false;
             for e in &self.edges[p.edges[0] as usize..p.edges[1] as usize] {
-                if *written >= self.params.occluder_budget {
+                if !count.can_write(&self.params) {
                     break;
                 }
                 let (a, b) = (off(e[0]), off(e[1]));
@@ -383,8 +611,36 @@ impl SafeCuller {
                 if !(top || flat) {
                     continue;
                 }
-                *written += 1;
+                count.edges += 1;
                 horizon.write_segment([&projected[base + e[0] as usize], &projected[base + e[1] as usize]]);
+                let (ra, rb) = (find(&mut parent, e[0]), find(&mut parent, e[1]));
+                joined |= touched[e[0] as usize] || touched[e[1] as usize];
+                touched[e[0] as usize] = true;
+                touched[e[1] as usize] = true;
+                if ra != rb {
+                    parent[ra as usize] = rb;
+                }
+            }
+            // Chains of two edges or more, also as flat covers: a chain crossing a column in several short edges covers
+            // it, which edge by edge only the partial covers of its first and last edge could (and cannot pair).
+            if !joined {
+                continue;
+            }
+            for root in 0..nv as u8 {
+                if !touched[root as usize] || find(&mut parent, root) != root || !count.can_write(&self.params) {
+                    continue;
+                }
+                let mut chain = Chain::default();
+                for v in 0..nv as u8 {
+                    if touched[v as usize] && find(&mut parent, v) == root {
+                        chain.add(&projected[base + v as usize]);
+                    }
+                }
+                if chain.vertices < 3 {
+                    continue;
+                }
+                count.flats += 1;
+                chain.write(horizon);
             }
         }
         eligible.clear();
@@ -398,6 +654,11 @@ impl SafeCuller {
     /// Nodes of the culling tree (hierarchy nodes and the halving trees below them).
     pub fn tree_nodes(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// Roots of the culling tree (the hierarchy's roots, and the always-visible set's halving tree).
+    pub fn roots(&self) -> usize {
+        self.roots.len()
     }
 
     /// Culls for `camera`, returning a new draw list.
@@ -447,10 +708,16 @@ impl SafeCuller {
             scratch.queue.push(Reverse((key(distance(n) - n.radius), r)));
         }
         let mut tested = 0u32;
-        let mut written = 0usize;
+        let mut count = Count::default();
         while let Some(Reverse((dmin_key, id))) = scratch.queue.pop() {
             let node = &self.nodes[id as usize];
             let dist = distance(node);
+            if count.work() >= self.params.work_budget {
+                // The budget is spent: stop refining and writing (below).
+                scratch.queue.push(Reverse((dmin_key, id)));
+                break;
+            }
+            count.tests += 1;
             // Occluders strictly nearer than every point of this node (rounding: the distances carry relative
             // errors below 1e-15, so compare with a relative gap far larger).
             let dmin = (dist - node.radius) * (1.0 - 1e-12);
@@ -461,6 +728,10 @@ impl SafeCuller {
                     break;
                 }
                 scratch.pending.pop();
+                if at == CRESTS {
+                    self.write_crests(horizon, patch, eye, mu, &mut count);
+                    continue;
+                }
                 let p = &self.nodes[patch as usize];
                 let n = (p.verts[1] - p.verts[0]) as usize;
                 let reach = horizon.raise_potential_reach(&scratch.projected[at as usize..at as usize + n]);
@@ -480,13 +751,26 @@ impl SafeCuller {
                 let dz = node.zmax - eye[2] + mu;
                 let mut hidden = horizon.disk_hidden(m, node.radius, dz, false);
                 if !hidden && !scratch.eligible.is_empty() && horizon.disk_hidden(m, node.radius, dz, true) {
-                    self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut written);
+                    self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut count);
                     hidden = horizon.disk_hidden(m, node.radius, dz, false);
                 }
                 if hidden {
                     out.stats.culled_by_occlusion += 1;
                     continue;
                 }
+            }
+            // Small on screen (angular radius times columns per radian, near enough): drawn whole, its crests queued
+            // as occluders.
+            let columns = (self.params.columns_per_face as f64, self.params.coarse_columns as f64);
+            if node.kids[0] < node.kids[1]
+                && !inside
+                && node.crests[0] < node.crests[1]
+                && node.radius * columns.0 < columns.1 * dist
+            {
+                scratch.drawn.push(node.triangles);
+                let dmax = (dist + node.radius) * (1.0 + 1e-12);
+                scratch.pending.push(Reverse((key(dmax), id, CRESTS)));
+                continue;
             }
             if node.kids[0] < node.kids[1] {
                 for &c in &self.children[node.kids[0] as usize..node.kids[1] as usize] {
@@ -523,7 +807,7 @@ impl SafeCuller {
             };
             let mut hidden = !inside && all_hidden(horizon, &scratch.projected, false);
             if !inside && !hidden && !scratch.eligible.is_empty() && all_hidden(horizon, &scratch.projected, true) {
-                self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut written);
+                self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut count);
                 hidden = all_hidden(horizon, &scratch.projected, false);
             }
             let all_hidden = hidden;
@@ -536,15 +820,143 @@ impl SafeCuller {
             let dmax = (dist + node.radius) * (1.0 + 1e-12);
             scratch.pending.push(Reverse((key(dmax), id, at as u32)));
         }
+        if !scratch.queue.is_empty() {
+            // The budget is spent. Every occluder in the horizon is nearer than every point of every node still
+            // queued (as when it was written), so the horizon stays valid for them and their descendants. The
+            // largest nodes first: each is tested once by its cylinder and culled if hidden, else split while `B`
+            // more tests are left, else drawn whole.
+            scratch.by_size.clear();
+            for Reverse((_, id)) in scratch.queue.drain() {
+                let [s, e] = self.nodes[id as usize].triangles;
+                scratch.by_size.push((e - s, id));
+            }
+            let mut splits = 0usize;
+            while let Some((_, id)) = scratch.by_size.pop() {
+                let node = &self.nodes[id as usize];
+                tested += 1;
+                if let Some((yaw, half_fov)) = frustum
+                    && outside_view(node, eye, yaw, half_fov)
+                {
+                    out.stats.culled_by_frustum += 1;
+                    continue;
+                }
+                if !(distance(node) <= node.radius) {
+                    let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
+                    if horizon.disk_hidden(m, node.radius, node.zmax - eye[2] + mu, false) {
+                        out.stats.culled_by_occlusion += 1;
+                        continue;
+                    }
+                }
+                if node.kids[0] < node.kids[1] && splits < self.params.work_budget {
+                    splits += 1;
+                    for &c in &self.children[node.kids[0] as usize..node.kids[1] as usize] {
+                        let [s, e] = self.nodes[c as usize].triangles;
+                        scratch.by_size.push((e - s, c));
+                    }
+                    continue;
+                }
+                scratch.drawn.push(node.triangles);
+            }
+            count.splits = splits;
+        }
         scratch.drawn.sort_unstable();
         for &r in &scratch.drawn {
             out.push(r);
         }
         out.stats.nodes_tested = tested;
+        out.stats.work = count.work() as u32;
+        out.stats.occluder_edges = count.edges as u32;
         out.stats.nodes_skipped = self.nodes.len() as u32 - tested;
         out.stats.triangles_culled = self.triangles - out.stats.triangles_drawn;
         scratch.horizon = Some(owned);
         out.scratch = scratch;
+    }
+}
+
+/// Appends the crests of the triangles `range` to `out`: for x and for y, the vertices within the first and the last
+/// quarter of the range's extent, and the bottleneck path between the two sets over the range's TIN edges (edges
+/// taken by decreasing lower end, union-find, until one component holds a vertex of each set; every vertex of the
+/// path joining them is at least as high as the last edge's lower end).
+fn crests_of(h: &Hierarchy, range: [u32; 2], out: &mut Vec<Crest>) {
+    let tris = &h.mesh.triangles[range[0] as usize..range[1] as usize];
+    let pos = &h.mesh.positions;
+    let mut vs: Vec<u32> = tris.iter().flatten().copied().collect();
+    vs.sort_unstable();
+    vs.dedup();
+    let local = |v: u32| vs.binary_search(&v).ok();
+    let mut edges: Vec<(f64, u32, u32)> = Vec::with_capacity(3 * tris.len());
+    for t in tris {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if let (Some(la), Some(lb)) = (local(a), local(b)) {
+                let z = pos[a as usize][2].min(pos[b as usize][2]);
+                edges.push((z, la.min(lb) as u32, la.max(lb) as u32));
+            }
+        }
+    }
+    edges.sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+    edges.dedup_by(|x, y| x.1 == y.1 && x.2 == y.2);
+    const NONE: u32 = u32::MAX;
+    for axis in 0..2 {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for &v in &vs {
+            lo = lo.min(pos[v as usize][axis]);
+            hi = hi.max(pos[v as usize][axis]);
+        }
+        let quarter = 0.25 * (hi - lo);
+        if !(quarter > 0.0) {
+            continue;
+        }
+        let mut parent: Vec<u32> = (0..vs.len() as u32).collect();
+        let mut reps: Vec<[u32; 2]> = vs
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let x = pos[v as usize][axis];
+                [
+                    if x <= lo + quarter { i as u32 } else { NONE },
+                    if x >= hi - quarter { i as u32 } else { NONE },
+                ]
+            })
+            .collect();
+        fn root(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                let up = parent[parent[v as usize] as usize];
+                parent[v as usize] = up;
+                v = up;
+            }
+            v
+        }
+        for &(z, a, b) in &edges {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            if ra == rb {
+                continue;
+            }
+            parent[ra as usize] = rb;
+            let merged = [
+                if reps[rb as usize][0] == NONE {
+                    reps[ra as usize][0]
+                } else {
+                    reps[rb as usize][0]
+                },
+                if reps[rb as usize][1] == NONE {
+                    reps[ra as usize][1]
+                } else {
+                    reps[rb as usize][1]
+                },
+            ];
+            reps[rb as usize] = merged;
+            if merged[0] != NONE && merged[1] != NONE {
+                let (va, vb) = (vs[merged[0] as usize], vs[merged[1] as usize]);
+                out.push(Crest {
+                    a: pos[va as usize],
+                    b: pos[vb as usize],
+                    ids: [va, vb],
+                    z,
+                });
+                break;
+            }
+        }
     }
 }
 

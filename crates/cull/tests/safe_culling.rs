@@ -38,11 +38,45 @@ fn assert_safe(name: &str, tin: &Tin, eyes: &[DVec3]) -> Captured {
                 columns_per_face: 8,
                 patch: 1,
                 occluder_budget: usize::MAX,
+                work_budget: usize::MAX,
+                coarse_columns: 0,
             },
             SafeParams {
                 columns_per_face: 2048,
                 patch: 4,
                 occluder_budget: 50,
+                work_budget: usize::MAX,
+                coarse_columns: 0,
+            },
+            // Tiny work budgets: refining and writing stop almost at once (or midway), the rest is split and
+            // tested against the horizon as it stands, or drawn whole.
+            SafeParams {
+                work_budget: 1,
+                ..SafeParams::default()
+            },
+            SafeParams {
+                work_budget: 7,
+                ..SafeParams::default()
+            },
+            SafeParams {
+                columns_per_face: 64,
+                patch: 2,
+                occluder_budget: usize::MAX,
+                work_budget: 40,
+                coarse_columns: 0,
+            },
+            // Coarse nodes: visible inner nodes drawn whole, their crests written as occluders (on these small
+            // terrains only with many columns per node).
+            SafeParams {
+                coarse_columns: 64,
+                ..SafeParams::default()
+            },
+            SafeParams {
+                columns_per_face: 2048,
+                patch: 2,
+                occluder_budget: usize::MAX,
+                work_budget: 300,
+                coarse_columns: 300,
             },
         ] {
             let tally = (params == SafeParams::default() && leaf == 8).then_some(0);
@@ -262,6 +296,96 @@ fn a_wall_hides_the_far_side() {
     // corners do not fall exactly on horizon column boundaries (covers ending exactly on one are dropped).
     let captured = assert_safe("wall", &tin, &[DVec3::new(100.37, 203.1, 4.0)]).lloyd_egbert;
     assert!(captured > 0.6, "captured {captured}");
+}
+
+/// The work budget bounds a cull whatever the view: at most `B` work units (nodes tested while refining, occluder
+/// edges and chains written: no slack, each unit is checked before it is spent), and at most `5 B + r` nodes tested in
+/// all (`r` roots; every node has at most two children: `B` refining tests push at most `2 B` nodes, the splits after
+/// the budget at most `B` more tests pushing `2 B`). Culls are deterministic, a budget draws at least what the
+/// unlimited culler draws (its horizon is never higher), and a budget never reached changes nothing.
+#[test]
+fn the_work_budget_bounds_every_cull() {
+    let tin = grid_tin(61, 600.0, DVec3::ZERO, |x, y| {
+        25.0 * ((x / 50.0).sin() * (y / 70.0).cos()) + 0.05 * x
+    });
+    let (h, _) = hierarchy_of(&tin, 8, 5);
+    let unlimited = SafeCuller::new(&h, SafeParams::default());
+    let eyes = eyes_over(&tin, &[DVec3::new(300.0, 300.0, 400.0), DVec3::new(10.0, 10.0, 3.0)]);
+    for &eye in &eyes {
+        let camera = Camera::all_around(eye.to_array());
+        let full = unlimited.cull(&camera);
+        let mut last_drawn = u32::MAX;
+        for budget in [1usize, 3, 10, 50, 200, 1000, 100_000] {
+            let culler = SafeCuller::new(
+                &h,
+                SafeParams {
+                    work_budget: budget,
+                    ..SafeParams::default()
+                },
+            );
+            let list = culler.cull(&camera);
+            let s = list.stats;
+            assert!(
+                s.work as usize <= budget,
+                "eye {eye}: work {} over budget {budget}",
+                s.work
+            );
+            assert!(
+                s.nodes_tested as usize <= 5 * budget + culler.roots(),
+                "eye {eye}, budget {budget}: {} nodes tested",
+                s.nodes_tested
+            );
+            assert_eq!(list, culler.cull(&camera), "deterministic");
+            if (full.stats.work as usize) < budget {
+                assert_eq!(
+                    list.ranges, full.ranges,
+                    "eye {eye}: a budget never reached changes nothing"
+                );
+            }
+            assert!(s.triangles_drawn >= full.stats.triangles_drawn);
+            last_drawn = last_drawn.min(s.triangles_drawn);
+        }
+        assert_eq!(last_drawn, full.stats.triangles_drawn);
+    }
+}
+
+/// Coarse nodes take effect on a terrain of this size: some visible inner nodes are drawn whole (more is drawn than
+/// when refining), culling goes on behind them, and nothing visible is culled.
+#[test]
+fn coarse_nodes_are_drawn_whole_safely() {
+    let tin = grid_tin(41, 400.0, DVec3::ZERO, |x, _| {
+        if (x - 200.0).abs() < 15.0 {
+            60.0
+        } else {
+            2.0 * (x / 37.0).sin()
+        }
+    });
+    let (h, order) = hierarchy_of(&tin, 8, 0);
+    let truth = GroundTruth::new(&tin);
+    let fine = SafeCuller::new(&h, SafeParams::default());
+    let coarse = SafeCuller::new(
+        &h,
+        SafeParams {
+            coarse_columns: 64,
+            ..SafeParams::default()
+        },
+    );
+    let (mut more, mut culled) = (0, 0);
+    for eye in [
+        DVec3::new(100.0, 200.0, 4.0),
+        DVec3::new(20.0, 30.0, 10.0),
+        DVec3::new(150.0, 380.0, 3.0),
+    ] {
+        let camera = Camera::all_around(eye.to_array());
+        let (a, b) = (fine.cull(&camera), coarse.cull(&camera));
+        more += usize::from(b.stats.triangles_drawn > a.stats.triangles_drawn);
+        culled += usize::from(b.stats.triangles_culled > 0);
+        let visible = truth.visible_triangles(eye);
+        let mask = b.mask(order.len());
+        assert!(order.iter().enumerate().all(|(i, &t)| mask[i] || !visible[t as usize]));
+    }
+    assert!(more > 0, "no node was drawn whole");
+    assert!(culled > 0, "nothing culled");
 }
 
 proptest! {
