@@ -144,12 +144,12 @@ const JACKSBORO_2K: &[Row] = &[
 
 const JACKSBORO_10K: &[Row] = &[
     ("safe", "ground", 0, 0, 0, Some(0.954451)),
-    ("safe", "low", 0, 0, 0, Some(0.856331)),
-    ("safe", "high", 0, 0, 0, Some(0.688001)),
-    ("safe", "valley", 0, 0, 0, Some(0.975410)),
-    ("safe", "ridge", 0, 0, 0, Some(0.796117)),
-    ("safe", "sky", 0, 0, 0, Some(0.423520)),
-    ("safe", "all", 0, 0, 0, Some(0.782305)),
+    ("safe", "low", 0, 0, 0, Some(0.855257)),
+    ("safe", "high", 0, 0, 0, Some(0.687924)),
+    ("safe", "valley", 0, 0, 0, Some(0.974944)),
+    ("safe", "ridge", 0, 0, 0, Some(0.795553)),
+    ("safe", "sky", 0, 0, 0, Some(0.422250)),
+    ("safe", "all", 0, 0, 0, Some(0.781730)),
     ("lloyd-egbert", "ground", 0, 0, 0, Some(0.266633)),
     ("lloyd-egbert", "low", 0, 0, 0, Some(0.244302)),
     ("lloyd-egbert", "high", 0, 0, 0, Some(0.086986)),
@@ -195,13 +195,13 @@ const JACKSBORO_10K: &[Row] = &[
 ];
 
 const SYNTH_5K: &[Row] = &[
-    ("safe", "ground", 0, 0, 0, Some(0.876820)),
-    ("safe", "low", 0, 0, 0, Some(0.815870)),
-    ("safe", "high", 0, 0, 0, Some(0.486237)),
+    ("safe", "ground", 0, 0, 0, Some(0.876612)),
+    ("safe", "low", 0, 0, 0, Some(0.815598)),
+    ("safe", "high", 0, 0, 0, Some(0.484146)),
     ("safe", "valley", 0, 0, 0, Some(0.928115)),
     ("safe", "ridge", 0, 0, 0, Some(0.778025)),
-    ("safe", "sky", 0, 0, 0, Some(0.573118)),
-    ("safe", "all", 0, 0, 0, Some(0.743031)),
+    ("safe", "sky", 0, 0, 0, Some(0.571869)),
+    ("safe", "all", 0, 0, 0, Some(0.742394)),
     ("lloyd-egbert", "ground", 0, 0, 0, Some(0.138135)),
     ("lloyd-egbert", "low", 0, 0, 0, Some(0.110298)),
     ("lloyd-egbert", "high", 0, 0, 0, Some(0.000000)),

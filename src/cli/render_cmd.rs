@@ -23,6 +23,9 @@ pub struct RenderArgs {
     /// `stewart` (not conservative).
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
+    /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
+    #[command(flatten)]
+    pub safe: super::culling_args::SafeArgs,
     /// The PNG to write.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -179,6 +182,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         compare: args.compare,
         timing_runs: args.runs,
         method: args.method,
+        safe: args.safe.params()?,
         pvs: pvs_mask,
     };
     viewer::validate(&terrain, &options)?;

@@ -19,6 +19,9 @@ pub struct ViewArgs {
     /// Culling method at start (switchable in the side panel): `safe`, `thesis`, `stewart` or `lloyd-egbert`.
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
+    /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
+    #[command(flatten)]
+    pub safe: super::culling_args::SafeArgs,
     /// Initial viewpoint `x,y,z` in world coordinates (m) [default: the centre, 20 m above the ground].
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
@@ -101,6 +104,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         }),
         window_size: [args.size[0] as f32, args.size[1] as f32],
         method: args.method,
+        safe: args.safe.params()?,
         startup: Startup {
             rebuild: args.rebuild,
             ground_truth: args.truth,

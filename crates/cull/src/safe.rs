@@ -24,7 +24,8 @@
 //! The edges written of one patch that are connected to each other (*chains*, found by a union-find over the patch's
 //! vertices) are also written as one flat cover each ([`crate::horizon`]'s chains: the least lowered `v` of the chain's
 //! vertices over the `u` its vertices span): far away, where a TIN edge is shorter than a column, edge by edge a chain
-//! covers no column it crosses, as a whole it does.
+//! covers no column it crosses, as a whole it does. Only patches small on screen (spanning fewer than 4 columns) write
+//! chains: nearer ones have edges long enough to cover columns by themselves.
 //!
 //! They are written lazily: each eligible patch raises a per-column bound `P` of what it could write (its highest
 //! lowered vertex over the columns its vertices span), and the eligible patches are written only when a test would
@@ -248,7 +249,6 @@ impl Count {
 /// of all its vertices, their least and greatest `u` (with the vertices there) and least lowered `v`.
 #[derive(Clone, Copy, Debug)]
 struct Chain {
-    vertices: usize,
     mask: u8,
     lo: [(f64, u32); FACES],
     hi: [(f64, u32); FACES],
@@ -258,7 +258,6 @@ struct Chain {
 impl Default for Chain {
     fn default() -> Self {
         Chain {
-            vertices: 0,
             mask: 0b1111,
             lo: [(f64::INFINITY, 0); FACES],
             hi: [(f64::NEG_INFINITY, 0); FACES],
@@ -269,7 +268,6 @@ impl Default for Chain {
 
 impl Chain {
     fn add(&mut self, p: &Projected) {
-        self.vertices += 1;
         self.mask &= p.mask;
         for k in 0..FACES {
             let q = p.face[k];
@@ -308,6 +306,9 @@ fn find(parent: &mut [u8], mut v: u8) -> u8 {
     }
     v
 }
+
+/// Patches spanning fewer columns than this (about `radius · columns / distance`) also write their chains.
+const CHAIN_COLUMNS: f64 = 4.0;
 
 /// No triangle on this side of a patch edge.
 const NO_TRIANGLE: u8 = u8::MAX;
@@ -592,9 +593,17 @@ impl SafeCuller {
                 let a = off(t[0]);
                 *f = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
             }
-            for (i, (q, t)) in parent.iter_mut().zip(touched.iter_mut()).take(nv).enumerate() {
-                *q = i as u8;
-                *t = false;
+            // Chains (below) only where the patch is small on screen: its circle spans fewer than `CHAIN_COLUMNS`
+            // columns, so its edges are about a column long or shorter; nearer, its edges cover the columns by
+            // themselves.
+            let (dx, dy) = (p.centre[0] - eye[0], p.centre[1] - eye[1]);
+            let w = self.params.columns_per_face as f64;
+            let chains = p.radius * w < CHAIN_COLUMNS * (dx * dx + dy * dy).sqrt();
+            if chains {
+                for (i, (q, t)) in parent.iter_mut().zip(touched.iter_mut()).take(nv).enumerate() {
+                    *q = i as u8;
+                    *t = false;
+                }
             }
             let mut joined = false;
             for e in &self.edges[p.edges[0] as usize..p.edges[1] as usize] {
@@ -613,12 +622,14 @@ impl SafeCuller {
                 }
                 count.edges += 1;
                 horizon.write_segment([&projected[base + e[0] as usize], &projected[base + e[1] as usize]]);
-                let (ra, rb) = (find(&mut parent, e[0]), find(&mut parent, e[1]));
-                joined |= touched[e[0] as usize] || touched[e[1] as usize];
-                touched[e[0] as usize] = true;
-                touched[e[1] as usize] = true;
-                if ra != rb {
-                    parent[ra as usize] = rb;
+                if chains {
+                    let (ra, rb) = (find(&mut parent, e[0]), find(&mut parent, e[1]));
+                    joined |= touched[e[0] as usize] || touched[e[1] as usize];
+                    touched[e[0] as usize] = true;
+                    touched[e[1] as usize] = true;
+                    if ra != rb {
+                        parent[ra as usize] = rb;
+                    }
                 }
             }
             // Chains of two edges or more, also as flat covers: a chain crossing a column in several short edges covers
@@ -626,18 +637,27 @@ impl SafeCuller {
             if !joined {
                 continue;
             }
-            for root in 0..nv as u8 {
-                if !touched[root as usize] || find(&mut parent, root) != root || !count.can_write(&self.params) {
+            // The touched vertices grouped by their root, then one chain per group of three vertices or more.
+            let mut members = [(0u8, 0u8); 192];
+            let mut n = 0;
+            for v in 0..nv as u8 {
+                if touched[v as usize] {
+                    members[n] = (find(&mut parent, v), v);
+                    n += 1;
+                }
+            }
+            let members = &mut members[..n];
+            members.sort_unstable();
+            for group in members.chunk_by(|a, b| a.0 == b.0) {
+                if group.len() < 3 {
                     continue;
+                }
+                if !count.can_write(&self.params) {
+                    break;
                 }
                 let mut chain = Chain::default();
-                for v in 0..nv as u8 {
-                    if touched[v as usize] && find(&mut parent, v) == root {
-                        chain.add(&projected[base + v as usize]);
-                    }
-                }
-                if chain.vertices < 3 {
-                    continue;
+                for &(_, v) in group {
+                    chain.add(&projected[base + v as usize]);
                 }
                 count.flats += 1;
                 chain.write(horizon);

@@ -70,6 +70,8 @@ pub struct RenderOptions {
     pub timing_runs: u32,
     /// The culling method (default: the safe culler).
     pub method: CullMethod,
+    /// The safe culler's run-time parameters (also `--columns` of `lloyd-egbert`).
+    pub safe: cull::SafeParams,
     /// A viewcell's PVS as a per-triangle mask (hierarchy order; crate `pvs`): with `ColourMode::Visibility` it
     /// replaces the viewpoint's culling, painting what the PVS excludes as culled.
     pub pvs: Option<Vec<bool>>,
@@ -90,6 +92,7 @@ impl Default for RenderOptions {
             compare: false,
             timing_runs: 5,
             method: CullMethod::Safe,
+            safe: cull::SafeParams::default(),
             pvs: None,
         }
     }
@@ -193,7 +196,7 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
     // Cull for the viewpoint when there is one and a hierarchy to cull with.
     let culled = match (&terrain.hierarchy, options.eye) {
         (Some(h), Some(eye)) if options.view != ViewKind::Map || options.colour == Some(ColourMode::Visibility) => {
-            let culler = AnyCuller::new(h, options.method);
+            let culler = AnyCuller::with_params(h, options.method, options.safe);
             let camera = culling_camera(eye, options);
             Some((culler.cull(&camera), culler, camera))
         }

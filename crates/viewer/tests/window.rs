@@ -97,6 +97,7 @@ fn child(out: &Path) {
         window_size: [WIDTH as f32, HEIGHT as f32],
         // The fixture's regions hide B wrongly; the thesis' test believes them, so ground truth finds false culls.
         method: cull::CullMethod::Thesis,
+        safe: cull::SafeParams::default(),
         startup: Startup {
             rebuild: true,
             ground_truth: true,

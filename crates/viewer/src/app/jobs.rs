@@ -64,6 +64,7 @@ impl ViewerApp {
         let tin = Arc::clone(&self.model.tin);
         let params = self.params.clone();
         let method = self.model.method;
+        let safe = self.model.safe;
         let ctx = ctx.clone();
         let shared = Arc::clone(&progress);
         let repaint = ctx.clone();
@@ -76,7 +77,7 @@ impl ViewerApp {
         std::thread::spawn(move || {
             let result = rebuild(&tin, &params, report)
                 .map_err(|e| e.to_string())
-                .and_then(|h| Model::from_hierarchy(h, method).map_err(|e| e.to_string()));
+                .and_then(|h| Model::from_hierarchy(h, method, safe).map_err(|e| e.to_string()));
             let _ = tx.send(result);
             ctx.request_repaint();
         });

@@ -120,6 +120,8 @@ pub struct ViewerOptions {
     pub startup: Startup,
     /// The culling method (the safe culler by default; switchable in the side panel).
     pub method: CullMethod,
+    /// The safe culler's run-time parameters (also `--columns` of `lloyd-egbert`).
+    pub safe: cull::SafeParams,
 }
 
 impl std::fmt::Debug for ViewerOptions {
@@ -142,30 +144,34 @@ struct Model {
     culler: Option<AnyCuller>,
     /// The culling method (kept across rebuilds).
     method: CullMethod,
+    /// The horizon cullers' parameters (kept across rebuilds).
+    safe: cull::SafeParams,
 }
 
 impl Model {
-    fn new(source: Source, method: CullMethod) -> Result<Model> {
+    fn new(source: Source, method: CullMethod, safe: cull::SafeParams) -> Result<Model> {
         match source {
             Source::Mesh(tin) => Ok(Model {
                 terrain: Terrain::from_tin(&tin)?,
                 tin: Arc::new(tin),
                 culler: None,
                 method,
+                safe,
             }),
-            Source::Hierarchy(h) => Model::from_hierarchy(h, method),
+            Source::Hierarchy(h) => Model::from_hierarchy(h, method, safe),
         }
     }
 
-    fn from_hierarchy(h: Hierarchy, method: CullMethod) -> Result<Model> {
+    fn from_hierarchy(h: Hierarchy, method: CullMethod, safe: cull::SafeParams) -> Result<Model> {
         let positions = h.mesh.positions.iter().map(|p| DVec3::from_array(*p)).collect();
         let tin = Tin::from_parts(positions, h.mesh.triangles.clone())?;
-        let culler = AnyCuller::new(&h, method);
+        let culler = AnyCuller::with_params(&h, method, safe);
         Ok(Model {
             tin: Arc::new(tin),
             terrain: Terrain::from_hierarchy(h)?,
             culler: Some(culler),
             method,
+            safe,
         })
     }
 }
@@ -183,10 +189,11 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         window_size,
         startup,
         method,
+        safe,
     } = options;
     let rebuild = rebuild.unwrap_or_else(pipeline_rebuild);
     let summary = Arc::new(Mutex::new(RunSummary::default()));
-    let model = Model::new(source, method)?;
+    let model = Model::new(source, method, safe)?;
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title(title.clone())
@@ -442,7 +449,7 @@ impl ViewerApp {
     fn set_method(&mut self, method: CullMethod) {
         self.model.method = method;
         if let Some(h) = &self.terrain().hierarchy {
-            self.model.culler = Some(AnyCuller::new(h, method));
+            self.model.culler = Some(AnyCuller::with_params(h, method, self.model.safe));
         }
     }
 
