@@ -41,7 +41,7 @@ pub struct TinArgs {
     pub output: OutputArgs,
 }
 
-fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
+pub(super) fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s.split_once(',').ok_or_else(|| format!("expected dx,dy, got {s:?}"))?;
     let parse = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
     let (dx, dy) = (parse(a)?, parse(b)?);

@@ -151,26 +151,76 @@ pub fn simplify(
     opts: &SimplifyOptions,
     progress: Option<&dyn Fn(usize)>,
 ) -> Result<(Tin, SimplifyReport)> {
+    simplify_constrained(grid, &[], &[], opts, progress)
+}
+
+/// [`simplify`] with constraints, for tiles that must join their neighbours exactly: every sample of `fixed` is a
+/// vertex from the start (after the hull corners, in the given order), and no sample of `frozen` is ever inserted
+/// (unless it is also fixed or a hull corner). Frozen samples count as voids for the error: the caller bounds their
+/// error itself (a tile's sides are simplified on their own, see crate `tiles`). Indices are row-major sample
+/// indices; a void, out-of-range or repeated fixed sample is an error naming its row and column.
+pub fn simplify_constrained(
+    grid: &Grid,
+    fixed: &[u32],
+    frozen: &[u32],
+    opts: &SimplifyOptions,
+    progress: Option<&dyn Fn(usize)>,
+) -> Result<(Tin, SimplifyReport)> {
     let start = Instant::now();
     opts.validate()?;
     check_grid(grid)?;
     let mut s = Simplifier::new(grid)?;
-    let hull = valid_hull(grid)?;
+    let mut start_vertices = valid_hull(grid)?;
+    let mut is_start = vec![false; grid.z.len()];
+    for &v in &start_vertices {
+        is_start[v as usize] = true;
+    }
+    let at = |i: u32| (i as usize / grid.cols, i as usize % grid.cols);
+    let mut seen = vec![false; grid.z.len()];
+    for &f in fixed {
+        let (r, c) = at(f);
+        if f as usize >= grid.z.len() || grid.z[f as usize].is_nan() {
+            return Err(TinError::InvalidParameter(format!(
+                "fixed sample (row {r}, col {c}) is outside the grid or void"
+            )));
+        }
+        if std::mem::replace(&mut seen[f as usize], true) {
+            return Err(TinError::InvalidParameter(format!(
+                "fixed sample (row {r}, col {c}) is given twice"
+            )));
+        }
+        if !std::mem::replace(&mut is_start[f as usize], true) {
+            start_vertices.push(f);
+        }
+    }
     let budget = opts.max_vertices.unwrap_or(usize::MAX);
-    if hull.len() > budget {
+    if start_vertices.len() > budget {
         return Err(TinError::InvalidParameter(format!(
-            "max_vertices is {budget}, but the convex hull of the valid samples already has {} corners",
-            hull.len()
+            "max_vertices is {budget}, but the convex hull corners of the valid samples and the fixed samples are \
+             already {}",
+            start_vertices.len()
         )));
     }
-    s.start(&hull)?;
+    for &f in frozen {
+        if f as usize >= grid.z.len() {
+            let (r, c) = at(f);
+            return Err(TinError::InvalidParameter(format!(
+                "frozen sample (row {r}, col {c}) is outside the grid"
+            )));
+        }
+        if !is_start[f as usize] {
+            s.open[f as usize] = f64::NAN;
+        }
+    }
+    let hull_len = start_vertices.len();
+    s.start(&start_vertices)?;
     let bound = opts.max_error.unwrap_or(0.0);
     let stopped_by = s.run(budget, bound, progress)?;
     if let Some(p) = progress {
         p(s.vertex_sample.len());
     }
     let (tin, mut report) = s.finish(stopped_by)?;
-    report.initial_vertices = hull.len();
+    report.initial_vertices = hull_len;
     report.seconds = start.elapsed().as_secs_f64();
     Ok((tin, report))
 }
