@@ -8,11 +8,11 @@ use clap::{Args, Subcommand};
 use rayon::prelude::*;
 use serde_json::json;
 use tiles::{Plan, PlanOptions, TileReport};
-use tin::DemOptions;
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::{Outputs, write_one};
 use super::mesh_input::is_dem;
+use super::tin_cmd::DemArgs;
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tiles`.
@@ -54,15 +54,9 @@ pub struct PlanArgs {
     /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated.
     #[arg(long, default_value_t = 1.0)]
     pub max_error: f64,
-    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar; required for .png).
-    #[arg(long, value_parser = super::tin_cmd::parse_spacing)]
-    pub spacing: Option<(f64, f64)>,
-    /// Multiply heights by this (for .png: metres per grey level).
-    #[arg(long, default_value_t = 1.0)]
-    pub z_scale: f64,
-    /// The elevation band (1-based) of a multi-band GeoTIFF.
-    #[arg(long)]
-    pub band: Option<u16>,
+    /// How to read the DEM.
+    #[command(flatten)]
+    pub read: DemArgs,
     /// Build parameters of every tile.
     #[command(flatten)]
     pub params: ParamArgs,
@@ -127,11 +121,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.check(&args.out)?;
     let params = args.params.resolve(args.config.as_deref())?;
-    let dem = DemOptions {
-        spacing: args.spacing,
-        z_scale: args.z_scale,
-        band: args.band,
-    };
+    let dem = args.read.options();
     let spinner = out.spinner("reading DEM");
     let grid = tin::read_dem(&args.dem, &dem)?;
     spinner.finish_and_clear();
