@@ -99,16 +99,6 @@ fn errors_name_what_is_wrong() {
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
     fails_with(&["tiles", "build", s(&plan)], "--tile");
     fails_with(
-        &[
-            "tiles",
-            "plan",
-            s(&mesh("jacksboro-2k.obj")),
-            "-o",
-            s(&dir.path().join("p.json")),
-        ],
-        "DEM grid",
-    );
-    fails_with(
         &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
         "directory",
     );
@@ -129,4 +119,37 @@ fn errors_name_what_is_wrong() {
         ],
         "at least 2",
     );
+}
+
+#[test]
+fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = dir.path().join("mesh.json");
+    let v = json(&[
+        "tiles",
+        "plan",
+        s(&mesh("jacksboro-2k.obj")),
+        "-o",
+        s(&plan),
+        "--tile",
+        "10000",
+        "--halo",
+        "1000",
+        "--far-block",
+        "1000",
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(v["tiles"].as_u64(), Some(12));
+    assert!(dir.path().join("mesh.tiles/part-00000.bin").is_file());
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let m = json(&["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch")), "--json"]);
+    let info = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
+    assert_eq!(m["vertices"], info["vertices"]);
+    assert_eq!(m["triangles"], info["triangles"]);
+    std::fs::remove_file(dir.path().join("mesh.tiles/part-00003.bin")).expect("remove");
+    fails_with(&["tiles", "build", s(&plan), "--tile", "3"], "part-00003.bin");
 }

@@ -11,7 +11,7 @@ use tiles::{Plan, PlanOptions, TileReport};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::{Outputs, write_one};
-use super::mesh_input::is_dem;
+use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, MeshArgs, is_dem};
 use super::tin_cmd::DemArgs;
 use super::{Output, OutputArgs};
 
@@ -26,7 +26,7 @@ pub struct TilesArgs {
 /// The steps of a tiled build.
 #[derive(Debug, Subcommand)]
 pub enum TilesCommand {
-    /// Cut a DEM grid into tiles and write the plan (JSON): tiles, halo, far field, build parameters.
+    /// Cut a DEM grid (or a mesh) into tiles and write the plan (JSON): tiles, halo, far field, build parameters.
     Plan(Box<PlanArgs>),
     /// Build one tile of a plan (`--tile I`: one job, as a cluster runs it) or every tile here (`--all`).
     Build(TileBuildArgs),
@@ -37,21 +37,28 @@ pub enum TilesCommand {
 /// Arguments of `tincull tiles plan`.
 #[derive(Debug, Args)]
 pub struct PlanArgs {
-    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF.
+    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF;
+    /// or a mesh (OBJ), read whole once and cut into squares (then --tile, --halo and --far-block are metres).
     pub dem: PathBuf,
+    /// For a mesh: use the file's own triangles (checked to form a height field) instead of re-triangulating.
+    #[arg(long)]
+    pub keep_faces: bool,
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
     #[arg(short, long)]
     pub out: PathBuf,
-    /// Largest tile side, in sample intervals.
+    /// Largest tile side, in sample intervals (a mesh: metres).
     #[arg(long, default_value_t = 512)]
     pub tile: usize,
-    /// Width of the full-resolution halo around each tile whose samples its horizons see, in samples.
+    /// Width of the full-resolution halo around each tile whose samples its horizons see, in samples (a mesh:
+    /// metres, its vertices).
     #[arg(long, default_value_t = 16)]
     pub halo: usize,
-    /// Side of the far field's blocks in samples: each contributes its lowest sample, lowered by --max-error.
+    /// Side of the far field's blocks in samples: each contributes its lowest sample, lowered by --max-error (a
+    /// mesh: metres, its lowest vertex).
     #[arg(long, default_value_t = 16)]
     pub far_block: usize,
-    /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated.
+    /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated (a DEM
+    /// only: a mesh keeps its triangles).
     #[arg(long, default_value_t = 1.0)]
     pub max_error: f64,
     /// How to read the DEM.
@@ -111,28 +118,9 @@ pub fn run(args: &TilesArgs) -> Result<()> {
 }
 
 fn plan(args: &PlanArgs, out: Output) -> Result<()> {
-    if !is_dem(&args.dem) {
-        bail!(
-            "{}: tiles plan takes a DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff); a mesh builds whole with \
-             `tincull build`",
-            args.dem.display()
-        );
-    }
     let mut files = Outputs::new();
     files.check(&args.out)?;
     let params = args.params.resolve(args.config.as_deref())?;
-    let dem = args.read.options();
-    let spinner = out.spinner("reading DEM");
-    let grid = tin::read_dem(&args.dem, &dem)?;
-    spinner.finish_and_clear();
-    let stem = args
-        .out
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tiles_dir = PathBuf::from(format!("{stem}.tiles"));
-    // The source is kept as given when absolute, else made relative to the plan's folder when possible.
-    let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
     let options = PlanOptions {
         tile: args.tile,
         halo: args.halo,
@@ -140,6 +128,20 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         max_error: args.max_error,
         params,
     };
+    let stem = args
+        .out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tiles_dir = PathBuf::from(format!("{stem}.tiles"));
+    let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
+    if !is_dem(&args.dem) {
+        return plan_mesh(args, out, files, options, &source, &tiles_dir);
+    }
+    let dem = args.read.options();
+    let spinner = out.spinner("reading DEM");
+    let grid = tin::read_dem(&args.dem, &dem)?;
+    spinner.finish_and_clear();
     let plan = tiles::make_plan(&grid, &source, dem, options, &tiles_dir)?;
     files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
     files.commit()?;
@@ -167,6 +169,66 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "tile_cols": cols,
         "far_points": plan.far_field.len(),
         "tiles_dir": Plan::resolve(&args.out, &plan.tiles_dir),
+    }))
+}
+
+/// `tiles plan MESH`: the whole mesh is read once and cut; each tile's part is written beside the plan.
+fn plan_mesh(
+    args: &PlanArgs,
+    out: Output,
+    mut files: Outputs,
+    options: PlanOptions,
+    source: &Path,
+    tiles_dir: &Path,
+) -> Result<()> {
+    let mesh = MeshArgs {
+        mesh: args.dem.clone(),
+        keep_faces: args.keep_faces,
+        dedupe: DedupeArg::Reject,
+        dem_vertices: DEFAULT_DEM_VERTICES,
+        band: None,
+    };
+    let (tin, _) = mesh.load(out)?;
+    let (plan, parts) = tiles::make_mesh_plan(&tin, source, options, tiles_dir)?;
+    let dir = Plan::resolve(&args.out, tiles_dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let paths: Vec<PathBuf> = plan
+        .tiles
+        .iter()
+        .filter_map(|t| t.part.as_ref().map(|p| Plan::resolve(&args.out, p)))
+        .collect();
+    for p in &paths {
+        files.check(p)?;
+    }
+    for (p, part) in paths.iter().zip(&parts) {
+        files.add_bytes(p, &part.to_bytes()?)?;
+    }
+    files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
+    files.commit()?;
+    let (rows, cols) = plan
+        .tiles
+        .iter()
+        .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
+    out.say(format!(
+        "{} ({} vertices, {} triangles) -> {}: {} tiles (of a {rows} x {cols} grid of {} m squares), halo {} m, far \
+         field blocks of {} m; parts and tiles in {}",
+        args.dem.display(),
+        tin.num_vertices(),
+        tin.num_triangles(),
+        args.out.display(),
+        plan.tiles.len(),
+        args.tile,
+        args.halo,
+        args.far_block,
+        dir.display()
+    ));
+    out.json(&json!({
+        "plan": args.out,
+        "tiles": plan.tiles.len(),
+        "tile_rows": rows,
+        "tile_cols": cols,
+        "far_points": parts.iter().map(|p| p.far.len()).max().unwrap_or(0),
+        "tiles_dir": dir,
     }))
 }
 

@@ -26,6 +26,7 @@ use tin::{DedupePolicy, Grid, SimplifyOptions, Tin};
 
 use crate::TilesError;
 use crate::boundary::side_vertices;
+use crate::part::MeshPart;
 use crate::plan::{GridInfo, Plan, TileSpec};
 
 /// What a tile job did, with the time of each stage.
@@ -33,7 +34,7 @@ use crate::plan::{GridInfo, Plan, TileSpec};
 pub struct TileReport {
     /// The tile's index.
     pub index: usize,
-    /// Samples of the tile.
+    /// Samples of the tile (a mesh's tile: its vertices).
     pub samples: usize,
     /// Vertices of the tile's TIN.
     pub vertices: usize,
@@ -55,21 +56,25 @@ pub struct TileReport {
     pub build: BuildReport,
 }
 
-/// Reads the plan's DEM and checks that it still has the plan's grid.
-pub fn read_grid(plan: &Plan, plan_path: &Path) -> Result<Grid, TilesError> {
+/// Reads the plan's DEM and checks that it still has the plan's grid; returns both.
+pub fn read_grid<'p>(plan: &'p Plan, plan_path: &Path) -> Result<(Grid, &'p GridInfo), TilesError> {
+    let info = plan
+        .grid
+        .as_ref()
+        .ok_or_else(|| TilesError::Parameter("the plan is a mesh's: its tiles read their parts".into()))?;
     let source = Plan::resolve(plan_path, &plan.source);
     let grid = tin::read_dem(&source, &plan.dem)?;
-    if GridInfo::of(&grid) != plan.grid {
+    if &GridInfo::of(&grid) != info {
         return Err(TilesError::Parameter(format!(
             "{} no longer has the plan's grid ({} x {} samples at {} x {} m): plan again",
             source.display(),
-            plan.grid.rows,
-            plan.grid.cols,
-            plan.grid.dx,
-            plan.grid.dy
+            info.rows,
+            info.cols,
+            info.dx,
+            info.dy
         )));
     }
-    Ok(grid)
+    Ok((grid, info))
 }
 
 /// The samples of `grid` in rows `r0..=r1`, columns `c0..=c1`, as a grid of their own.
@@ -101,7 +106,7 @@ fn sides(rows: usize, cols: usize) -> [Vec<u32>; 4] {
 }
 
 /// The tile's TIN in world coordinates by the plan's formula, and its report's error.
-fn tile_tin(plan: &Plan, spec: &TileSpec, tile: &Grid) -> Result<(Tin, f64), TilesError> {
+fn tile_tin(plan: &Plan, info: &GridInfo, spec: &TileSpec, tile: &Grid) -> Result<(Tin, f64), TilesError> {
     let e = plan.options.max_error;
     let mut fixed = Vec::new();
     let mut frozen = Vec::new();
@@ -123,10 +128,102 @@ fn tile_tin(plan: &Plan, spec: &TileSpec, tile: &Grid) -> Result<(Tin, f64), Til
         .map(|p| {
             let col = ((p.x - tile.origin.x) / tile.dx).round() as usize;
             let row = ((tile.origin.y - p.y) / tile.dy).round() as usize;
-            DVec3::from_array(plan.grid.position(spec.rows[0] + row, spec.cols[0] + col, p.z))
+            DVec3::from_array(info.position(spec.rows[0] + row, spec.cols[0] + col, p.z))
         })
         .collect();
     Ok((Tin::from_parts(world, triangles)?, report.max_error))
+}
+
+/// A tile's TIN and the points beyond it that its horizons see, with the figures of how they were made.
+struct TileInput {
+    tin: Tin,
+    /// Halo points, then far-field points: all on or below the terrain.
+    beyond: Vec<DVec3>,
+    halo_points: usize,
+    samples: usize,
+    max_error: f64,
+    read_seconds: f64,
+    simplify_seconds: f64,
+}
+
+/// A DEM tile: its simplified TIN, the lowered halo and the far field outside the halo.
+fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput, TilesError> {
+    let start = Instant::now();
+    let h = plan.options.halo;
+    let (tile, halo, info) = {
+        let (grid, info) = read_grid(plan, plan_path)?;
+        let win_r = [spec.rows[0].saturating_sub(h), (spec.rows[1] + h).min(info.rows - 1)];
+        let win_c = [spec.cols[0].saturating_sub(h), (spec.cols[1] + h).min(info.cols - 1)];
+        let halo = (window(&grid, win_r, win_c)?, win_r, win_c);
+        (window(&grid, spec.rows, spec.cols)?, halo, info)
+    };
+    let (halo, win_r, win_c) = halo;
+    let read_seconds = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let (tin, max_error) = tile_tin(plan, info, spec, &tile)?;
+    let simplify_seconds = start.elapsed().as_secs_f64();
+
+    let e = plan.options.max_error;
+    let inside = |r: usize, c: usize, rr: [usize; 2], cc: [usize; 2]| {
+        (rr[0]..=rr[1]).contains(&r) && (cc[0]..=cc[1]).contains(&c)
+    };
+    let mut beyond = Vec::new();
+    for r in win_r[0]..=win_r[1] {
+        for c in win_c[0]..=win_c[1] {
+            let z = halo.z[(r - win_r[0]) * halo.cols + (c - win_c[0])];
+            if !z.is_nan() && !inside(r, c, spec.rows, spec.cols) {
+                beyond.push(DVec3::from_array(info.position(r, c, z - e)));
+            }
+        }
+    }
+    let halo_points = beyond.len();
+    for p in &plan.far_field {
+        let (r, c) = (p.row as usize, p.col as usize);
+        if !inside(r, c, win_r, win_c) {
+            beyond.push(DVec3::from_array(info.position(r, c, p.z)));
+        }
+    }
+    Ok(TileInput {
+        tin,
+        beyond,
+        halo_points,
+        samples: tile.z.len(),
+        max_error,
+        read_seconds,
+        simplify_seconds,
+    })
+}
+
+/// A mesh tile: its part, as the plan cut it.
+fn mesh_input(plan_path: &Path, part: &Path) -> Result<TileInput, TilesError> {
+    let start = Instant::now();
+    let path = Plan::resolve(plan_path, part);
+    let bytes = std::fs::read(&path).map_err(|source| TilesError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let part = MeshPart::from_bytes(&bytes, &path)?;
+    let tin = Tin::from_parts(
+        part.positions.iter().map(|p| DVec3::from_array(*p)).collect(),
+        part.triangles,
+    )?;
+    let halo_points = part.halo.len();
+    let beyond = part
+        .halo
+        .iter()
+        .chain(&part.far)
+        .map(|p| DVec3::from_array(*p))
+        .collect();
+    Ok(TileInput {
+        samples: tin.num_vertices(),
+        tin,
+        beyond,
+        halo_points,
+        max_error: 0.0,
+        read_seconds: start.elapsed().as_secs_f64(),
+        simplify_seconds: 0.0,
+    })
 }
 
 /// Runs tile `index` of `plan` (read from `plan_path`) and returns its hierarchy and report; writes nothing.
@@ -137,49 +234,17 @@ pub fn build_tile(
     progress: Option<BuildProgress>,
 ) -> Result<(cull::Hierarchy, TileReport), TilesError> {
     let spec = plan.tile(index)?;
-    let start = Instant::now();
-    let h = plan.options.halo;
-    let win_r = [
-        spec.rows[0].saturating_sub(h),
-        (spec.rows[1] + h).min(plan.grid.rows - 1),
-    ];
-    let win_c = [
-        spec.cols[0].saturating_sub(h),
-        (spec.cols[1] + h).min(plan.grid.cols - 1),
-    ];
-    let (tile, halo) = {
-        let grid = read_grid(plan, plan_path)?;
-        (window(&grid, spec.rows, spec.cols)?, window(&grid, win_r, win_c)?)
+    let input = match &spec.part {
+        Some(part) => mesh_input(plan_path, part)?,
+        None => dem_input(plan, plan_path, spec)?,
     };
-    let read_seconds = start.elapsed().as_secs_f64();
-
-    let start = Instant::now();
-    let (tin, max_error) = tile_tin(plan, spec, &tile)?;
-    let simplify_seconds = start.elapsed().as_secs_f64();
+    let tin = &input.tin;
 
     // The sweep's points: the tile's vertices first, then the halo and the far field, all on or below the terrain.
     let start = Instant::now();
-    let e = plan.options.max_error;
     let mut points: Vec<DVec3> = tin.positions().to_vec();
-    let inside = |r: usize, c: usize, rr: [usize; 2], cc: [usize; 2]| {
-        (rr[0]..=rr[1]).contains(&r) && (cc[0]..=cc[1]).contains(&c)
-    };
-    for r in win_r[0]..=win_r[1] {
-        for c in win_c[0]..=win_c[1] {
-            let z = halo.z[(r - win_r[0]) * halo.cols + (c - win_c[0])];
-            if !z.is_nan() && !inside(r, c, spec.rows, spec.cols) {
-                points.push(DVec3::from_array(plan.grid.position(r, c, z - e)));
-            }
-        }
-    }
-    let halo_points = points.len() - tin.num_vertices();
-    for p in &plan.far_field {
-        let (r, c) = (p.row as usize, p.col as usize);
-        if !inside(r, c, win_r, win_c) {
-            points.push(DVec3::from_array(plan.grid.position(r, c, p.z)));
-        }
-    }
-    let far_points = points.len() - tin.num_vertices() - halo_points;
+    points.extend_from_slice(&input.beyond);
+    let far_points = input.beyond.len() - input.halo_points;
     let (ext, _) = tin::triangulate(&points, DedupePolicy::Reject)?;
     if ext.num_vertices() != points.len() {
         return Err(TilesError::Parameter(format!(
@@ -209,18 +274,18 @@ pub fn build_tile(
     drop(field);
     drop(ext);
     let regions_seconds = start.elapsed().as_secs_f64();
-    let build = pipeline::build_from_regions(&tin, regions, params, [horizon_seconds, regions_seconds], progress)
+    let build = pipeline::build_from_regions(tin, regions, params, [horizon_seconds, regions_seconds], progress)
         .map_err(|e| TilesError::Parameter(format!("tile {index}: {e:#}")))?;
     let report = TileReport {
         index,
-        samples: tile.z.len(),
+        samples: input.samples,
         vertices: tin.num_vertices(),
         triangles: tin.num_triangles(),
-        halo_points,
+        halo_points: input.halo_points,
         far_points,
-        max_error,
-        read_seconds,
-        simplify_seconds,
+        max_error: input.max_error,
+        read_seconds: input.read_seconds,
+        simplify_seconds: input.simplify_seconds,
         triangulate_seconds,
         build: build.report,
     };

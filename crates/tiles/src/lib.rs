@@ -2,7 +2,8 @@
 //! or many) and merge into one hierarchy (thesis §7.1, "out-of-core").
 //!
 //! - [`plan`]: `tincull tiles plan DEM --tile N` cuts a DEM grid into tiles that share their sides and computes the
-//!   far field once ([`far_field`]).
+//!   far field once ([`far_field`]); `tincull tiles plan MESH --tile M` cuts a mesh's triangles into squares of `M`
+//!   metres and writes each tile's part ([`part`]).
 //! - [`job`]: `tincull tiles build plan.json --tile I` builds one tile: its TIN (sides simplified identically by
 //!   both neighbours, [`boundary`]), its vertices' horizons over the tile, a full-resolution halo and the far field
 //!   (all on or below the terrain), and its partial hierarchy, written as a `.tch`.
@@ -20,13 +21,14 @@ pub mod boundary;
 pub mod far_field;
 pub mod job;
 pub mod merge;
+pub mod part;
 pub mod plan;
 
 use std::path::PathBuf;
 
 pub use job::{TileReport, build_tile};
 pub use merge::merge;
-pub use plan::{Plan, PlanOptions, TileSpec, make_plan};
+pub use plan::{Plan, PlanOptions, TileSpec, make_mesh_plan, make_plan};
 
 /// Errors of tiled builds.
 #[derive(Debug, thiserror::Error)]

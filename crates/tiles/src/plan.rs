@@ -63,22 +63,28 @@ pub struct TileSpec {
     pub tile_row: usize,
     /// Column of the tile in the tile grid (west first).
     pub tile_col: usize,
-    /// First and last sample row.
+    /// First and last sample row (a DEM's tile).
+    #[serde(default)]
     pub rows: [usize; 2],
-    /// First and last sample column.
+    /// First and last sample column (a DEM's tile).
+    #[serde(default)]
     pub cols: [usize; 2],
+    /// A mesh's tile: its part file ([`crate::part`]), relative to the plan's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub part: Option<PathBuf>,
     /// The tile's partial hierarchy, relative to the plan's folder.
     pub output: PathBuf,
 }
 
-/// How to cut a DEM into tiles.
+/// How to cut a terrain into tiles. Lengths are in samples for a DEM, in metres for a mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlanOptions {
-    /// Largest tile side in sample intervals (a tile has at most `tile + 1` samples a side).
+    /// Largest tile side: sample intervals of a DEM (a tile has at most `tile + 1` samples a side), metres of a
+    /// mesh.
     pub tile: usize,
-    /// Width of the full-resolution halo around a tile, in samples.
+    /// Width of the full-resolution halo around a tile (samples, or metres).
     pub halo: usize,
-    /// Side of the far field's blocks, in samples.
+    /// Side of the far field's blocks (samples, or metres).
     pub far_block: usize,
     /// Vertical error bound of every tile's simplification (m); 0 keeps every sample that is not exactly
     /// interpolated.
@@ -115,12 +121,12 @@ impl PlanOptions {
 pub struct Plan {
     /// [`PLAN_VERSION`].
     pub version: u32,
-    /// The DEM, absolute or relative to the plan's folder.
+    /// The DEM or mesh, absolute or relative to the plan's folder (a mesh's tiles read only their parts).
     pub source: PathBuf,
-    /// How to read it.
+    /// How to read a DEM.
     pub dem: DemOptions,
-    /// Its grid.
-    pub grid: GridInfo,
+    /// A DEM's grid; `None` for a mesh.
+    pub grid: Option<GridInfo>,
     /// How it was cut.
     pub options: PlanOptions,
     /// The far field: per block of samples, its lowest sample lowered by the error bound.
@@ -161,6 +167,7 @@ pub fn make_plan(
                 tile_col: tc,
                 rows: [rc[tr], rc[tr + 1]],
                 cols: [cc[tc], cc[tc + 1]],
+                part: None,
                 output: tiles_dir.join(format!("tile-{index:05}.tch")),
             });
         }
@@ -169,12 +176,49 @@ pub fn make_plan(
         version: PLAN_VERSION,
         source: source.to_path_buf(),
         dem,
-        grid: GridInfo::of(grid),
+        grid: Some(GridInfo::of(grid)),
         far_field: far_field(grid, options.far_block, options.max_error),
         options,
         tiles,
         tiles_dir: tiles_dir.to_path_buf(),
     })
+}
+
+/// Cuts a mesh into tiles of `options.tile` metres (see [`crate::part`]); returns the plan and each tile's part,
+/// to be written to the tile's [`TileSpec::part`] beside the plan.
+pub fn make_mesh_plan(
+    tin: &tin::Tin,
+    source: &Path,
+    options: PlanOptions,
+    tiles_dir: &Path,
+) -> Result<(Plan, Vec<crate::part::MeshPart>), TilesError> {
+    options.validate()?;
+    let parts = crate::part::mesh_parts(tin, options.tile as f64, options.halo as f64, options.far_block as f64);
+    let mut tiles = Vec::with_capacity(parts.len());
+    let mut out = Vec::with_capacity(parts.len());
+    for (index, (tile_row, tile_col, part)) in parts.into_iter().enumerate() {
+        tiles.push(TileSpec {
+            index,
+            tile_row,
+            tile_col,
+            rows: [0, 0],
+            cols: [0, 0],
+            part: Some(tiles_dir.join(format!("part-{index:05}.bin"))),
+            output: tiles_dir.join(format!("tile-{index:05}.tch")),
+        });
+        out.push(part);
+    }
+    let plan = Plan {
+        version: PLAN_VERSION,
+        source: source.to_path_buf(),
+        dem: DemOptions::default(),
+        grid: None,
+        far_field: Vec::new(),
+        options,
+        tiles,
+        tiles_dir: tiles_dir.to_path_buf(),
+    };
+    Ok((plan, out))
 }
 
 impl Plan {
@@ -197,10 +241,16 @@ impl Plan {
         plan.options.validate()?;
         for (i, t) in plan.tiles.iter().enumerate() {
             let ok = t.index == i
-                && t.rows[0] < t.rows[1]
-                && t.cols[0] < t.cols[1]
-                && t.rows[1] < plan.grid.rows
-                && t.cols[1] < plan.grid.cols;
+                && match &plan.grid {
+                    Some(g) => {
+                        t.part.is_none()
+                            && t.rows[0] < t.rows[1]
+                            && t.cols[0] < t.cols[1]
+                            && t.rows[1] < g.rows
+                            && t.cols[1] < g.cols
+                    }
+                    None => t.part.is_some(),
+                };
             if !ok {
                 return Err(TilesError::Plan {
                     path: path.to_path_buf(),

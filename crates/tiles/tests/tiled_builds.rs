@@ -106,7 +106,11 @@ fn halo_and_far_field_lie_on_or_below_the_merged_terrain() {
     let loc = truth::locate::Locator::new(&tin);
     assert!(!plan.far_field.is_empty());
     for p in &plan.far_field {
-        let at = plan.grid.position(p.row as usize, p.col as usize, p.z);
+        let at = plan
+            .grid
+            .as_ref()
+            .expect("a DEM plan")
+            .position(p.row as usize, p.col as usize, p.z);
         let ground = loc.ground_height(&tin, DVec2::new(at[0], at[1])).expect("inside");
         assert!(
             at[2] <= ground + 1e-9,
@@ -218,6 +222,69 @@ fn a_missing_or_foreign_dem_is_a_clear_error() {
     std::fs::write(&path, "{\"version\": 1}").expect("bad plan");
     let err = Plan::load(&path).expect_err("bad plan").to_string();
     assert!(err.contains("not a tincull tile plan"), "{err}");
+}
+
+/// A triangle as its three positions' bits, rotated to start at the smallest: the same triangle in any mesh.
+fn canonical(tin_positions: &[[f64; 3]], t: [u32; 3]) -> [[u64; 3]; 3] {
+    let mut k = t.map(|v| tin_positions[v as usize].map(f64::to_bits));
+    let m = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+    k.rotate_left(m);
+    k
+}
+
+#[test]
+fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tin = tin::synth_tin(&SynthOptions::new(3000, 9)).expect("synth");
+    let mut params = BuildParams {
+        sectors: 8,
+        subsectors: 2,
+        ..BuildParams::default()
+    };
+    params.crystal.min_group = 4;
+    let side = tin.bbox().size().x;
+    let options = PlanOptions {
+        tile: (side / 3.5) as usize,
+        halo: (side / 20.0) as usize,
+        far_block: (side / 30.0) as usize,
+        max_error: 0.0,
+        params,
+    };
+    let (plan, parts) =
+        tiles::make_mesh_plan(&tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
+    assert_eq!(plan.tiles.len(), 16);
+    std::fs::create_dir_all(dir.path().join("plan.tiles")).expect("dir");
+    for (t, part) in plan.tiles.iter().zip(&parts) {
+        let path = dir.path().join(t.part.as_ref().expect("part"));
+        std::fs::write(path, part.to_bytes().expect("bytes")).expect("write part");
+        assert!(!part.halo.is_empty() && !part.far.is_empty());
+    }
+    let path = dir.path().join("plan.json");
+    std::fs::write(&path, plan.to_json().expect("json")).expect("plan");
+    let plan = Plan::load(&path).expect("load");
+    let h = build_all(&plan, &path);
+    assert_eq!(h.mesh.positions.len(), tin.num_vertices());
+    let original: Vec<[f64; 3]> = tin.positions().iter().map(|p| p.to_array()).collect();
+    let mut a: Vec<_> = tin.triangles().iter().map(|&t| canonical(&original, t)).collect();
+    let mut b: Vec<_> = h
+        .mesh
+        .triangles
+        .iter()
+        .map(|&t| canonical(&h.mesh.positions, t))
+        .collect();
+    a.sort_unstable();
+    b.sort_unstable();
+    assert!(a == b, "the merged mesh differs from the mesh that was cut");
+    // A damaged part is refused with its name.
+    let p0 = dir.path().join(plan.tiles[0].part.as_ref().expect("part"));
+    let mut bytes = std::fs::read(&p0).expect("read");
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    std::fs::write(&p0, bytes).expect("damage");
+    let err = tiles::build_tile(&plan, &path, 0, None)
+        .expect_err("damaged")
+        .to_string();
+    assert!(err.contains("part-00000.bin") && err.contains("checksum"), "{err}");
 }
 
 proptest! {
