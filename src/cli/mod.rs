@@ -19,6 +19,7 @@ mod render_cmd;
 mod stress_cmd;
 mod sweep_cmd;
 mod synth;
+mod tiles_cmd;
 mod tin_cmd;
 #[cfg(feature = "viewer")]
 mod view_cmd;
@@ -46,7 +47,7 @@ pub enum Command {
     Info(info::InfoArgs),
     /// Turn a DEM grid (.npy, .asc, .hgt, .png) into a simplified TIN by greedy insertion, written as OBJ.
     Tin(tin_cmd::TinArgs),
-    /// Write a seeded synthetic terrain (ridged fractal with valleys) as OBJ.
+    /// Write a seeded synthetic terrain (ridged fractal with valleys) as OBJ, or as a height grid (.npy).
     Synth(synth::SynthArgs),
     /// Compute the horizon of every vertex in every subsector (the covering-set sweep), optionally verified.
     Horizon(horizon_cmd::HorizonArgs),
@@ -68,6 +69,9 @@ pub enum Command {
     /// From-region visibility: the potentially visible set (PVS) of a viewcell or of a grid of cells (Koltun et al.
     /// 2001 over the TIN's walls, and the conservative regions), or a check of random cells against ground truth.
     Pvs(pvs_cmd::PvsArgs),
+    /// Tiled builds of terrains too large for one build: plan a DEM's tiles, build each (here or on a cluster),
+    /// merge them into one hierarchy.
+    Tiles(tiles_cmd::TilesArgs),
     /// Render a hierarchy or mesh to PNG without a window: map, orbit overview with culling, or eye view.
     #[cfg(feature = "viewer")]
     Render(render_cmd::RenderArgs),
@@ -117,6 +121,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Stress(args) => stress_cmd::run(&args, args.output.into()),
         Command::Failmap(args) => failmap_cmd::run(&args),
         Command::Pvs(args) => pvs_cmd::run(&args, args.output.into()),
+        Command::Tiles(args) => tiles_cmd::run(&args),
         #[cfg(feature = "viewer")]
         Command::Render(args) => render_cmd::run(&args, args.output.into()),
         #[cfg(feature = "viewer")]

@@ -1,4 +1,4 @@
-//! `tincull synth`: a seeded synthetic terrain written as OBJ.
+//! `tincull synth`: a seeded synthetic terrain written as OBJ (or as a height grid, `.npy`).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -14,10 +14,11 @@ use super::{Output, OutputArgs};
 /// Arguments of `tincull synth`.
 #[derive(Debug, Args)]
 pub struct SynthArgs {
-    /// Output OBJ file.
+    /// Output file: an OBJ mesh, or with `.npy` the terrain's height grid (f64, a JSON sidecar with its spacing
+    /// and position beside it), e.g. the input of `tiles plan`.
     #[arg(short, long)]
     pub out: PathBuf,
-    /// Number of vertices (exact).
+    /// Number of vertices (exact; for a `.npy` grid, the nearest square number of samples).
     #[arg(long, default_value_t = 10_000)]
     pub vertices: usize,
     /// Seed of the random generator: the same seed gives the same terrain.
@@ -38,6 +39,11 @@ pub struct SynthArgs {
 pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.check(&args.out)?;
+    let grid_out = args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+    let sidecar = tin::dem::npy::sidecar_path(&args.out);
+    if grid_out {
+        files.check(&sidecar)?;
+    }
     let start = Instant::now();
     let mut opts = SynthOptions::new(args.vertices, args.rng_seed);
     if let Some(e) = args.extent {
@@ -48,6 +54,34 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
         opts.relief = r;
     }
     let spinner = out.spinner("synthesising");
+    if grid_out {
+        let grid = tin::synth_grid(&opts)?;
+        spinner.set_message("writing");
+        files.add(&args.out, |w| tin::dem::npy::write_npy_to(&grid, w))?;
+        files.add_bytes(&sidecar, tin::dem::npy::sidecar_json(&grid).as_bytes())?;
+        files.commit()?;
+        spinner.finish_and_clear();
+        let seconds = start.elapsed().as_secs_f64();
+        out.say(format!(
+            "wrote {} and {}: {} x {} samples, {:.0} m square, {:.0} m relief ({seconds:.2} s)",
+            args.out.display(),
+            sidecar.display(),
+            grid.rows,
+            grid.cols,
+            opts.extent,
+            opts.relief
+        ));
+        return out.json(&json!({
+            "output": args.out,
+            "sidecar": sidecar,
+            "rows": grid.rows,
+            "cols": grid.cols,
+            "extent": opts.extent,
+            "relief": opts.relief,
+            "rng_seed": args.rng_seed,
+            "seconds": seconds,
+        }));
+    }
     let tin = tin::synth_tin(&opts)?;
     spinner.set_message("writing");
     files.add(&args.out, |w| tin::write_obj_to(&tin, w))?;

@@ -27,6 +27,17 @@ pub struct TinArgs {
     /// Stop when the largest vertical error is at most this (m).
     #[arg(long)]
     pub max_error: Option<f64>,
+    /// How to read the DEM.
+    #[command(flatten)]
+    pub read: DemArgs,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// How to read a DEM grid: the options of every command that reads one (`tin`, `tiles plan`).
+#[derive(Clone, Copy, Debug, Args)]
+pub struct DemArgs {
     /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar; required for .png).
     #[arg(long, value_parser = parse_spacing)]
     pub spacing: Option<(f64, f64)>,
@@ -36,9 +47,17 @@ pub struct TinArgs {
     /// The elevation band (1-based) of a multi-band GeoTIFF.
     #[arg(long)]
     pub band: Option<u16>,
-    /// Output flags.
-    #[command(flatten)]
-    pub output: OutputArgs,
+}
+
+impl DemArgs {
+    /// The reader's options.
+    pub fn options(&self) -> DemOptions {
+        DemOptions {
+            spacing: self.spacing,
+            z_scale: self.z_scale,
+            band: self.band,
+        }
+    }
 }
 
 fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
@@ -56,11 +75,7 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.check(&args.out)?;
     let start = Instant::now();
-    let dem_opts = DemOptions {
-        spacing: args.spacing,
-        z_scale: args.z_scale,
-        band: args.band,
-    };
+    let dem_opts = args.read.options();
     let spinner = out.spinner("reading DEM");
     let grid = tin::read_dem(&args.dem, &dem_opts)?;
     spinner.finish_and_clear();

@@ -49,6 +49,23 @@ pub enum FrameError {
     },
 }
 
+impl std::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameError::BadMagic => write!(f, "it does not start with the expected magic number"),
+            FrameError::Truncated { expected, found } => {
+                write!(f, "truncated: {found} bytes where {expected} are needed")
+            }
+            FrameError::Trailing(extra) => write!(f, "{extra} unexpected bytes after the data"),
+            FrameError::Checksum { stored, found } => {
+                write!(f, "checksum mismatch (stored {stored:08x}, computed {found:08x})")
+            }
+        }
+    }
+}
+
+impl std::error::Error for FrameError {}
+
 /// Frames `payload` as a file of this layout: `magic`, `version`, payload length, CRC-32 (IEEE) of the payload, the
 /// payload (little-endian). Shared by every binary file of tincull (`.tch` here, `.pvs` in the `pvs` crate).
 pub fn frame(magic: &[u8; 8], version: u32, payload: &[u8]) -> Vec<u8> {

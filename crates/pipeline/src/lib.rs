@@ -169,7 +169,38 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     if let Some(p) = &progress {
         p("regions", 1, 1);
     }
+    build_from_regions(
+        tin,
+        vertex_regions,
+        params,
+        [horizon_seconds, regions_seconds],
+        progress,
+    )
+}
 
+/// The grouping and export stages of [`build`], from per-vertex regions computed elsewhere (a tile job computes
+/// them with terrain from outside its tile: crate `tiles`). `seconds` are the horizon and region times to report.
+pub fn build_from_regions(
+    tin: &Tin,
+    vertex_regions: RegionTable,
+    params: &BuildParams,
+    seconds: [f64; 2],
+    progress: Option<BuildProgress>,
+) -> Result<Build> {
+    let [horizon_seconds, regions_seconds] = seconds;
+    match &params.grouping {
+        Grouping::Crystal => params.crystal.validate()?,
+        Grouping::Quadtree(q) => q.validate()?,
+    }
+    if vertex_regions.len() != tin.num_vertices() || vertex_regions.sectors() != params.sectors {
+        anyhow::bail!(
+            "{} vertex region rows of {} sectors do not match a terrain of {} vertices built with {} sectors",
+            vertex_regions.len(),
+            vertex_regions.sectors(),
+            tin.num_vertices(),
+            params.sectors
+        );
+    }
     if let Some(p) = &progress {
         p("grouping", 0, 1);
     }
@@ -249,7 +280,7 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
 }
 
 /// Rounds a circle to f32 relative to `origin` so that it still encloses the original one.
-fn stored_circle(c: &Circle, origin: [f64; 3]) -> ([f32; 2], f32) {
+pub fn stored_circle(c: &Circle, origin: [f64; 3]) -> ([f32; 2], f32) {
     let rel = [c.centre.x - origin[0], c.centre.y - origin[1]];
     let centre = [rel[0] as f32, rel[1] as f32];
     let shift = (f64::from(centre[0]) - rel[0]).hypot(f64::from(centre[1]) - rel[1]);

@@ -22,6 +22,6 @@ pub use grid::Grid;
 pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points};
 pub use obj::{ObjImportOptions, ObjImportReport, ObjLineError, parse_obj, read_obj, write_obj_to};
 pub use predicates::{COORDINATE_LIMIT, coordinate_in_range, orient2d, orientation};
-pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify};
+pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify, simplify_constrained};
 pub use synth::{SynthOptions, synth_grid, synth_tin};
 pub use validate::{MeshStats, PrecisionReport, ValidationReport, find_overlaps, mesh_stats, validate, validate_parts};

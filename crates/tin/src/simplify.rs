@@ -120,7 +120,8 @@ pub struct SimplifyReport {
     pub vertices: usize,
     /// Triangles of the result.
     pub triangles: usize,
-    /// Vertices of the start triangulation (the corners of the convex hull of the valid samples).
+    /// Vertices of the start triangulation (the corners of the convex hull of the valid samples, and the fixed
+    /// samples of [`simplify_constrained`]).
     pub initial_vertices: usize,
     /// Largest vertical error `|z - TIN(x, y)|` over all valid samples (m), from a final pass over the result.
     pub max_error: f64,
@@ -151,26 +152,81 @@ pub fn simplify(
     opts: &SimplifyOptions,
     progress: Option<&dyn Fn(usize)>,
 ) -> Result<(Tin, SimplifyReport)> {
+    simplify_constrained(grid, &[], &[], opts, progress)
+}
+
+/// [`simplify`] with constraints, for tiles that must join their neighbours exactly: every sample of `fixed` is a
+/// vertex from the start (after the hull corners, in the given order), and no sample of `frozen` is ever inserted
+/// (unless it is also fixed or a hull corner). Frozen samples count as voids for the error: the caller bounds their
+/// error itself (a tile's sides are simplified on their own, see crate `tiles`). Indices are row-major sample
+/// indices; a void, out-of-range or repeated fixed sample is an error naming its row and column.
+pub fn simplify_constrained(
+    grid: &Grid,
+    fixed: &[u32],
+    frozen: &[u32],
+    opts: &SimplifyOptions,
+    progress: Option<&dyn Fn(usize)>,
+) -> Result<(Tin, SimplifyReport)> {
     let start = Instant::now();
     opts.validate()?;
     check_grid(grid)?;
     let mut s = Simplifier::new(grid)?;
-    let hull = valid_hull(grid)?;
+    let mut start_vertices = valid_hull(grid)?;
+    let hull_corners = start_vertices.len();
+    let mut is_start = vec![false; grid.z.len()];
+    for &v in &start_vertices {
+        is_start[v as usize] = true;
+    }
+    let at = |i: u32| (i as usize / grid.cols, i as usize % grid.cols);
+    let mut seen = vec![false; grid.z.len()];
+    for &f in fixed {
+        let (r, c) = at(f);
+        if f as usize >= grid.z.len() || grid.z[f as usize].is_nan() {
+            return Err(TinError::InvalidParameter(format!(
+                "fixed sample (row {r}, col {c}) is outside the grid or void"
+            )));
+        }
+        if std::mem::replace(&mut seen[f as usize], true) {
+            return Err(TinError::InvalidParameter(format!(
+                "fixed sample (row {r}, col {c}) is given twice"
+            )));
+        }
+        if !std::mem::replace(&mut is_start[f as usize], true) {
+            start_vertices.push(f);
+        }
+    }
     let budget = opts.max_vertices.unwrap_or(usize::MAX);
-    if hull.len() > budget {
+    if start_vertices.len() > budget {
+        let more = start_vertices.len() - hull_corners;
         return Err(TinError::InvalidParameter(format!(
-            "max_vertices is {budget}, but the convex hull of the valid samples already has {} corners",
-            hull.len()
+            "max_vertices is {budget}, but the convex hull of the valid samples already has {hull_corners} corners{}",
+            if more > 0 {
+                format!(" and {more} more fixed samples")
+            } else {
+                String::new()
+            }
         )));
     }
-    s.start(&hull)?;
+    for &f in frozen {
+        if f as usize >= grid.z.len() {
+            let (r, c) = at(f);
+            return Err(TinError::InvalidParameter(format!(
+                "frozen sample (row {r}, col {c}) is outside the grid"
+            )));
+        }
+        if !is_start[f as usize] {
+            s.open[f as usize] = f64::NAN;
+        }
+    }
+    let start_len = start_vertices.len();
+    s.start(&start_vertices)?;
     let bound = opts.max_error.unwrap_or(0.0);
     let stopped_by = s.run(budget, bound, progress)?;
     if let Some(p) = progress {
         p(s.vertex_sample.len());
     }
     let (tin, mut report) = s.finish(stopped_by)?;
-    report.initial_vertices = hull.len();
+    report.initial_vertices = start_len;
     report.seconds = start.elapsed().as_secs_f64();
     Ok((tin, report))
 }
@@ -750,6 +806,40 @@ mod tests {
             })
             .collect();
         grid_from(rows, cols, z)
+    }
+
+    #[test]
+    fn constrained_keeps_fixed_samples_and_never_inserts_frozen_ones() {
+        let g = hills(9, 9);
+        let top_row: Vec<u32> = (0..9).collect();
+        let (tin, report) =
+            simplify_constrained(&g, &[4, 40], &top_row, &SimplifyOptions::error(0.0), None).expect("constrained");
+        assert_eq!(report.initial_vertices, 6);
+        let top: Vec<f64> = tin
+            .positions()
+            .iter()
+            .filter(|p| p.y == g.origin.y)
+            .map(|p| p.x - g.origin.x)
+            .collect();
+        let mut top = top;
+        top.sort_by(f64::total_cmp);
+        assert_eq!(
+            top,
+            vec![0.0, 4.0 * g.dx, 8.0 * g.dx],
+            "the top row keeps its corners and sample 4 only"
+        );
+        let centre = g.sample(4, 4).expect("centre");
+        assert!(tin.positions().contains(&centre));
+        // Every sample off the top row is exact (error bound 0).
+        let (e, _, covered) = brute_force_error(&g, &tin);
+        assert!(covered);
+        assert!(e.is_finite());
+        let err = simplify_constrained(&g, &[4, 4], &[], &SimplifyOptions::error(0.0), None).expect_err("twice");
+        assert!(err.to_string().contains("given twice"), "{err}");
+        let mut holed = hills(9, 9);
+        holed.z[40] = f64::NAN;
+        let err = simplify_constrained(&holed, &[40], &[], &SimplifyOptions::error(0.0), None).expect_err("void");
+        assert!(err.to_string().contains("row 4, col 4"), "{err}");
     }
 
     /// Checks the report and the TIN against the oracle and the grid.

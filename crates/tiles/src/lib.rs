@@ -1,0 +1,61 @@
+//! Tiled builds: terrains larger than one machine's memory, cut into tiles that build independently (on one machine
+//! or many) and merge into one hierarchy (thesis §7.1, "out-of-core").
+//!
+//! - [`plan`]: `tincull tiles plan DEM --tile N` cuts a DEM grid into tiles that share their sides and computes the
+//!   far field once ([`far_field`]); `tincull tiles plan MESH --tile M` cuts a mesh's triangles into squares of `M`
+//!   metres and writes each tile's part ([`part`]).
+//! - [`job`]: `tincull tiles build plan.json --tile I` builds one tile: its TIN (sides simplified identically by
+//!   both neighbours, [`boundary`]), its vertices' horizons over the tile, a full-resolution halo and the far field
+//!   (all on or below the terrain), and its partial hierarchy, written as a `.tch`.
+//! - [`merge`]: `tincull tiles merge plan.json -o terrain.tch` joins the tiles' meshes and hierarchies; every tile is
+//!   a node near the top.
+//!
+//! **Safety.** The default culler (`safe`) decides at run time from the mesh alone, so the merged hierarchy culls
+//! as safely as any other: its proof needs only that every node's range holds the triangles its bounds cover, which
+//! [`cull::Hierarchy::check_invariants`] and the merge's circles (they only grow) give. The stored regions (the
+//! thesis' test) come from horizons over points on or below the terrain, so tiling never makes them claim more
+//! than an untiled build's horizons over the same terrain would.
+#![warn(missing_docs)]
+
+pub mod boundary;
+pub mod far_field;
+pub mod job;
+pub mod merge;
+pub mod part;
+pub mod plan;
+
+use std::path::PathBuf;
+
+pub use job::{TileReport, build_tile};
+pub use merge::merge;
+pub use plan::{Plan, PlanOptions, TileSpec, make_mesh_plan, make_plan};
+
+/// Errors of tiled builds.
+#[derive(Debug, thiserror::Error)]
+pub enum TilesError {
+    /// A parameter or a plan's content is wrong.
+    #[error("{0}")]
+    Parameter(String),
+    /// A plan file cannot be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A plan file is malformed.
+    #[error("{}: not a tincull tile plan: {reason}", path.display())]
+    Plan {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Reading or simplifying the terrain failed.
+    #[error(transparent)]
+    Tin(#[from] tin::TinError),
+    /// The horizon sweep failed.
+    #[error(transparent)]
+    Horizon(#[from] horizon::HorizonError),
+}

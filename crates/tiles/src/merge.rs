@@ -1,0 +1,291 @@
+//! Joining the tiles' partial hierarchies into one hierarchy over the whole terrain.
+//!
+//! - **Mesh.** Vertices are merged by exact position (shared side vertices are bit-identical, [`crate::job`]);
+//!   the tiles' grouped triangles come first, tile after tile in Morton order of the tile grid, then every tile's
+//!   always-visible triangles. The joined mesh is checked to be an edge-manifold height field ([`tin::Tin`]).
+//! - **Nodes.** Every tile's nodes keep their children, levels and regions, re-expressed relative to the merged
+//!   origin with [`cull::StoredRegion::from_f64`] (which only shrinks a region) and circles that only grow. Each
+//!   tile becomes one node whose children are the tile's roots, and tiles are joined 2 × 2 up a quadtree of the tile
+//!   grid to one root: a tile is a node near the top. Tile and quadtree nodes store no region (never hidden by the
+//!   region test; the safe culler tests their bounds like any node), so they add no claim of occlusion.
+
+use std::collections::HashMap;
+
+use cull::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
+use glam::{DVec2, DVec3};
+use tin::{Circle, Tin};
+
+use crate::TilesError;
+use crate::plan::Plan;
+
+/// A circle in world coordinates.
+#[derive(Clone, Copy)]
+struct WorldCircle {
+    centre: DVec2,
+    radius: f64,
+}
+
+/// Rounds a world circle to f32 relative to `origin` so that it still encloses the original one.
+fn stored(c: WorldCircle, origin: DVec3) -> ([f32; 2], f32) {
+    pipeline::stored_circle(
+        &Circle {
+            centre: c.centre,
+            radius: c.radius,
+        },
+        origin.to_array(),
+    )
+}
+
+/// A node circle of a tile, in world coordinates, grown by the rounding of the sum.
+fn world_circle(n: &Node, origin: DVec3) -> WorldCircle {
+    let centre = origin.truncate() + DVec2::new(f64::from(n.centre[0]), f64::from(n.centre[1]));
+    let slack = 2.0 * f64::EPSILON * centre.abs().max_element();
+    WorldCircle {
+        centre,
+        radius: f64::from(n.radius) + slack,
+    }
+}
+
+/// A circle enclosing all of `circles`.
+fn enclosing(circles: &[WorldCircle]) -> WorldCircle {
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for c in circles {
+        lo = lo.min(c.centre - c.radius);
+        hi = hi.max(c.centre + c.radius);
+    }
+    let centre = (lo + hi) * 0.5;
+    let radius = circles
+        .iter()
+        .map(|c| c.centre.distance(centre) + c.radius)
+        .fold(0.0, f64::max);
+    WorldCircle {
+        centre,
+        radius: radius * (1.0 + 4.0 * f64::EPSILON),
+    }
+}
+
+/// Re-expresses a stored region relative to `to` instead of `from` (it can only shrink).
+fn move_region(r: &StoredRegion, sectors: u32, from: DVec3, to: DVec3) -> Option<StoredRegion> {
+    let points: Vec<[f64; 2]> = r.points.iter().map(|p| [f64::from(p[0]), f64::from(p[1])]).collect();
+    let dir = DVec2::from_array(cull::sector_direction(sectors, u32::from(r.sector)));
+    let origin_t = dir.dot(to.truncate() - from.truncate());
+    StoredRegion::from_f64(r.sector, &points, f64::from(r.tail_slope), origin_t, to.z - from.z)
+}
+
+/// Interleaves the bits of a tile's row and column (row bits higher): the order of the tile quadtree's leaves.
+fn morton(row: usize, col: usize) -> u64 {
+    let mut key = 0u64;
+    for b in 0..32 {
+        key |= (((row >> b) & 1) as u64) << (2 * b + 1) | (((col >> b) & 1) as u64) << (2 * b);
+    }
+    key
+}
+
+/// Merges the tiles' hierarchies (`tiles[i]` is tile `i` of `plan`) into one (see the module docs).
+pub fn merge(plan: &Plan, tiles: &[Hierarchy]) -> Result<Hierarchy, TilesError> {
+    if tiles.len() != plan.tiles.len() {
+        return Err(TilesError::Parameter(format!(
+            "{} tile hierarchies for a plan of {} tiles",
+            tiles.len(),
+            plan.tiles.len()
+        )));
+    }
+    let sectors = plan.options.params.sectors;
+    for (i, t) in tiles.iter().enumerate() {
+        if t.sectors != sectors {
+            return Err(TilesError::Parameter(format!(
+                "tile {i} has {} sectors, the plan {sectors}",
+                t.sectors
+            )));
+        }
+    }
+    let mut order: Vec<usize> = (0..tiles.len()).collect();
+    order.sort_by_key(|&i| morton(plan.tiles[i].tile_row, plan.tiles[i].tile_col));
+
+    // The mesh: vertices merged by exact position, grouped triangles tile by tile, then all orphans.
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut remap: Vec<Vec<u32>> = vec![Vec::new(); tiles.len()];
+    for &i in &order {
+        remap[i] = tiles[i]
+            .mesh
+            .positions
+            .iter()
+            .map(|p| {
+                *index.entry(p.map(f64::to_bits)).or_insert_with(|| {
+                    positions.push(DVec3::from_array(*p));
+                    (positions.len() - 1) as u32
+                })
+            })
+            .collect();
+    }
+    drop(index);
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut tri_base = vec![0u32; tiles.len()];
+    for &i in &order {
+        tri_base[i] = triangles.len() as u32;
+        let end = tiles[i].always_visible[0] as usize;
+        triangles.extend(
+            tiles[i].mesh.triangles[..end]
+                .iter()
+                .map(|t| t.map(|v| remap[i][v as usize])),
+        );
+    }
+    let grouped = triangles.len() as u32;
+    for &i in &order {
+        let [a, b] = tiles[i].always_visible;
+        triangles.extend(
+            tiles[i].mesh.triangles[a as usize..b as usize]
+                .iter()
+                .map(|t| t.map(|v| remap[i][v as usize])),
+        );
+    }
+    let tin = Tin::from_parts(positions, triangles).map_err(|e| {
+        TilesError::Parameter(format!(
+            "the tiles do not join into one terrain (plan and build them again): {e}"
+        ))
+    })?;
+    let origin = tin.origin();
+
+    // The tiles' nodes, then one node per tile.
+    let mut nodes: Vec<Node> = Vec::new();
+    let mut circles: Vec<WorldCircle> = Vec::new();
+    let mut tile_node: HashMap<(usize, usize), u32> = HashMap::new();
+    for &i in &order {
+        let t = &tiles[i];
+        let from = DVec3::from_array(t.origin);
+        let base = nodes.len() as u32;
+        for n in &t.nodes {
+            let c = world_circle(n, from);
+            let (centre, radius) = stored(c, origin);
+            circles.push(c);
+            nodes.push(Node {
+                centre,
+                radius,
+                children: n.children.iter().map(|&k| k + base).collect(),
+                triangles: n.triangles.map(|k| k + tri_base[i]),
+                level: n.level,
+                regions: n
+                    .regions
+                    .iter()
+                    .filter_map(|r| move_region(r, sectors, from, origin))
+                    .collect(),
+            });
+        }
+        let mut roots: Vec<u32> = t.roots.iter().map(|&r| r + base).collect();
+        if roots.is_empty() {
+            continue;
+        }
+        roots.sort_by_key(|&r| nodes[r as usize].triangles[0]);
+        let id = push_parent(&mut nodes, &mut circles, roots, origin);
+        tile_node.insert((plan.tiles[i].tile_row, plan.tiles[i].tile_col), id);
+    }
+
+    // The quadtree of tiles.
+    let (rows, cols) = plan
+        .tiles
+        .iter()
+        .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
+    let mut side = 1;
+    while side < rows.max(cols) {
+        side *= 2;
+    }
+    let mut level_nodes: HashMap<(usize, usize), u32> = tile_node;
+    while side > 1 {
+        let mut up: HashMap<(usize, usize), u32> = HashMap::new();
+        let mut keys: Vec<(usize, usize)> = level_nodes.keys().map(|&(r, c)| (r / 2, c / 2)).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        for (r, c) in keys {
+            let children: Vec<u32> = [(0, 0), (0, 1), (1, 0), (1, 1)]
+                .iter()
+                .filter_map(|&(dr, dc)| level_nodes.get(&(2 * r + dr, 2 * c + dc)).copied())
+                .collect();
+            let id = if children.len() == 1 {
+                children[0]
+            } else {
+                push_parent(&mut nodes, &mut circles, children, origin)
+            };
+            up.insert((r, c), id);
+        }
+        level_nodes = up;
+        side /= 2;
+    }
+    let roots: Vec<u32> = level_nodes.values().copied().collect();
+
+    let first = &tiles[order[0]].build;
+    let (positions, triangles) = tin.into_parts();
+    let h = Hierarchy {
+        sectors,
+        origin: origin.to_array(),
+        nodes,
+        roots,
+        always_visible: [grouped, triangles.len() as u32],
+        mesh: Mesh {
+            positions: positions.iter().map(|p| p.to_array()).collect(),
+            triangles,
+        },
+        build: BuildInfo {
+            seeds: tiles.iter().map(|t| t.build.seeds).sum(),
+            ..first.clone()
+        },
+    };
+    h.check_invariants()
+        .map_err(|e| TilesError::Parameter(format!("the merged hierarchy is malformed: {e}")))?;
+    Ok(h)
+}
+
+/// Appends a region-less node over `children` (whose ranges are consecutive, in order) and returns its index.
+fn push_parent(nodes: &mut Vec<Node>, circles: &mut Vec<WorldCircle>, children: Vec<u32>, origin: DVec3) -> u32 {
+    let c = enclosing(&children.iter().map(|&k| circles[k as usize]).collect::<Vec<_>>());
+    let (centre, radius) = stored(c, origin);
+    let first = nodes[children[0] as usize].triangles[0];
+    let last = nodes[children[children.len() - 1] as usize].triangles[1];
+    let level = children.iter().map(|&k| nodes[k as usize].level).max().unwrap_or(0) + 1;
+    nodes.push(Node {
+        centre,
+        radius,
+        children,
+        triangles: [first, last],
+        level,
+        regions: Vec::new(),
+    });
+    circles.push(c);
+    (nodes.len() - 1) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_orders_quadrants() {
+        let keys: Vec<u64> = [(0, 0), (0, 1), (1, 0), (1, 1), (0, 2)]
+            .iter()
+            .map(|&(r, c)| morton(r, c))
+            .collect();
+        assert_eq!(keys, vec![0, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn enclosing_circle_contains_its_circles() {
+        let cs = [
+            WorldCircle {
+                centre: DVec2::new(0.0, 0.0),
+                radius: 1.0,
+            },
+            WorldCircle {
+                centre: DVec2::new(10.0, 3.0),
+                radius: 2.5,
+            },
+            WorldCircle {
+                centre: DVec2::new(4.0, -7.0),
+                radius: 0.5,
+            },
+        ];
+        let e = enclosing(&cs);
+        for c in cs {
+            assert!(c.centre.distance(e.centre) + c.radius <= e.radius);
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! Tiles of a mesh (an OBJ terrain rather than a DEM grid): the plan cuts the whole TIN once and writes each tile's
+//! part, which its job reads alone.
+//!
+//! A triangle belongs to the tile (a square of `tile` metres over the footprint) that holds its centroid; a tile's
+//! vertices are its triangles' vertices, so the tiles' triangles are exactly the mesh's, and the merge joins the
+//! shared vertices (same positions) back into the same mesh. A part also carries the points its horizons see
+//! beyond the tile: every other vertex within `halo` metres of the tile's vertices' bounding box, and the far
+//! field (per square of `far_block` metres, its lowest vertex) outside that. These are vertices of the mesh itself,
+//! so they lie on the terrain.
+
+use serde::{Deserialize, Serialize};
+use tin::Tin;
+
+use crate::TilesError;
+
+/// Magic bytes of a part file (framed like a `.tch`: [`cull::file::frame`]).
+pub const PART_MAGIC: &[u8; 8] = b"TCPART\0\0";
+/// Version of the part format.
+pub const PART_VERSION: u32 = 1;
+
+/// One tile of a mesh: its triangles and the points beyond it that its horizons see.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MeshPart {
+    /// The tile's vertices (world coordinates), in the mesh's vertex order.
+    pub positions: Vec<[f64; 3]>,
+    /// The tile's triangles, indices into `positions`, in the mesh's triangle order.
+    pub triangles: Vec<[u32; 3]>,
+    /// Other vertices of the mesh near the tile.
+    pub halo: Vec<[f64; 3]>,
+    /// Far-field vertices.
+    pub far: Vec<[f64; 3]>,
+}
+
+impl MeshPart {
+    /// The part as a checksummed file.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, TilesError> {
+        let payload =
+            postcard::to_stdvec(self).map_err(|e| TilesError::Parameter(format!("cannot encode a part: {e}")))?;
+        Ok(cull::file::frame(PART_MAGIC, PART_VERSION, &payload))
+    }
+
+    /// Reads a part file; `name` names it in errors.
+    pub fn from_bytes(bytes: &[u8], name: &std::path::Path) -> Result<MeshPart, TilesError> {
+        let bad = |reason: String| TilesError::Plan {
+            path: name.to_path_buf(),
+            reason,
+        };
+        let (version, payload) = cull::file::unframe(bytes, PART_MAGIC).map_err(|e| bad(e.to_string()))?;
+        if version != PART_VERSION {
+            return Err(bad(format!("part version {version} is not {PART_VERSION}")));
+        }
+        postcard::from_bytes(payload).map_err(|e| bad(format!("malformed part: {e}")))
+    }
+}
+
+/// Cuts `tin` into tiles of `tile` metres (see the module docs): `(tile row, tile column, part)` for every tile
+/// that holds a triangle, row by row from the north.
+pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64) -> Vec<(usize, usize, MeshPart)> {
+    let b = tin.bbox();
+    let cell = |v: f64, lo: f64, k: usize| (((v - lo) / tile).floor().max(0.0) as usize).min(k - 1);
+    let kc = ((b.max.x - b.min.x) / tile).ceil().max(1.0) as usize;
+    let kr = ((b.max.y - b.min.y) / tile).ceil().max(1.0) as usize;
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); kr * kc];
+    for (t, tri) in tin.triangles().iter().enumerate() {
+        let c = tri.iter().map(|&v| tin.position(v)).sum::<glam::DVec3>() / 3.0;
+        let (r, col) = (cell(b.max.y - c.y, 0.0, kr), cell(c.x, b.min.x, kc));
+        members[r * kc + col].push(t as u32);
+    }
+    // The far field: per square of `far_block` metres, its lowest vertex (the first in vertex order on ties).
+    let fc = ((b.max.x - b.min.x) / far_block).ceil().max(1.0) as usize;
+    let fr = ((b.max.y - b.min.y) / far_block).ceil().max(1.0) as usize;
+    let fcell = |v: f64, lo: f64, k: usize| (((v - lo) / far_block).floor().max(0.0) as usize).min(k - 1);
+    let mut lowest: Vec<Option<u32>> = vec![None; fr * fc];
+    for (v, p) in tin.positions().iter().enumerate() {
+        let slot = &mut lowest[fcell(b.max.y - p.y, 0.0, fr) * fc + fcell(p.x, b.min.x, fc)];
+        if slot.is_none_or(|w| p.z < tin.position(w).z) {
+            *slot = Some(v as u32);
+        }
+    }
+    let far: Vec<u32> = lowest.into_iter().flatten().collect();
+
+    let mut local = vec![u32::MAX; tin.num_vertices()];
+    let mut out = Vec::new();
+    for (k, tris) in members.iter().enumerate() {
+        if tris.is_empty() {
+            continue;
+        }
+        let mut vertices: Vec<u32> = tris.iter().flat_map(|&t| tin.triangles()[t as usize]).collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        for (i, &v) in vertices.iter().enumerate() {
+            local[v as usize] = i as u32;
+        }
+        let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+        for &v in &vertices {
+            lo = lo.min(tin.position(v).truncate());
+            hi = hi.max(tin.position(v).truncate());
+        }
+        let (lo, hi) = (lo - halo, hi + halo);
+        let near = |p: glam::DVec3| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y;
+        let part = MeshPart {
+            positions: vertices.iter().map(|&v| tin.position(v).to_array()).collect(),
+            triangles: tris
+                .iter()
+                .map(|&t| tin.triangles()[t as usize].map(|v| local[v as usize]))
+                .collect(),
+            halo: (0..tin.num_vertices() as u32)
+                .filter(|&v| local[v as usize] == u32::MAX && near(tin.position(v)))
+                .map(|v| tin.position(v).to_array())
+                .collect(),
+            far: far
+                .iter()
+                .filter(|&&v| local[v as usize] == u32::MAX && !near(tin.position(v)))
+                .map(|&v| tin.position(v).to_array())
+                .collect(),
+        };
+        for &v in &vertices {
+            local[v as usize] = u32::MAX;
+        }
+        out.push((k / kc, k % kc, part));
+    }
+    out
+}

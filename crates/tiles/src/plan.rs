@@ -1,0 +1,301 @@
+//! The plan of a tiled build (`plan.json`): the DEM, its grid, the tiles, the far field and the build parameters.
+//!
+//! Tiles cut the grid's sample intervals evenly: with `k` tiles across `n` samples, tile `i` spans samples
+//! `round(i·(n−1)/k) ..= round((i+1)·(n−1)/k)`, so neighbouring tiles share one row or column of samples, which both
+//! simplify identically ([`crate::boundary`]). The far field is computed here, once, for every job.
+
+use std::path::{Path, PathBuf};
+
+use pipeline::BuildParams;
+use serde::{Deserialize, Serialize};
+use tin::{DemOptions, Grid};
+
+use crate::TilesError;
+use crate::far_field::{FarPoint, far_field};
+
+/// The plan format's version; a plan of another version is refused.
+pub const PLAN_VERSION: u32 = 1;
+
+/// The DEM's grid, as the plan saw it; every job checks that the file still has it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GridInfo {
+    /// Rows (north to south).
+    pub rows: usize,
+    /// Columns (west to east).
+    pub cols: usize,
+    /// Sample spacing east-west (m).
+    pub dx: f64,
+    /// Sample spacing north-south (m).
+    pub dy: f64,
+    /// World x,y of sample (0, 0), the north-west corner.
+    pub origin: [f64; 2],
+}
+
+impl GridInfo {
+    /// The grid description of `grid`.
+    pub fn of(grid: &Grid) -> GridInfo {
+        GridInfo {
+            rows: grid.rows,
+            cols: grid.cols,
+            dx: grid.dx,
+            dy: grid.dy,
+            origin: grid.origin.to_array(),
+        }
+    }
+
+    /// The world position of sample `(row, col)` at height `z`: the one formula every tile uses, so that shared
+    /// samples get bit-identical positions in every tile.
+    pub fn position(&self, row: usize, col: usize, z: f64) -> [f64; 3] {
+        [
+            self.origin[0] + col as f64 * self.dx,
+            self.origin[1] - row as f64 * self.dy,
+            z,
+        ]
+    }
+}
+
+/// One tile: a rectangle of samples (both ends inclusive) and where its job writes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TileSpec {
+    /// Index in [`Plan::tiles`].
+    pub index: usize,
+    /// Row of the tile in the tile grid (north first).
+    pub tile_row: usize,
+    /// Column of the tile in the tile grid (west first).
+    pub tile_col: usize,
+    /// First and last sample row (a DEM's tile).
+    #[serde(default)]
+    pub rows: [usize; 2],
+    /// First and last sample column (a DEM's tile).
+    #[serde(default)]
+    pub cols: [usize; 2],
+    /// A mesh's tile: its part file ([`crate::part`]), relative to the plan's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub part: Option<PathBuf>,
+    /// The tile's partial hierarchy, relative to the plan's folder.
+    pub output: PathBuf,
+}
+
+/// How to cut a terrain into tiles. Lengths are in samples for a DEM, in metres for a mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanOptions {
+    /// Largest tile side: sample intervals of a DEM (a tile has at most `tile + 1` samples a side), metres of a
+    /// mesh.
+    pub tile: usize,
+    /// Width of the full-resolution halo around a tile (samples, or metres).
+    pub halo: usize,
+    /// Side of the far field's blocks (samples, or metres).
+    pub far_block: usize,
+    /// Vertical error bound of every tile's simplification (m); 0 keeps every sample that is not exactly
+    /// interpolated.
+    pub max_error: f64,
+    /// The build parameters of every tile.
+    pub params: BuildParams,
+}
+
+impl PlanOptions {
+    /// Checks the values.
+    pub fn validate(&self) -> Result<(), TilesError> {
+        let bad = |m: String| Err(TilesError::Parameter(m));
+        if self.tile < 2 {
+            return bad(format!("the tile side must be at least 2 samples, got {}", self.tile));
+        }
+        if self.far_block < 1 {
+            return bad("the far-field block must be at least 1 sample".into());
+        }
+        if !(self.max_error.is_finite() && self.max_error >= 0.0) {
+            return bad(format!(
+                "the error bound must be finite and non-negative, got {}",
+                self.max_error
+            ));
+        }
+        if !matches!(self.params.grouping, pipeline::Grouping::Crystal) {
+            return bad("tiled builds group with crystals (--grouping crystal)".into());
+        }
+        Ok(())
+    }
+}
+
+/// A tiled build's plan (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// [`PLAN_VERSION`].
+    pub version: u32,
+    /// The DEM or mesh, absolute or relative to the plan's folder (a mesh's tiles read only their parts).
+    pub source: PathBuf,
+    /// How to read a DEM.
+    pub dem: DemOptions,
+    /// A DEM's grid; `None` for a mesh.
+    pub grid: Option<GridInfo>,
+    /// How it was cut.
+    pub options: PlanOptions,
+    /// The far field: per block of samples, its lowest sample lowered by the error bound.
+    pub far_field: Vec<FarPoint>,
+    /// The tiles, row by row.
+    pub tiles: Vec<TileSpec>,
+    /// Where the tiles' outputs go, relative to the plan's folder.
+    pub tiles_dir: PathBuf,
+}
+
+/// The first sample of each of `k` even spans over `n` samples, and the last sample.
+fn cuts(n: usize, k: usize) -> Vec<usize> {
+    (0..=k)
+        .map(|i| ((i * (n - 1)) as f64 / k as f64).round() as usize)
+        .collect()
+}
+
+/// Cuts `grid` (read from `source` with `dem`) into tiles. `tiles_dir` is where the jobs will write, relative to the
+/// plan's folder.
+pub fn make_plan(
+    grid: &Grid,
+    source: &Path,
+    dem: DemOptions,
+    options: PlanOptions,
+    tiles_dir: &Path,
+) -> Result<Plan, TilesError> {
+    options.validate()?;
+    let kr = (grid.rows - 1).div_ceil(options.tile).max(1);
+    let kc = (grid.cols - 1).div_ceil(options.tile).max(1);
+    let (rc, cc) = (cuts(grid.rows, kr), cuts(grid.cols, kc));
+    let mut tiles = Vec::with_capacity(kr * kc);
+    for tr in 0..kr {
+        for tc in 0..kc {
+            let index = tiles.len();
+            tiles.push(TileSpec {
+                index,
+                tile_row: tr,
+                tile_col: tc,
+                rows: [rc[tr], rc[tr + 1]],
+                cols: [cc[tc], cc[tc + 1]],
+                part: None,
+                output: tiles_dir.join(format!("tile-{index:05}.tch")),
+            });
+        }
+    }
+    Ok(Plan {
+        version: PLAN_VERSION,
+        source: source.to_path_buf(),
+        dem,
+        grid: Some(GridInfo::of(grid)),
+        far_field: far_field(grid, options.far_block, options.max_error),
+        options,
+        tiles,
+        tiles_dir: tiles_dir.to_path_buf(),
+    })
+}
+
+/// Cuts a mesh into tiles of `options.tile` metres (see [`crate::part`]); returns the plan and each tile's part,
+/// to be written to the tile's [`TileSpec::part`] beside the plan.
+pub fn make_mesh_plan(
+    tin: &tin::Tin,
+    source: &Path,
+    options: PlanOptions,
+    tiles_dir: &Path,
+) -> Result<(Plan, Vec<crate::part::MeshPart>), TilesError> {
+    options.validate()?;
+    let parts = crate::part::mesh_parts(tin, options.tile as f64, options.halo as f64, options.far_block as f64);
+    let mut tiles = Vec::with_capacity(parts.len());
+    let mut out = Vec::with_capacity(parts.len());
+    for (index, (tile_row, tile_col, part)) in parts.into_iter().enumerate() {
+        tiles.push(TileSpec {
+            index,
+            tile_row,
+            tile_col,
+            rows: [0, 0],
+            cols: [0, 0],
+            part: Some(tiles_dir.join(format!("part-{index:05}.bin"))),
+            output: tiles_dir.join(format!("tile-{index:05}.tch")),
+        });
+        out.push(part);
+    }
+    let plan = Plan {
+        version: PLAN_VERSION,
+        source: source.to_path_buf(),
+        dem: DemOptions::default(),
+        grid: None,
+        far_field: Vec::new(),
+        options,
+        tiles,
+        tiles_dir: tiles_dir.to_path_buf(),
+    };
+    Ok((plan, out))
+}
+
+impl Plan {
+    /// Reads and checks a plan file.
+    pub fn load(path: &Path) -> Result<Plan, TilesError> {
+        let text = std::fs::read_to_string(path).map_err(|source| TilesError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let plan: Plan = serde_json::from_str(&text).map_err(|e| TilesError::Plan {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        if plan.version != PLAN_VERSION {
+            return Err(TilesError::Plan {
+                path: path.to_path_buf(),
+                reason: format!("plan version {} is not {PLAN_VERSION}", plan.version),
+            });
+        }
+        plan.options.validate()?;
+        for (i, t) in plan.tiles.iter().enumerate() {
+            let ok = t.index == i
+                && match &plan.grid {
+                    Some(g) => {
+                        t.part.is_none()
+                            && t.rows[0] < t.rows[1]
+                            && t.cols[0] < t.cols[1]
+                            && t.rows[1] < g.rows
+                            && t.cols[1] < g.cols
+                    }
+                    None => t.part.is_some(),
+                };
+            if !ok {
+                return Err(TilesError::Plan {
+                    path: path.to_path_buf(),
+                    reason: format!("tile {i} is malformed"),
+                });
+            }
+        }
+        Ok(plan)
+    }
+
+    /// The plan as pretty JSON.
+    pub fn to_json(&self) -> Result<String, TilesError> {
+        serde_json::to_string_pretty(self).map_err(|e| TilesError::Parameter(format!("cannot write the plan: {e}")))
+    }
+
+    /// A path of the plan (the source, a tile's output) resolved against the plan file's folder.
+    pub fn resolve(plan_path: &Path, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            plan_path.parent().unwrap_or(Path::new(".")).join(p)
+        }
+    }
+
+    /// Tile `index`, or an error naming the range.
+    pub fn tile(&self, index: usize) -> Result<&TileSpec, TilesError> {
+        self.tiles.get(index).ok_or_else(|| {
+            TilesError::Parameter(format!(
+                "tile {index} does not exist: the plan has tiles 0 to {}",
+                self.tiles.len().saturating_sub(1)
+            ))
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cuts_share_their_ends_and_cover_the_grid() {
+        assert_eq!(cuts(11, 2), vec![0, 5, 10]);
+        assert_eq!(cuts(1201, 3), vec![0, 400, 800, 1200]);
+        let c = cuts(1000, 7);
+        assert_eq!((c[0], c[7]), (0, 999));
+        assert!(c.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= 143));
+    }
+}

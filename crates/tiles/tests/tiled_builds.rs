@@ -1,0 +1,320 @@
+//! Tiled builds against their oracles: the merged terrain reproduces every sample within the error bound (no crack
+//! between tiles), halo and far field lie on or below it, the safe culler culls nothing visible on it (exact
+//! checker), and builds are deterministic.
+
+use std::path::{Path, PathBuf};
+
+use cull::{AnyCuller, Camera, Hierarchy, SafeCuller, SafeParams};
+use glam::{DVec2, DVec3};
+use pipeline::BuildParams;
+use proptest::prelude::*;
+use tiles::{Plan, PlanOptions};
+use tin::{DemOptions, Grid, SynthOptions, Tin};
+use truth::visible::GroundTruth;
+
+/// Writes `grid` as `.npy` + sidecar in `dir`, plans it and returns the plan and its path.
+fn plan_grid(dir: &Path, grid: &Grid, tile: usize, halo: usize, max_error: f64) -> (Plan, PathBuf) {
+    let npy = dir.join("terrain.npy");
+    let mut bytes = Vec::new();
+    tin::dem::npy::write_npy_to(grid, &mut bytes).expect("npy");
+    std::fs::write(&npy, bytes).expect("write npy");
+    std::fs::write(tin::dem::npy::sidecar_path(&npy), tin::dem::npy::sidecar_json(grid)).expect("sidecar");
+    let mut params = BuildParams {
+        sectors: 8,
+        subsectors: 2,
+        ..BuildParams::default()
+    };
+    params.crystal.min_group = 4;
+    let options = PlanOptions {
+        tile,
+        halo,
+        far_block: 3,
+        max_error,
+        params,
+    };
+    let plan = tiles::make_plan(grid, &npy, DemOptions::default(), options, Path::new("plan.tiles")).expect("plan");
+    let path = dir.join("plan.json");
+    std::fs::write(&path, plan.to_json().expect("json")).expect("write plan");
+    (Plan::load(&path).expect("load"), path)
+}
+
+/// Builds every tile and merges them.
+fn build_all(plan: &Plan, path: &Path) -> Hierarchy {
+    let tiles: Vec<Hierarchy> = (0..plan.tiles.len())
+        .map(|i| tiles::build_tile(plan, path, i, None).expect("tile").0)
+        .collect();
+    tiles::merge(plan, &tiles).expect("merge")
+}
+
+fn synth(samples: usize, seed: u64) -> Grid {
+    tin::synth_grid(&SynthOptions::new(samples, seed)).expect("synth")
+}
+
+fn tin_of(h: &Hierarchy) -> Tin {
+    Tin::from_parts(
+        h.mesh.positions.iter().map(|p| DVec3::from_array(*p)).collect(),
+        h.mesh.triangles.clone(),
+    )
+    .expect("merged mesh")
+}
+
+/// The largest |sample − merged terrain| over the valid samples; panics where a sample is outside the terrain.
+fn max_sample_error(grid: &Grid, tin: &Tin) -> f64 {
+    let loc = truth::locate::Locator::new(tin);
+    let mut worst: f64 = 0.0;
+    for r in 0..grid.rows {
+        for c in 0..grid.cols {
+            if let Some(p) = grid.sample(r, c) {
+                let h = loc
+                    .ground_height(tin, p.truncate())
+                    .unwrap_or_else(|| panic!("sample ({r}, {c}) is outside the merged terrain"));
+                worst = worst.max((h - p.z).abs());
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn merged_terrain_reproduces_every_sample_within_the_bound() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(45 * 45, 7);
+    for e in [0.0, 0.5, 3.0] {
+        let (plan, path) = plan_grid(dir.path(), &grid, 14, 3, e);
+        assert_eq!(plan.tiles.len(), 16);
+        let h = build_all(&plan, &path);
+        let tin = tin_of(&h);
+        let worst = max_sample_error(&grid, &tin);
+        assert!(
+            worst <= e + 1e-9,
+            "error bound {e}: a sample is {worst} m off the merged terrain"
+        );
+        // The tiles cover the grid's rectangle exactly: no gap, no overlap.
+        let area: f64 = (0..tin.num_triangles()).map(|t| tin.triangle_area_xy(t)).sum();
+        let expected = (grid.cols - 1) as f64 * grid.dx * (grid.rows - 1) as f64 * grid.dy;
+        assert!((area - expected).abs() <= 1e-9 * expected, "area {area} != {expected}");
+    }
+}
+
+#[test]
+fn halo_and_far_field_lie_on_or_below_the_merged_terrain() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(40 * 40, 11);
+    let e = 1.0;
+    let (plan, path) = plan_grid(dir.path(), &grid, 12, 4, e);
+    let tin = tin_of(&build_all(&plan, &path));
+    let loc = truth::locate::Locator::new(&tin);
+    assert!(!plan.far_field.is_empty());
+    for p in &plan.far_field {
+        let at = plan
+            .grid
+            .as_ref()
+            .expect("a DEM plan")
+            .position(p.row as usize, p.col as usize, p.z);
+        let ground = loc.ground_height(&tin, DVec2::new(at[0], at[1])).expect("inside");
+        assert!(
+            at[2] <= ground + 1e-9,
+            "far-field point {at:?} above the terrain ({ground})"
+        );
+    }
+    for r in 0..grid.rows {
+        for c in 0..grid.cols {
+            let p = grid.sample(r, c).expect("no voids");
+            let ground = loc.ground_height(&tin, p.truncate()).expect("inside");
+            assert!(p.z - e <= ground + 1e-9, "halo sample ({r}, {c}) above the terrain");
+        }
+    }
+}
+
+#[test]
+fn safe_culling_of_a_merged_terrain_never_culls_a_visible_triangle() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(48 * 48, 5);
+    let (plan, path) = plan_grid(dir.path(), &grid, 12, 3, 0.5);
+    let h = build_all(&plan, &path);
+    let tin = tin_of(&h);
+    let truth = GroundTruth::new(&tin);
+    let loc = truth.locator();
+    let culler = AnyCuller::Safe(SafeCuller::new(&h, SafeParams::default()));
+    let (lo, hi) = (tin.bbox().min, tin.bbox().max);
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut culled = 0usize;
+    let mut eyes = 0;
+    while eyes < 40 {
+        let xy = DVec2::new(lo.x + next() * (hi.x - lo.x), lo.y + next() * (hi.y - lo.y));
+        let Some(ground) = loc.ground_height(&tin, xy) else {
+            continue;
+        };
+        let above = [2.0, 20.0, 200.0][eyes % 3];
+        let eye = xy.extend(ground + above);
+        eyes += 1;
+        let visible = truth.visible_triangles(eye);
+        let mask = culler
+            .cull(&Camera::all_around(eye.to_array()))
+            .mask(tin.num_triangles());
+        for t in 0..tin.num_triangles() {
+            assert!(!visible[t] || mask[t], "false cull of triangle {t} from {eye:?}");
+        }
+        culled += mask.iter().filter(|&&m| !m).count();
+    }
+    assert!(culled > 0, "the safe culler culled nothing on the merged terrain");
+}
+
+#[test]
+fn tiled_builds_are_deterministic_and_tiles_are_nodes_near_the_top() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(33 * 33, 2);
+    let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
+    let a = build_all(&plan, &path).to_bytes().expect("bytes");
+    let h = build_all(&plan, &path);
+    assert_eq!(a, h.to_bytes().expect("bytes"));
+    // 4 x 4 tiles: one root over 4 quadrant nodes over the 16 tile nodes (none of them stores a region).
+    assert_eq!(h.roots.len(), 1);
+    let root = &h.nodes[h.roots[0] as usize];
+    assert_eq!(root.children.len(), 4);
+    assert!(root.regions.is_empty());
+    for &q in &root.children {
+        let quad = &h.nodes[q as usize];
+        assert_eq!(quad.children.len(), 4);
+        assert!(quad.regions.is_empty());
+    }
+}
+
+#[test]
+fn voids_across_tile_sides_still_join() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut grid = synth(36 * 36, 4);
+    for r in 8..20 {
+        for c in 5..16 {
+            grid.z[r * grid.cols + c] = f64::NAN;
+        }
+    }
+    let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
+    let h = build_all(&plan, &path);
+    let tin = tin_of(&h);
+    assert!(max_sample_error(&grid, &tin) <= 0.5 + 1e-9);
+}
+
+#[test]
+fn a_missing_or_foreign_dem_is_a_clear_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(20 * 20, 1);
+    let (plan, path) = plan_grid(dir.path(), &grid, 8, 2, 0.5);
+    let other = synth(21 * 21, 1);
+    let mut bytes = Vec::new();
+    tin::dem::npy::write_npy_to(&other, &mut bytes).expect("npy");
+    std::fs::write(dir.path().join("terrain.npy"), bytes).expect("replace");
+    std::fs::write(dir.path().join("terrain.json"), tin::dem::npy::sidecar_json(&other)).expect("sidecar");
+    let err = tiles::build_tile(&plan, &path, 0, None)
+        .expect_err("changed DEM")
+        .to_string();
+    assert!(err.contains("no longer has the plan's grid"), "{err}");
+    let err = tiles::build_tile(&plan, &path, 99, None)
+        .expect_err("no such tile")
+        .to_string();
+    assert!(err.contains("tile 99 does not exist"), "{err}");
+    std::fs::write(&path, "{\"version\": 1}").expect("bad plan");
+    let err = Plan::load(&path).expect_err("bad plan").to_string();
+    assert!(err.contains("not a tincull tile plan"), "{err}");
+}
+
+/// A triangle as its three positions' bits, rotated to start at the smallest: the same triangle in any mesh.
+fn canonical(tin_positions: &[[f64; 3]], t: [u32; 3]) -> [[u64; 3]; 3] {
+    let mut k = t.map(|v| tin_positions[v as usize].map(f64::to_bits));
+    let m = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+    k.rotate_left(m);
+    k
+}
+
+#[test]
+fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tin = tin::synth_tin(&SynthOptions::new(3000, 9)).expect("synth");
+    let mut params = BuildParams {
+        sectors: 8,
+        subsectors: 2,
+        ..BuildParams::default()
+    };
+    params.crystal.min_group = 4;
+    let side = tin.bbox().size().x;
+    let options = PlanOptions {
+        tile: (side / 3.5) as usize,
+        halo: (side / 20.0) as usize,
+        far_block: (side / 30.0) as usize,
+        max_error: 0.0,
+        params,
+    };
+    let (plan, parts) =
+        tiles::make_mesh_plan(&tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
+    assert_eq!(plan.tiles.len(), 16);
+    std::fs::create_dir_all(dir.path().join("plan.tiles")).expect("dir");
+    for (t, part) in plan.tiles.iter().zip(&parts) {
+        let path = dir.path().join(t.part.as_ref().expect("part"));
+        std::fs::write(path, part.to_bytes().expect("bytes")).expect("write part");
+        assert!(!part.halo.is_empty() && !part.far.is_empty());
+    }
+    let path = dir.path().join("plan.json");
+    std::fs::write(&path, plan.to_json().expect("json")).expect("plan");
+    let plan = Plan::load(&path).expect("load");
+    let h = build_all(&plan, &path);
+    assert_eq!(h.mesh.positions.len(), tin.num_vertices());
+    let original: Vec<[f64; 3]> = tin.positions().iter().map(|p| p.to_array()).collect();
+    let mut a: Vec<_> = tin.triangles().iter().map(|&t| canonical(&original, t)).collect();
+    let mut b: Vec<_> = h
+        .mesh
+        .triangles
+        .iter()
+        .map(|&t| canonical(&h.mesh.positions, t))
+        .collect();
+    a.sort_unstable();
+    b.sort_unstable();
+    assert!(a == b, "the merged mesh differs from the mesh that was cut");
+    // A damaged part is refused with its name.
+    let p0 = dir.path().join(plan.tiles[0].part.as_ref().expect("part"));
+    let mut bytes = std::fs::read(&p0).expect("read");
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    std::fs::write(&p0, bytes).expect("damage");
+    let err = tiles::build_tile(&plan, &path, 0, None)
+        .expect_err("damaged")
+        .to_string();
+    assert!(err.contains("part-00000.bin") && err.contains("checksum"), "{err}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+    /// Random grids (rough, with flat runs), tile sizes and bounds: the tiles always join into a terrain within the
+    /// bound of every sample.
+    #[test]
+    fn random_grids_join_within_the_bound(
+        rows in 5usize..24,
+        cols in 5usize..24,
+        tile in 3usize..9,
+        e in prop_oneof![Just(0.0), Just(0.5), Just(4.0)],
+        seed in 0u64..1000,
+    ) {
+        let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+        let z: Vec<f64> = (0..rows * cols)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                let v = (s % 1000) as f64 / 50.0;
+                if s % 5 == 0 { 3.0 } else { v }
+            })
+            .collect();
+        let grid = Grid::new(rows, cols, 10.0, 12.5, DVec2::new(300_000.0, 5_000_000.0), z).expect("grid");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (plan, path) = plan_grid(dir.path(), &grid, tile, 2, e);
+        let h = build_all(&plan, &path);
+        let tin = tin_of(&h);
+        prop_assert!(max_sample_error(&grid, &tin) <= e + 1e-9);
+    }
+}

@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""Runs a tincull tiled build on a Dask distributed cluster.
+
+One task per tile (`tincull tiles build PLAN --tile I`), then one merge task (`tincull tiles merge PLAN -o OUT`).
+Each task runs the tincull CLI in a subprocess, so a worker needs the `tincull` binary and the plan's files (the
+DEM and the plan's folder) at the same paths: a shared file system, as on any cluster. A failed tile is retried
+(`--retries`); a tile's output is written atomically, so a retry or a lost worker never leaves half a file.
+
+    scripts/tiles/dask_tiles.py plan.json -o terrain.tch --workers 4          # a local cluster of 4 processes
+    scripts/tiles/dask_tiles.py plan.json -o terrain.tch --scheduler tcp://head:8786   # an existing cluster
+
+Why Dask: its distributed scheduler is pure Python (a small, quick install from PyPI), starts a local cluster in
+a second for tests, and reaches batch systems through dask-jobqueue (Slurm, PBS, SGE) without changing this
+script; the jobs are coarse subprocesses, so nothing of Ray's shared-memory object store would be used.
+"""
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+
+def run_cli(args):
+    """Runs the tincull CLI; returns its JSON report or raises with its error message."""
+    done = subprocess.run(args, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(args)} failed with status {done.returncode}: {done.stderr.strip()}")
+    return json.loads(done.stdout)
+
+
+def build_tile(tincull, plan, index, threads):
+    """One tile job."""
+    args = [tincull, "tiles", "build", plan, "--tile", str(index), "--json", "--quiet"]
+    if threads:
+        args += ["--jobs", str(threads)]
+    return run_cli(args)
+
+
+def merge(tincull, plan, out, _tiles):
+    """The merge job; `_tiles` (the tile jobs' results) makes Dask run it after every tile."""
+    return run_cli([tincull, "tiles", "merge", plan, "-o", out, "--json", "--quiet"])
+
+
+def find_tincull(given):
+    if given:
+        return os.path.abspath(given)
+    here = os.path.dirname(os.path.abspath(__file__))
+    built = os.path.join(here, "..", "..", "target", "release", "tincull")
+    if os.path.exists(built):
+        return os.path.abspath(built)
+    on_path = shutil.which("tincull")
+    if on_path:
+        return on_path
+    sys.exit("error: no tincull binary: build it (cargo build --release) or pass --tincull PATH")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("plan", help="the plan from `tincull tiles plan`")
+    p.add_argument("-o", "--out", required=True, help="the merged hierarchy (.tch)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler; without it a local cluster starts")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster [2]")
+    p.add_argument("--threads", type=int, default=0, help="threads of each tile job [all cores of its worker]")
+    p.add_argument("--retries", type=int, default=2, help="retries of a failed tile job [2]")
+    p.add_argument("--tincull", help="the tincull binary [target/release/tincull, else on PATH]")
+    args = p.parse_args()
+
+    tincull = find_tincull(args.tincull)
+    plan = os.path.abspath(args.plan)
+    out = os.path.abspath(args.out)
+    try:
+        with open(plan) as f:
+            tiles = len(json.load(f)["tiles"])
+    except (OSError, ValueError, KeyError) as e:
+        sys.exit(f"error: {args.plan}: not a readable tincull plan: {e}")
+
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    start = time.time()
+    cluster = None
+    if args.scheduler:
+        client = Client(args.scheduler)
+    else:
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futures = [
+            client.submit(build_tile, tincull, plan, i, args.threads, key=f"tile-{i}", retries=args.retries, pure=False)
+            for i in range(tiles)
+        ]
+        reports = []
+        for k, fut in enumerate(as_completed(futures), 1):
+            reports.append(fut.result())
+            print(f"tiles: {k}/{tiles}", file=sys.stderr)
+        merged = client.submit(merge, tincull, plan, out, futures, key="merge", pure=False).result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    summary = {
+        "tiles": tiles,
+        "seconds": time.time() - start,
+        "tile_peak_memory_bytes": max((r.get("peak_memory_bytes") or 0) for r in reports),
+        "merge": merged,
+    }
+    print(json.dumps(summary))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,370 @@
+//! `tincull tiles plan|build|merge`: tiled builds of terrains too large for one build (crate `tiles`).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+use rayon::prelude::*;
+use serde_json::json;
+use tiles::{Plan, PlanOptions, TileReport};
+
+use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
+use super::files::{Outputs, write_one};
+use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, MeshArgs, is_dem};
+use super::tin_cmd::DemArgs;
+use super::{Output, OutputArgs};
+
+/// Arguments of `tincull tiles`.
+#[derive(Debug, Args)]
+pub struct TilesArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: TilesCommand,
+}
+
+/// The steps of a tiled build.
+#[derive(Debug, Subcommand)]
+pub enum TilesCommand {
+    /// Cut a DEM grid (or a mesh) into tiles and write the plan (JSON): tiles, halo, far field, build parameters.
+    Plan(Box<PlanArgs>),
+    /// Build one tile of a plan (`--tile I`: one job, as a cluster runs it) or every tile here (`--all`).
+    Build(TileBuildArgs),
+    /// Join the tiles' hierarchies into one `.tch`.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `tincull tiles plan`.
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF;
+    /// or a mesh (OBJ), read whole once and cut into squares (then --tile, --halo and --far-block are metres).
+    pub dem: PathBuf,
+    /// For a mesh: use the file's own triangles (checked to form a height field) instead of re-triangulating.
+    #[arg(long)]
+    pub keep_faces: bool,
+    /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Largest tile side, in sample intervals (a mesh: metres).
+    #[arg(long, default_value_t = 512)]
+    pub tile: usize,
+    /// Width of the full-resolution halo around each tile whose samples its horizons see, in samples (a mesh:
+    /// metres, its vertices).
+    #[arg(long, default_value_t = 16)]
+    pub halo: usize,
+    /// Side of the far field's blocks in samples: each contributes its lowest sample, lowered by --max-error (a
+    /// mesh: metres, its lowest vertex).
+    #[arg(long, default_value_t = 16)]
+    pub far_block: usize,
+    /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated (a DEM
+    /// only: a mesh keeps its triangles).
+    #[arg(long, default_value_t = 1.0)]
+    pub max_error: f64,
+    /// How to read the DEM.
+    #[command(flatten)]
+    pub read: DemArgs,
+    /// Build parameters of every tile.
+    #[command(flatten)]
+    pub params: ParamArgs,
+    /// Read build parameters from this TOML file (keys as the long options, with underscores).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Arguments of `tincull tiles build`.
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("which").required(true).args(["tile", "all"])))]
+pub struct TileBuildArgs {
+    /// The plan (from `tiles plan`).
+    pub plan: PathBuf,
+    /// Build this tile (0-based); repeat for several.
+    #[arg(long)]
+    pub tile: Vec<usize>,
+    /// Build every tile of the plan.
+    #[arg(long)]
+    pub all: bool,
+    /// Threads, shared by the tiles built at once [default: all cores].
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Arguments of `tincull tiles merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The plan whose tiles were built.
+    pub plan: PathBuf,
+    /// The merged hierarchy (.tch).
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Runs `tincull tiles`.
+pub fn run(args: &TilesArgs) -> Result<()> {
+    match &args.command {
+        TilesCommand::Plan(a) => plan(a, a.output.into()),
+        TilesCommand::Build(a) => build(a, a.output.into()),
+        TilesCommand::Merge(a) => merge(a, a.output.into()),
+    }
+}
+
+fn plan(args: &PlanArgs, out: Output) -> Result<()> {
+    let mut files = Outputs::new();
+    files.check(&args.out)?;
+    let params = args.params.resolve(args.config.as_deref())?;
+    let options = PlanOptions {
+        tile: args.tile,
+        halo: args.halo,
+        far_block: args.far_block,
+        max_error: args.max_error,
+        params,
+    };
+    let stem = args
+        .out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tiles_dir = PathBuf::from(format!("{stem}.tiles"));
+    let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
+    if !is_dem(&args.dem) {
+        return plan_mesh(args, out, files, options, &source, &tiles_dir);
+    }
+    let dem = args.read.options();
+    let spinner = out.spinner("reading DEM");
+    let grid = tin::read_dem(&args.dem, &dem)?;
+    spinner.finish_and_clear();
+    let plan = tiles::make_plan(&grid, &source, dem, options, &tiles_dir)?;
+    files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
+    files.commit()?;
+    let (rows, cols) = plan
+        .tiles
+        .iter()
+        .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
+    out.say(format!(
+        "{} ({} x {} samples) -> {}: {} tiles ({rows} x {cols}) of at most {} intervals, halo {} samples, far field \
+         {} points; tiles write to {}",
+        args.dem.display(),
+        grid.rows,
+        grid.cols,
+        args.out.display(),
+        plan.tiles.len(),
+        args.tile,
+        args.halo,
+        plan.far_field.len(),
+        Plan::resolve(&args.out, &plan.tiles_dir).display()
+    ));
+    out.json(&json!({
+        "plan": args.out,
+        "tiles": plan.tiles.len(),
+        "tile_rows": rows,
+        "tile_cols": cols,
+        "far_points": plan.far_field.len(),
+        "tiles_dir": Plan::resolve(&args.out, &plan.tiles_dir),
+    }))
+}
+
+/// `tiles plan MESH`: the whole mesh is read once and cut; each tile's part is written beside the plan.
+fn plan_mesh(
+    args: &PlanArgs,
+    out: Output,
+    mut files: Outputs,
+    options: PlanOptions,
+    source: &Path,
+    tiles_dir: &Path,
+) -> Result<()> {
+    let mesh = MeshArgs {
+        mesh: args.dem.clone(),
+        keep_faces: args.keep_faces,
+        dedupe: DedupeArg::Reject,
+        dem_vertices: DEFAULT_DEM_VERTICES,
+        band: None,
+    };
+    let (tin, _) = mesh.load(out)?;
+    let (plan, parts) = tiles::make_mesh_plan(&tin, source, options, tiles_dir)?;
+    let dir = Plan::resolve(&args.out, tiles_dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let paths: Vec<PathBuf> = plan
+        .tiles
+        .iter()
+        .filter_map(|t| t.part.as_ref().map(|p| Plan::resolve(&args.out, p)))
+        .collect();
+    for p in &paths {
+        files.check(p)?;
+    }
+    for (p, part) in paths.iter().zip(&parts) {
+        files.add_bytes(p, &part.to_bytes()?)?;
+    }
+    files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
+    files.commit()?;
+    let (rows, cols) = plan
+        .tiles
+        .iter()
+        .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
+    out.say(format!(
+        "{} ({} vertices, {} triangles) -> {}: {} tiles (of a {rows} x {cols} grid of {} m squares), halo {} m, far \
+         field blocks of {} m; parts and tiles in {}",
+        args.dem.display(),
+        tin.num_vertices(),
+        tin.num_triangles(),
+        args.out.display(),
+        plan.tiles.len(),
+        args.tile,
+        args.halo,
+        args.far_block,
+        dir.display()
+    ));
+    out.json(&json!({
+        "plan": args.out,
+        "tiles": plan.tiles.len(),
+        "tile_rows": rows,
+        "tile_cols": cols,
+        "far_points": parts.iter().map(|p| p.far.len()).max().unwrap_or(0),
+        "tiles_dir": dir,
+    }))
+}
+
+/// Builds one tile and writes its hierarchy.
+fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: bool) -> Result<TileReport> {
+    let target = Plan::resolve(plan_path, &plan.tile(index)?.output);
+    if let Some(dir) = target.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    outfile::check(&target)?;
+    let progress = bars.then(|| stage_progress(out));
+    let (h, report) = tiles::build_tile(plan, plan_path, index, progress).with_context(|| format!("tile {index}"))?;
+    let bytes = h.to_bytes()?;
+    write_one(&target, |w| w.write_all(&bytes))?;
+    Ok(report)
+}
+
+fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
+    let plan = Plan::load(&args.plan)?;
+    let indices: Vec<usize> = if args.all {
+        (0..plan.tiles.len()).collect()
+    } else {
+        args.tile.clone()
+    };
+    for &i in &indices {
+        plan.tile(i)?;
+    }
+    let start = Instant::now();
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(j) = args.jobs {
+        if j == 0 {
+            bail!("--jobs must be at least 1");
+        }
+        builder = builder.num_threads(j);
+    }
+    let pool = builder.build()?;
+    let reports: Vec<TileReport> = if indices.len() == 1 {
+        pool.install(|| build_one(&plan, &args.plan, indices[0], out, true))
+            .map(|r| vec![r])?
+    } else {
+        let bar = out.progress(indices.len() as u64, "tiles");
+        let r = pool.install(|| {
+            indices
+                .par_iter()
+                .map(|&i| {
+                    let r = build_one(&plan, &args.plan, i, out, false);
+                    bar.inc(1);
+                    r
+                })
+                .collect::<Result<Vec<_>>>()
+        })?;
+        bar.finish_and_clear();
+        r
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    for r in &reports {
+        out.say(format!(
+            "tile {}: {} samples -> {} vertices, {} triangles (max error {:.3} m); halo {} and far field {} points; \
+             read {:.2} s, simplify {:.2} s, triangulate {:.2} s, horizons {:.2} s, grouping {:.2} s",
+            r.index,
+            r.samples,
+            r.vertices,
+            r.triangles,
+            r.max_error,
+            r.halo_points,
+            r.far_points,
+            r.read_seconds,
+            r.simplify_seconds,
+            r.triangulate_seconds,
+            r.build.horizon_seconds,
+            r.build.grouping_seconds
+        ));
+    }
+    let peak = peak_memory_bytes();
+    out.say(format!(
+        "{} tiles in {seconds:.2} s{}",
+        reports.len(),
+        peak.map(|b| format!(", peak memory {:.1} MB", b as f64 / 1e6))
+            .unwrap_or_default()
+    ));
+    out.json(&json!({
+        "tiles": reports,
+        "seconds": seconds,
+        "threads": pool.current_num_threads(),
+        "peak_memory_bytes": peak,
+    }))
+}
+
+fn merge(args: &MergeArgs, out: Output) -> Result<()> {
+    let mut out = out;
+    let plan = Plan::load(&args.plan)?;
+    let mut files = Outputs::new();
+    files.check_or_stdout(&args.out, &mut out)?;
+    let start = Instant::now();
+    let bar = out.progress(plan.tiles.len() as u64, "reading");
+    let mut hierarchies = Vec::with_capacity(plan.tiles.len());
+    for t in &plan.tiles {
+        let path = Plan::resolve(&args.plan, &t.output);
+        if !path.exists() {
+            bail!(
+                "tile {} has not been built ({} is missing): run `tincull tiles build {} --tile {}`",
+                t.index,
+                path.display(),
+                args.plan.display(),
+                t.index
+            );
+        }
+        hierarchies.push(cull::Hierarchy::load(&path).with_context(|| format!("tile {}", t.index))?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let h = tiles::merge(&plan, &hierarchies)?;
+    drop(hierarchies);
+    files.add_bytes(&args.out, &h.to_bytes()?)?;
+    files.commit()?;
+    let seconds = start.elapsed().as_secs_f64();
+    let peak = peak_memory_bytes();
+    out.say(format!(
+        "{} tiles -> {}: {} vertices, {} triangles, {} nodes, {} always visible; {seconds:.2} s{}",
+        plan.tiles.len(),
+        args.out.display(),
+        h.mesh.positions.len(),
+        h.num_triangles(),
+        h.nodes.len(),
+        h.always_visible[1] - h.always_visible[0],
+        peak.map(|b| format!(", peak memory {:.1} MB", b as f64 / 1e6))
+            .unwrap_or_default()
+    ));
+    out.json(&json!({
+        "output": args.out,
+        "tiles": plan.tiles.len(),
+        "vertices": h.mesh.positions.len(),
+        "triangles": h.num_triangles(),
+        "nodes": h.nodes.len(),
+        "always_visible": h.always_visible[1] - h.always_visible[0],
+        "seconds": seconds,
+        "peak_memory_bytes": peak,
+    }))
+}

@@ -1,0 +1,155 @@
+//! End-to-end tests of `tincull tiles plan|build|merge` and of `synth` writing a height grid.
+
+mod common;
+
+use common::{fails_with, json, mesh, ok, s};
+
+/// A small synthetic grid and its plan of 3 x 3 tiles in `dir`.
+fn planned(dir: &std::path::Path) -> std::path::PathBuf {
+    let npy = dir.join("t.npy");
+    let v = json(&[
+        "synth",
+        "--vertices",
+        "3600",
+        "--rng-seed",
+        "2",
+        "-o",
+        s(&npy),
+        "--json",
+    ]);
+    assert_eq!((v["rows"].as_u64(), v["cols"].as_u64()), (Some(60), Some(60)));
+    assert!(dir.join("t.json").is_file(), "the sidecar is written beside the grid");
+    let plan = dir.join("plan.json");
+    let v = json(&[
+        "tiles",
+        "plan",
+        s(&npy),
+        "-o",
+        s(&plan),
+        "--tile",
+        "20",
+        "--halo",
+        "4",
+        "--max-error",
+        "0.5",
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(v["tiles"].as_u64(), Some(9));
+    plan
+}
+
+#[test]
+fn all_tiles_or_one_by_one_merge_to_the_same_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = planned(dir.path());
+    let v = json(&["tiles", "build", s(&plan), "--all", "--jobs", "2", "--json"]);
+    assert_eq!(v["tiles"].as_array().map(Vec::len), Some(9));
+    let a = dir.path().join("a.tch");
+    let m = json(&["tiles", "merge", s(&plan), "-o", s(&a), "--json"]);
+    assert!(m["triangles"].as_u64().expect("triangles") > 3000);
+    // One tile at a time, single-threaded: the same bytes.
+    for i in 0..9 {
+        ok(&[
+            "tiles",
+            "build",
+            s(&plan),
+            "--tile",
+            &i.to_string(),
+            "--jobs",
+            "1",
+            "-q",
+        ]);
+    }
+    let b = dir.path().join("b.tch");
+    ok(&["tiles", "merge", s(&plan), "-o", s(&b), "-q"]);
+    assert_eq!(std::fs::read(&a).expect("a"), std::fs::read(&b).expect("b"));
+    // The merged file is an ordinary hierarchy: cull and eval read it.
+    let e = json(&[
+        "eval",
+        s(&a),
+        "--viewpoints",
+        "2",
+        "--no-per-triangle",
+        "--no-safe-regions",
+        "--json",
+        "-q",
+    ]);
+    let safe = e["rows"]
+        .as_array()
+        .expect("rows")
+        .iter()
+        .find(|r| r["method"] == "safe" && r["class"] == "all")
+        .expect("safe row")
+        .clone();
+    assert_eq!(safe["summary"]["viewpoints_with_false_culls"].as_u64(), Some(0));
+}
+
+#[test]
+fn errors_name_what_is_wrong() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = planned(dir.path());
+    fails_with(
+        &["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch"))],
+        "tile 0 has not been built",
+    );
+    fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
+    fails_with(&["tiles", "build", s(&plan)], "--tile");
+    fails_with(
+        &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
+        "directory",
+    );
+    std::fs::write(dir.path().join("bad.json"), "[1, 2]").expect("write");
+    fails_with(
+        &["tiles", "build", s(&dir.path().join("bad.json")), "--all"],
+        "not a tincull tile plan",
+    );
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&dir.path().join("t.npy")),
+            "-o",
+            s(&dir.path().join("q.json")),
+            "--tile",
+            "1",
+        ],
+        "at least 2",
+    );
+}
+
+#[test]
+fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = dir.path().join("mesh.json");
+    let v = json(&[
+        "tiles",
+        "plan",
+        s(&mesh("jacksboro-2k.obj")),
+        "-o",
+        s(&plan),
+        "--tile",
+        "10000",
+        "--halo",
+        "1000",
+        "--far-block",
+        "1000",
+        "--sectors",
+        "8",
+        "--subsectors",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(v["tiles"].as_u64(), Some(12));
+    assert!(dir.path().join("mesh.tiles/part-00000.bin").is_file());
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let m = json(&["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch")), "--json"]);
+    let info = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
+    assert_eq!(m["vertices"], info["vertices"]);
+    assert_eq!(m["triangles"], info["triangles"]);
+    std::fs::remove_file(dir.path().join("mesh.tiles/part-00003.bin")).expect("remove");
+    fails_with(&["tiles", "build", s(&plan), "--tile", "3"], "part-00003.bin");
+}
