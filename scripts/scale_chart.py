@@ -15,14 +15,16 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-TIME_STAGES = [
-    ("tin_s", "tin (DEM → TIN)"),
+BUILD_STAGES = [
     ("load_s", "build: read + Delaunay"),
     ("horizon_s", "build: horizons"),
     ("regions_s", "build: regions"),
     ("grouping_s", "build: grouping"),
     ("build_s", "build: total (wall)"),
     ("build_user_s", "build: total (user CPU)"),
+]
+OTHER_STAGES = [
+    ("tin_s", "tin (DEM → TIN)"),
     ("truth_s_per_viewpoint", "eval: ground truth / viewpoint"),
     ("cull_safe_ground_us", "cull safe, ground (µs → s)"),
     ("cull_thesis_ground_us", "cull thesis, ground (µs → s)"),
@@ -60,23 +62,24 @@ def main():
     path = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/scale/scale.csv")
     png = Path(sys.argv[2] if len(sys.argv) > 2 else "docs/scale.png")
     rows = list(csv.DictReader(path.open()))
-    fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(14, 6.5))
+    fig, (ax_t, ax_o, ax_m) = plt.subplots(1, 3, figsize=(18, 8.5))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     exponents = []
     for src, (title, style) in SOURCES.items():
         mine = [r for r in rows if r["source"] == src]
         if not mine:
             continue
-        for i, (key, label) in enumerate(TIME_STAGES):
-            xs, ys = series(mine, key)
-            if key.endswith("_us"):
-                ys = [y / 1e6 for y in ys]
-            b = fit(xs, ys)
-            if not xs:
-                continue
-            exponents.append((title, label, b))
-            ax_t.plot(xs, ys, style, marker="o", color=colours[i % len(colours)],
-                      label=f"{title}: {label}" + (f" (n^{b:.2f})" if b is not None else ""))
+        for ax, stages in ((ax_t, BUILD_STAGES), (ax_o, OTHER_STAGES)):
+            for i, (key, label) in enumerate(stages):
+                xs, ys = series(mine, key)
+                if key.endswith("_us"):
+                    ys = [y / 1e6 for y in ys]
+                b = fit(xs, ys)
+                if not xs:
+                    continue
+                exponents.append((title, label, b))
+                ax.plot(xs, ys, style, marker="o", color=colours[i % len(colours)],
+                        label=f"{title}: {label}" + (f" (n^{b:.2f})" if b is not None else ""))
         for i, (key, label) in enumerate(MEMORY_STAGES):
             xs, ys = series(mine, key)
             b = fit(xs, ys)
@@ -86,16 +89,19 @@ def main():
             ax_m.plot(xs, ys, style, marker="o", color=colours[i % len(colours)],
                       label=f"{title}: {label}" + (f" (n^{b:.2f})" if b is not None else ""))
     threads = sorted({r["threads"] for r in rows if r.get("threads")})
-    ax_t.set_title(f"Time per stage ({', '.join(threads) or '?'} threads; shared 2-core machine)")
+    ax_t.set_title(f"build, per stage ({', '.join(threads) or '?'} threads; shared, loaded 2-core machine)",
+                   fontsize=10)
     ax_t.set_ylabel("seconds")
-    ax_m.set_title("Peak resident memory per command")
+    ax_o.set_title("tin, ground truth per viewpoint, cull per view", fontsize=10)
+    ax_o.set_ylabel("seconds")
+    ax_m.set_title("Peak resident memory per command", fontsize=10)
     ax_m.set_ylabel("MB")
-    for ax in (ax_t, ax_m):
+    for ax in (ax_t, ax_o, ax_m):
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("vertices")
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7, loc="upper left")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=1)
     fig.suptitle("tincull at scale: solid = synthetic (synth --rng-seed 1), dashed = N43W123 (tin --vertices N); "
                  "16×4 sectors", fontsize=10)
     fig.tight_layout()
@@ -121,10 +127,14 @@ def main():
               f"| {cell(r, 'cull_thesis_ground_us', '{:.1f}')} / {cell(r, 'cull_thesis_high_us', '{:.1f}')} "
               f"| {cell(r, 'truth_s_per_viewpoint', '{:.2f}')} |")
     print()
-    print("| source | stage | fitted exponent |")
-    print("| --- | --- | ---: |")
-    for title, label, b in exponents:
-        print(f"| {title} | {label} | {'–' if b is None else f'{b:.2f}'} |")
+    titles = [t for t, _ in SOURCES.values() if any(e[0] == t for e in exponents)]
+    print("| stage | " + " | ".join(f"exponent, {t}" for t in titles) + " |")
+    print("| --- |" + " ---: |" * len(titles))
+    labels = list(dict.fromkeys(e[1] for e in exponents))
+    found = {(t, label): b for t, label, b in exponents}
+    for label in labels:
+        cells = [found.get((t, label)) for t in titles]
+        print(f"| {label} | " + " | ".join("–" if b is None else f"{b:.2f}" for b in cells) + " |")
 
 
 if __name__ == "__main__":

@@ -29,6 +29,8 @@
 //!   will query again are skipped (for narrow wedges the `A` and `B` orders nearly coincide, so
 //!   whole subtrees are finished early);
 //! - the sorts compare the f64 approximations of `A` and `B` and re-sort only runs of near-ties exactly;
+//! - consecutive subsectors share a boundary direction (`b` of one is `a` of the next): a sweep hands its leaf
+//!   order on, and the next derives its visiting order from it instead of sorting (`DirectionOrder`);
 //! - everything the main loop reads is laid out in visiting order, and prefetched a few visits ahead;
 //! - each node keeps bounds (smallest and largest `t`, largest `z`) of the points inserted into its covering set;
 //!   a node whose bounding box is strictly less steep than the best candidate so far cannot hold the horizon
@@ -58,18 +60,54 @@ use crate::sector::Wedge;
 /// Leaves of the tree are buckets of this many consecutive leaf positions, scanned directly.
 const BUCKET: usize = 8;
 
+/// The vertices sorted by their exact key across a boundary direction `e` (`cross(e, x)`, increasing; ties by
+/// index): the leaf order of the subsector whose wedge has `b = e`, and, reversed with its runs of equal keys
+/// re-sorted, the visiting order of the next subsector (`a = e`). Handing it on saves one of the two sorts of a
+/// sweep.
+pub(crate) struct DirectionOrder {
+    direction: DVec2,
+    order: Vec<u32>,
+}
+
 /// Computes, for every vertex, its horizon vertex in the subsector with wedge `wedge` (or [`NO_HORIZON`]), into
-/// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]).
-pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]) {
-    sweep_with(positions, origin, wedge, out, BUCKET, HullSet::DEFAULT_SMALL_LIMIT);
+/// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]). `previous` is
+/// what the sweep of the previous subsector returned, if it ran just before (used when its direction is this
+/// wedge's `a`); the result is the same with or without it.
+pub(crate) fn sweep_subsector(
+    positions: &[DVec3],
+    origin: DVec2,
+    wedge: &Wedge,
+    out: &mut [u32],
+    previous: Option<DirectionOrder>,
+) -> DirectionOrder {
+    sweep_with(
+        positions,
+        origin,
+        wedge,
+        out,
+        BUCKET,
+        HullSet::DEFAULT_SMALL_LIMIT,
+        previous,
+    )
 }
 
 /// [`sweep_subsector`] with a given bucket size and small-hull limit (tests vary both).
-fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32], bucket: usize, small_limit: usize) {
+fn sweep_with(
+    positions: &[DVec3],
+    origin: DVec2,
+    wedge: &Wedge,
+    out: &mut [u32],
+    bucket: usize,
+    small_limit: usize,
+    previous: Option<DirectionOrder>,
+) -> DirectionOrder {
     let n = positions.len();
     debug_assert_eq!(out.len(), n);
     if n == 0 {
-        return;
+        return DirectionOrder {
+            direction: wedge.b,
+            order: Vec::new(),
+        };
     }
     let xy = |v: u32| positions[v as usize].truncate();
     let ka: Vec<LineKey> = positions.iter().map(|p| LineKey::new(wedge.a, p.truncate())).collect();
@@ -78,18 +116,42 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
     let cmp_b = |x: u32, y: u32| kb[x as usize].cmp_exact(&kb[y as usize], wedge.b, xy(x), xy(y));
     let gap = |keys: &[LineKey]| LineKey::certain_gap(keys.iter().map(LineKey::magnitude).fold(0.0, f64::max));
 
-    // Visiting order: A descending, then B ascending, then index.
-    let order_a = sort_exact(
-        n,
-        |v| -ka[v as usize].value(),
-        gap(&ka),
-        |x, y| {
-            ka[y as usize]
-                .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
-                .then_with(|| cmp_b(x, y))
-                .then(x.cmp(&y))
-        },
-    );
+    // Visiting order: A descending, then B ascending, then index. From the previous subsector's leaf order (A
+    // ascending, then index) when there is one: reversed, with each run of equal A re-sorted by B and index. Both
+    // are sorted by the same total order, hence identical.
+    let same_direction = |d: DVec2| d.to_array().map(f64::to_bits) == wedge.a.to_array().map(f64::to_bits);
+    let order_a = match previous {
+        Some(DirectionOrder { direction, mut order }) if same_direction(direction) && order.len() == n => {
+            order.reverse();
+            let mut start = 0;
+            while start < n {
+                let (first, mut end) = (order[start], start + 1);
+                while end < n
+                    && ka[order[end] as usize]
+                        .cmp_exact(&ka[first as usize], wedge.a, xy(order[end]), xy(first))
+                        .is_eq()
+                {
+                    end += 1;
+                }
+                if end - start > 1 {
+                    order[start..end].sort_unstable_by(|&x, &y| cmp_b(x, y).then(x.cmp(&y)));
+                }
+                start = end;
+            }
+            order
+        }
+        _ => sort_exact(
+            n,
+            |v| -ka[v as usize].value(),
+            gap(&ka),
+            |x, y| {
+                ka[y as usize]
+                    .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
+                    .then_with(|| cmp_b(x, y))
+                    .then(x.cmp(&y))
+            },
+        ),
+    };
     // Leaves: B ascending, then index; hi = last leaf of each group of equal B.
     let order_b = sort_exact(
         n,
@@ -110,7 +172,6 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
             pos as u32
         };
     }
-    drop(order_b);
 
     // Everything the main loop reads, laid out in visiting order; the bucket members in leaf (B) order.
     let buckets = n.div_ceil(bucket);
@@ -290,6 +351,10 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
             node >>= 1;
         }
     }
+    DirectionOrder {
+        direction: wedge.b,
+        order: order_b,
+    }
 }
 
 /// How many visits ahead the main loop prefetches.
@@ -423,10 +488,15 @@ mod tests {
             let g = SectorGeometry::new(&SectorConfig::new(s, k).expect("valid"));
             let origin = DVec2::new(1.0, 2.0);
             let expect = vertex_horizons(&positions, origin, &g);
+            let mut previous = None;
             for j in 0..g.total() {
                 let mut out = vec![0; n];
-                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit);
+                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, None);
                 prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {}", j);
+                // Handing on the previous subsector's leaf order gives the same.
+                let mut out = vec![0; n];
+                previous = Some(sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, previous));
+                prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {} after {}", j, j.max(1) - 1);
             }
         }
     }
