@@ -61,7 +61,9 @@ def series(rows, key):
 def main():
     path = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/scale/scale.csv")
     png = Path(sys.argv[2] if len(sys.argv) > 2 else "docs/scale.png")
-    rows = list(csv.DictReader(path.open()))
+    order = list(SOURCES)
+    rows = sorted(csv.DictReader(path.open()),
+                  key=lambda r: (order.index(r["source"]) if r["source"] in order else len(order), int(r["vertices"])))
     fig, (ax_t, ax_o, ax_m) = plt.subplots(1, 3, figsize=(18, 8.5))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     exponents = []
