@@ -64,6 +64,63 @@ fn tin_simplifies_an_ascii_grid() {
     assert_eq!(info["vertices"], v["vertices"]);
 }
 
+/// The full-resolution path (issue #18): a regular grid kept whole (every cell's four corners are cocircular, so
+/// the Delaunay triangulation is degenerate everywhere) and at max error 0 builds, evaluates and culls, and the
+/// build does not depend on the thread count.
+#[test]
+fn a_whole_regular_grid_builds_and_culls() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asc = dir.path().join("grid.asc");
+    let (rows, cols) = (24, 31);
+    let mut text =
+        format!("ncols {cols}\nnrows {rows}\nxllcorner 500000\nyllcorner 4000000\ncellsize 30\nNODATA_value -9999\n");
+    for r in 0..rows {
+        // Ridges and flat runs: many samples lie exactly on the planes of their neighbours.
+        let row: Vec<String> = (0..cols)
+            .map(|c| format!("{}", ((r * 7 + c * 3) % 11).min(6) * 10 + (c / 8) * 40))
+            .collect();
+        text += &row.join(" ");
+        text += "\n";
+    }
+    std::fs::write(&asc, text).expect("fixture");
+    let whole = dir.path().join("whole.obj");
+    let v = json(&["tin", s(&asc), "-o", s(&whole), "--keep-grid", "--json", "-q"]);
+    assert_eq!(v["vertices"], rows * cols);
+    assert_eq!(v["triangles"], 2 * (rows - 1) * (cols - 1));
+    let exact = dir.path().join("exact.obj");
+    let e = json(&["tin", s(&asc), "-o", s(&exact), "--max-error", "0", "--json", "-q"]);
+    assert!(e["vertices"].as_u64().expect("count") < (rows * cols) as u64);
+    for mesh in [&whole, &exact] {
+        let tch = dir.path().join("h.tch");
+        let one = dir.path().join("one.tch");
+        let b = json(&["build", s(mesh), "-o", s(&tch), "--json", "-q"]);
+        assert_eq!(b["vertices"], json(&["info", s(mesh), "--json"])["vertices"]);
+        let out = bin()
+            .args(["build", s(mesh), "-o", s(&one), "-q"])
+            .env("RAYON_NUM_THREADS", "1")
+            .output()
+            .expect("runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(
+            std::fs::read(&tch).expect("written"),
+            std::fs::read(&one).expect("written")
+        );
+        let c = json(&["cull", s(&tch), "--eye", "500450,4000300,400", "--json", "-q"]);
+        let drawn = c["triangles_drawn"].as_u64().expect("triangles drawn");
+        assert!(drawn <= b["triangles"].as_u64().expect("triangles"), "{c}");
+        ok(&[
+            "eval",
+            s(&tch),
+            "--viewpoints",
+            "2",
+            "--classes",
+            "ground,high",
+            "--no-per-triangle",
+            "-q",
+        ]);
+    }
+}
+
 #[test]
 fn bad_input_gives_clear_errors() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -219,8 +220,11 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     if let Some(path) = &args.export_obj {
         files.check_grouped_obj(path)?;
     }
+    let started = Instant::now();
     let (tin, _) = args.mesh.load(out)?;
+    let load_seconds = started.elapsed().as_secs_f64();
     let result = build(&tin, &params, Some(stage_progress(out)))?;
+    let started = Instant::now();
     files.add_bytes(&args.out, &result.hierarchy.to_bytes()?)?;
     if let Some(path) = &args.export_json {
         files.add_bytes(path, to_json(&result.hierarchy)?.as_bytes())?;
@@ -229,7 +233,12 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
         files.add_grouped_obj(&result.hierarchy, path)?;
     }
     files.commit()?;
+    let write_seconds = started.elapsed().as_secs_f64();
     print_report(&result.report, out);
+    out.say(format!(
+        "  mesh read and triangulated in {load_seconds:.3} s, output written in {write_seconds:.3} s; {} threads",
+        rayon::current_num_threads()
+    ));
     let peak = peak_memory_bytes();
     if let Some(bytes) = peak {
         out.say(format!(
@@ -248,6 +257,9 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     j["output"] = json!(args.out);
     j["params"] = serde_json::to_value(&params)?;
     j["peak_memory_bytes"] = json!(peak);
+    j["load_seconds"] = json!(load_seconds);
+    j["write_seconds"] = json!(write_seconds);
+    j["threads"] = json!(rayon::current_num_threads());
     out.json(&j)
 }
 

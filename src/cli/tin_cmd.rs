@@ -13,7 +13,7 @@ use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tin`.
 #[derive(Debug, Args)]
-#[command(group(clap::ArgGroup::new("budget").required(true).multiple(true).args(["vertices", "max_error"])))]
+#[command(group(clap::ArgGroup::new("budget").required(true).multiple(true).args(["vertices", "max_error", "keep_grid"])))]
 pub struct TinArgs {
     /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF
     /// (.tif, .tiff; geographic CRSs are converted to metres like .hgt).
@@ -27,6 +27,10 @@ pub struct TinArgs {
     /// Stop when the largest vertical error is at most this (m).
     #[arg(long)]
     pub max_error: Option<f64>,
+    /// Keep every valid sample: the full-resolution grid, Delaunay-triangulated, without simplification (unlike
+    /// `--max-error 0`, which leaves out the samples that the triangles through their neighbours reproduce exactly).
+    #[arg(long, conflicts_with_all = ["vertices", "max_error"])]
+    pub keep_grid: bool,
     /// How to read the DEM.
     #[command(flatten)]
     pub read: DemArgs,
@@ -79,6 +83,9 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let spinner = out.spinner("reading DEM");
     let grid = tin::read_dem(&args.dem, &dem_opts)?;
     spinner.finish_and_clear();
+    if args.keep_grid {
+        return keep_grid(args, &grid, files, start, out);
+    }
     let opts = SimplifyOptions {
         max_vertices: args.vertices,
         max_error: args.max_error,
@@ -117,6 +124,39 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
         "rms_error": report.rms_error,
         "stopped_by": report.stopped_by,
         "simplify_seconds": report.seconds,
+        "seconds": seconds,
+    }))
+}
+
+/// `tincull tin --keep-grid`: every valid sample, Delaunay-triangulated.
+fn keep_grid(args: &TinArgs, grid: &tin::Grid, mut files: Outputs, start: Instant, out: Output) -> Result<()> {
+    let spinner = out.spinner("triangulating");
+    let (tin, _) = tin::triangulate(&grid.points(), tin::DedupePolicy::Reject)?;
+    spinner.finish_and_clear();
+    files.add(&args.out, |w| tin::write_obj_to(&tin, w))?;
+    files.commit()?;
+    let seconds = start.elapsed().as_secs_f64();
+    out.say(format!(
+        "{} ({} x {} samples, {} voids) -> {}: the whole grid, {} vertices, {} triangles; total {seconds:.2} s",
+        args.dem.display(),
+        grid.rows,
+        grid.cols,
+        grid.voids(),
+        args.out.display(),
+        tin.num_vertices(),
+        tin.num_triangles(),
+    ));
+    out.json(&json!({
+        "dem": args.dem,
+        "output": args.out,
+        "rows": grid.rows,
+        "cols": grid.cols,
+        "voids": grid.voids(),
+        "vertices": tin.num_vertices(),
+        "triangles": tin.num_triangles(),
+        "max_error": 0.0,
+        "rms_error": 0.0,
+        "stopped_by": "KeepGrid",
         "seconds": seconds,
     }))
 }

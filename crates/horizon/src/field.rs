@@ -351,15 +351,24 @@ pub fn compute(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> Resul
     let origin = projection_origin(tin);
     let mut horizons = vec![NO_HORIZON; n * total];
     let done = AtomicUsize::new(0);
-    // One task per subsector: rayon runs at most one sweep per worker thread at a time, so the working memory is
-    // that of (threads) sweeps, each O(n log n).
-    horizons.par_chunks_mut(n.max(1)).enumerate().for_each(|(j, out)| {
-        sweep::sweep_subsector(positions, origin, &geometry.wedge(j), out);
-        let finished = done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
-        if let Some(progress) = &opts.progress {
-            progress(finished, total);
-        }
-    });
+    // One task per run of consecutive subsectors, a few runs per thread: within a run each sweep hands its sorted
+    // order to the next (one sort saved per sweep). Rayon runs at most one task per worker thread at a time, so
+    // the working memory is that of (threads) sweeps, each O(n log n). The result does not depend on the runs.
+    let run = (total / (4 * rayon::current_num_threads().max(1))).max(1);
+    horizons
+        .par_chunks_mut((n * run).max(1))
+        .enumerate()
+        .for_each(|(c, block)| {
+            let mut previous = None;
+            for (k, out) in block.chunks_mut(n.max(1)).enumerate() {
+                let wedge = geometry.wedge(c * run + k);
+                previous = Some(sweep::sweep_subsector(positions, origin, &wedge, out, previous));
+                let finished = done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
+                if let Some(progress) = &opts.progress {
+                    progress(finished, total);
+                }
+            }
+        });
     let edge_points = match opts.undersampling_radius {
         Some(radius) => undersampling::fast(tin, &geometry, origin, radius, &horizons),
         None => Vec::new(),

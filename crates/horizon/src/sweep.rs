@@ -25,11 +25,16 @@
 //! Choices beyond the thesis, for speed (none changes the result; the tests run several bucket sizes, including
 //! the thesis' single leaves, against the oracle):
 //! - buckets of a few positions at the bottom of the tree replace its lowest levels by a scan of one cache line;
-//! - every node counts the vertices still to be visited whose query path passes through it; insertions into a
-//!   node that no one will query again are skipped (for narrow wedges the `A` and `B` orders nearly coincide, so
+//! - every node knows the last visit whose query path passes through it; insertions into a node that no one
+//!   will query again are skipped (for narrow wedges the `A` and `B` orders nearly coincide, so
 //!   whole subtrees are finished early);
 //! - the sorts compare the f64 approximations of `A` and `B` and re-sort only runs of near-ties exactly;
-//! - everything the main loop reads is laid out in visiting order.
+//! - consecutive subsectors share a boundary direction (`b` of one is `a` of the next): a sweep hands its leaf
+//!   order on, and the next derives its visiting order from it instead of sorting (`DirectionOrder`);
+//! - everything the main loop reads is laid out in visiting order, and prefetched a few visits ahead;
+//! - each node keeps bounds (smallest and largest `t`, largest `z`) of the points inserted into its covering set;
+//!   a node whose bounding box is strictly less steep than the best candidate so far cannot hold the horizon
+//!   and is not queried (an exact test, `cannot_beat`).
 //!
 //! Degenerate input: a member `q` with `t_q ≤ t_p` (identical positions, or points closer than the rounding of
 //! `t`) is no candidate by definition, and it would break the tangent search, which needs the apex left of every
@@ -49,24 +54,60 @@ use crate::NO_HORIZON;
 use crate::candidate::{Candidate, CandidateId, keep_best};
 use crate::hull::{HullRef, HullSet};
 use crate::oracle::best_in_wedge;
-use crate::predicates::LineKey;
+use crate::predicates::{LineKey, cmp_slope};
 use crate::sector::Wedge;
 
 /// Leaves of the tree are buckets of this many consecutive leaf positions, scanned directly.
 const BUCKET: usize = 8;
 
+/// The vertices sorted by their exact key across a boundary direction `e` (`cross(e, x)`, increasing; ties by
+/// index): the leaf order of the subsector whose wedge has `b = e`, and, reversed with its runs of equal keys
+/// re-sorted, the visiting order of the next subsector (`a = e`). Handing it on saves one of the two sorts of a
+/// sweep.
+pub(crate) struct DirectionOrder {
+    direction: DVec2,
+    order: Vec<u32>,
+}
+
 /// Computes, for every vertex, its horizon vertex in the subsector with wedge `wedge` (or [`NO_HORIZON`]), into
-/// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]).
-pub(crate) fn sweep_subsector(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]) {
-    sweep_with(positions, origin, wedge, out, BUCKET, HullSet::DEFAULT_SMALL_LIMIT);
+/// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]). `previous` is
+/// what the sweep of the previous subsector returned, if it ran just before (used when its direction is this
+/// wedge's `a`); the result is the same with or without it.
+pub(crate) fn sweep_subsector(
+    positions: &[DVec3],
+    origin: DVec2,
+    wedge: &Wedge,
+    out: &mut [u32],
+    previous: Option<DirectionOrder>,
+) -> DirectionOrder {
+    sweep_with(
+        positions,
+        origin,
+        wedge,
+        out,
+        BUCKET,
+        HullSet::DEFAULT_SMALL_LIMIT,
+        previous,
+    )
 }
 
 /// [`sweep_subsector`] with a given bucket size and small-hull limit (tests vary both).
-fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32], bucket: usize, small_limit: usize) {
+fn sweep_with(
+    positions: &[DVec3],
+    origin: DVec2,
+    wedge: &Wedge,
+    out: &mut [u32],
+    bucket: usize,
+    small_limit: usize,
+    previous: Option<DirectionOrder>,
+) -> DirectionOrder {
     let n = positions.len();
     debug_assert_eq!(out.len(), n);
     if n == 0 {
-        return;
+        return DirectionOrder {
+            direction: wedge.b,
+            order: Vec::new(),
+        };
     }
     let xy = |v: u32| positions[v as usize].truncate();
     let ka: Vec<LineKey> = positions.iter().map(|p| LineKey::new(wedge.a, p.truncate())).collect();
@@ -75,18 +116,42 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
     let cmp_b = |x: u32, y: u32| kb[x as usize].cmp_exact(&kb[y as usize], wedge.b, xy(x), xy(y));
     let gap = |keys: &[LineKey]| LineKey::certain_gap(keys.iter().map(LineKey::magnitude).fold(0.0, f64::max));
 
-    // Visiting order: A descending, then B ascending, then index.
-    let order_a = sort_exact(
-        n,
-        |v| -ka[v as usize].value(),
-        gap(&ka),
-        |x, y| {
-            ka[y as usize]
-                .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
-                .then_with(|| cmp_b(x, y))
-                .then(x.cmp(&y))
-        },
-    );
+    // Visiting order: A descending, then B ascending, then index. From the previous subsector's leaf order (A
+    // ascending, then index) when there is one: reversed, with each run of equal A re-sorted by B and index. Both
+    // are sorted by the same total order, hence identical.
+    let same_direction = |d: DVec2| d.to_array().map(f64::to_bits) == wedge.a.to_array().map(f64::to_bits);
+    let order_a = match previous {
+        Some(DirectionOrder { direction, mut order }) if same_direction(direction) && order.len() == n => {
+            order.reverse();
+            let mut start = 0;
+            while start < n {
+                let (first, mut end) = (order[start], start + 1);
+                while end < n
+                    && ka[order[end] as usize]
+                        .cmp_exact(&ka[first as usize], wedge.a, xy(order[end]), xy(first))
+                        .is_eq()
+                {
+                    end += 1;
+                }
+                if end - start > 1 {
+                    order[start..end].sort_unstable_by(|&x, &y| cmp_b(x, y).then(x.cmp(&y)));
+                }
+                start = end;
+            }
+            order
+        }
+        _ => sort_exact(
+            n,
+            |v| -ka[v as usize].value(),
+            gap(&ka),
+            |x, y| {
+                ka[y as usize]
+                    .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
+                    .then_with(|| cmp_b(x, y))
+                    .then(x.cmp(&y))
+            },
+        ),
+    };
     // Leaves: B ascending, then index; hi = last leaf of each group of equal B.
     let order_b = sort_exact(
         n,
@@ -107,11 +172,11 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
             pos as u32
         };
     }
-    drop(order_b);
 
     // Everything the main loop reads, laid out in visiting order; the bucket members in leaf (B) order.
     let buckets = n.div_ceil(bucket);
     let tree_leaves = buckets.next_power_of_two();
+    let tree_leaf = |pos: u32| (tree_leaves + pos as usize / bucket) as u32;
     struct Visit {
         t: f64,
         z: f64,
@@ -120,17 +185,26 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
         pos: u32,
         /// Last leaf position with the same B.
         hi: u32,
+        /// First leaf position of the bucket of `hi`.
+        first: u32,
+        /// Tree nodes of the buckets of `hi` (query path) and `pos` (insertion path).
+        query_leaf: u32,
+        insert_leaf: u32,
     }
     let visits: Vec<Visit> = order_a
         .iter()
         .map(|&v| {
             let pos = leaf_of[v as usize];
+            let hi = hi[pos as usize];
             Visit {
                 t: t[v as usize],
                 z: positions[v as usize].z,
                 vertex: v,
                 pos,
-                hi: hi[pos as usize],
+                hi,
+                first: (hi as usize / bucket * bucket) as u32,
+                query_leaf: tree_leaf(hi),
+                insert_leaf: tree_leaf(pos),
             }
         })
         .collect();
@@ -139,14 +213,12 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
         t: f64,
         z: f64,
         vertex: u32,
-        visited: bool,
     }
     let mut members = vec![
         Member {
             t: 0.0,
             z: 0.0,
-            vertex: 0,
-            visited: false
+            vertex: 0
         };
         n
     ];
@@ -155,43 +227,78 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
             t: visit.t,
             z: visit.z,
             vertex: visit.vertex,
-            visited: false,
         };
     }
+    // Whether the member at each leaf position has been visited: one byte per position, apart from the members,
+    // so that the scan of a bucket touches the members only where it needs them.
+    let mut visited = vec![false; n];
     drop((order_a, leaf_of, hi));
-    let tree_leaf = |pos: u32| tree_leaves + pos as usize / bucket;
 
-    // Per tree node: its covering set, and the number of vertices not yet visited whose query path contains the
-    // node (a hull that no later vertex will query needs no insertions). Kept together for cache locality.
+    // Per tree node: its covering set, the index of the last visit whose query path contains the node (a hull
+    // that no later vertex will query needs no insertions), and bounds of every point inserted into the hull (its
+    // smallest `t` answers the degeneracy check without touching the hull; with the largest `t` and `z` they bound
+    // the slope of every hull vertex, see `cannot_beat`). Kept together for cache locality.
+    // 32 bytes, aligned: one slot never straddles two cache lines. The largest `t` is rounded up to f32 (only
+    // ever used as an upper bound).
     #[derive(Clone, Copy)]
+    #[repr(C, align(32))]
     struct Slot {
         hull: HullRef,
-        pending: u32,
+        last: u32,
+        max_t: f32,
+        min_t: f64,
+        max_z: f64,
     }
     let mut slots = vec![
         Slot {
             hull: HullRef::EMPTY,
-            pending: 0
+            last: 0,
+            max_t: f32::NEG_INFINITY,
+            min_t: f64::INFINITY,
+            max_z: f64::NEG_INFINITY,
         };
         2 * tree_leaves
     ];
-    for visit in &visits {
-        let mut node = tree_leaf(visit.hi);
+    for (i, visit) in visits.iter().enumerate() {
+        let mut node = visit.query_leaf as usize;
         while node >= 1 {
-            slots[node].pending += 1;
+            slots[node].last = i as u32;
             node >>= 1;
         }
     }
     let mut hulls = HullSet::new(small_limit, 4 * n);
-    for visit in &visits {
+    for (i, visit) in visits.iter().enumerate() {
+        // The main loop is bound by memory latency: fetch what later visits will read (their bucket, the bottom
+        // of their query path, and the hulls there) ahead of time. No effect on the result.
+        if let Some(ahead) = visits.get(i + PREFETCH_AHEAD) {
+            prefetch(&visited[ahead.first as usize]);
+            prefetch(&members[ahead.first as usize]);
+            prefetch(&out[ahead.vertex as usize]);
+            let (query, insert) = (ahead.query_leaf as usize, ahead.insert_leaf as usize);
+            for level in 0..PREFETCH_LEVELS {
+                prefetch(&slots[query >> level]);
+                prefetch(&slots[(insert >> level) | 1]);
+            }
+        }
+        if let Some(ahead) = visits.get(i + PREFETCH_AHEAD / 2) {
+            // The hulls it will query, and those it will insert into (right siblings on the path of its own leaf).
+            let (query, insert) = (ahead.query_leaf as usize, ahead.insert_leaf as usize);
+            for level in 0..PREFETCH_LEVELS {
+                hulls.prefetch(&slots[query >> level].hull);
+                hulls.prefetch(&slots[(insert >> level) | 1].hull);
+            }
+        }
         let p = visit.vertex;
         let apex = DVec2::new(visit.t, visit.z);
         let mut best: Option<Candidate> = None;
         let mut degenerate = false;
         // Visited members of the query bucket up to hi.
-        let first = visit.hi as usize / bucket * bucket;
-        for m in &members[first..=visit.hi as usize] {
-            if m.visited {
+        let first = visit.first as usize;
+        for (m, &seen) in members[first..=visit.hi as usize]
+            .iter()
+            .zip(&visited[first..=visit.hi as usize])
+        {
+            if seen {
                 if m.t <= apex.x {
                     degenerate = true;
                 } else {
@@ -200,18 +307,17 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
             }
         }
         // Covering sets on the path of the query bucket.
-        let mut node = tree_leaf(visit.hi);
+        let mut node = visit.query_leaf as usize;
         loop {
-            let slot = &mut slots[node];
-            slot.pending -= 1;
+            let slot = &slots[node];
             if !degenerate && !slot.hull.is_empty() {
-                match hulls.min_t(&slot.hull) {
-                    Some(min_t) if min_t <= apex.x => degenerate = true,
-                    _ => {
-                        if let Some(c) = hulls.tangent(&slot.hull, apex) {
-                            keep_best(&mut best, c, apex);
-                        }
-                    }
+                if slot.min_t <= apex.x {
+                    degenerate = true;
+                } else if !best
+                    .is_some_and(|b| cannot_beat(apex, slot.min_t, f64::from(slot.max_t), slot.max_z, b.point))
+                    && let Some(c) = hulls.tangent(&slot.hull, apex)
+                {
+                    keep_best(&mut best, c, apex);
                 }
             }
             if node == 1 {
@@ -232,15 +338,66 @@ fn sweep_with(positions: &[DVec3], origin: DVec2, wedge: &Wedge, out: &mut [u32]
 
         // Mark p in its bucket and insert it into the right siblings of the left children on its bucket's path,
         // skipping nodes that no vertex still to be visited will query.
-        members[visit.pos as usize].visited = true;
-        let mut node = tree_leaf(visit.pos);
+        visited[visit.pos as usize] = true;
+        let mut node = visit.insert_leaf as usize;
         while node > 1 {
-            if node & 1 == 0 && slots[node + 1].pending > 0 {
-                hulls.insert(&mut slots[node + 1].hull, apex.x, apex.y, p);
+            if node & 1 == 0 && slots[node + 1].last > i as u32 {
+                let slot = &mut slots[node + 1];
+                hulls.insert(&mut slot.hull, apex.x, apex.y, p);
+                slot.min_t = slot.min_t.min(apex.x);
+                slot.max_t = slot.max_t.max(f32_at_least(apex.x));
+                slot.max_z = slot.max_z.max(apex.y);
             }
             node >>= 1;
         }
     }
+    DirectionOrder {
+        direction: wedge.b,
+        order: order_b,
+    }
+}
+
+/// How many visits ahead the main loop prefetches.
+const PREFETCH_AHEAD: usize = 16;
+
+/// How many levels of a later visit's paths (from the bottom) the main loop prefetches; the levels above are few
+/// nodes, which stay in cache.
+const PREFETCH_LEVELS: usize = 6;
+
+/// Hints the processor to load the cache line of `x`; no effect on the program's result.
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
+/// The smallest f32 not below `x` (infinite beyond the f32 range).
+#[inline]
+fn f32_at_least(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) < x { y.next_up() } else { y }
+}
+
+/// Whether no point in the box `t ∈ [min_t, max_t]`, `z ≤ max_z` (`min_t` strictly right of `apex`; `max_t` may
+/// exceed the largest `t`) can be a better
+/// horizon than the candidate at `best`: true when the box's steepest corner is strictly less steep than `best`.
+/// Exact. The steepest corner is `(min_t, max_z)` when `max_z ≥ z_p` (every point of the box with `z ≥ z_p` rises
+/// at most as steeply, the others fall); otherwise every point falls, at least as steeply as `(max_t, max_z)`. A
+/// strictly less steep point never wins, whatever the tie-breaks ([`crate::candidate`]).
+#[inline]
+fn cannot_beat(apex: DVec2, min_t: f64, max_t: f64, max_z: f64, best: DVec2) -> bool {
+    let corner = if max_z >= apex.y {
+        DVec2::new(min_t, max_z)
+    } else {
+        DVec2::new(max_t, max_z)
+    };
+    cmp_slope(apex, corner, best) == Ordering::Less
 }
 
 /// The vertices `0..n` sorted by `exact`, a total order that agrees with the approximate keys `approx` whenever
@@ -288,6 +445,36 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+        /// Whenever `cannot_beat` prunes a box, every point in it is strictly less steep than the best candidate
+        /// (with the largest `t` rounded up as the sweep stores it).
+        #[test]
+        fn cannot_beat_is_a_sound_bound(points in prop::collection::vec((1i32..40, -10i32..10), 1..20),
+                                        apex_z in -10i32..10, best in (1i32..40, -10i32..10)) {
+            let apex = DVec2::new(0.3, apex_z as f64 / 3.0);
+            let pts: Vec<DVec2> = points.iter().map(|&(t, z)| DVec2::new(t as f64 / 7.0 + 0.3, z as f64 / 3.0)).collect();
+            let min_t = pts.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+            let max_t = pts.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max);
+            let max_z = pts.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+            let best = DVec2::new(best.0 as f64 / 7.0 + 0.3, best.1 as f64 / 3.0);
+            if cannot_beat(apex, min_t, f64::from(f32_at_least(max_t)), max_z, best) {
+                for p in &pts {
+                    prop_assert_eq!(cmp_slope(apex, *p, best), Ordering::Less, "{} beats {}", p, best);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn f32_at_least_rounds_up() {
+        for x in [0.1, 1.0 / 3.0, 5_000_000.123, -2.7, 0.0, 1e30] {
+            assert!(f64::from(f32_at_least(x)) >= x, "{x}");
+        }
+        assert_eq!(f32_at_least(0.5), 0.5);
+    }
+
+    proptest! {
         #![proptest_config(ProptestConfig { cases: 150, ..ProptestConfig::default() })]
 
         /// Every bucket size (1 = the thesis' tree down to single leaves) and a tiny small-hull limit (treaps
@@ -301,10 +488,15 @@ mod tests {
             let g = SectorGeometry::new(&SectorConfig::new(s, k).expect("valid"));
             let origin = DVec2::new(1.0, 2.0);
             let expect = vertex_horizons(&positions, origin, &g);
+            let mut previous = None;
             for j in 0..g.total() {
                 let mut out = vec![0; n];
-                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit);
+                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, None);
                 prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {}", j);
+                // Handing on the previous subsector's leaf order gives the same.
+                let mut out = vec![0; n];
+                previous = Some(sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, previous));
+                prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {} after {}", j, j.max(1) - 1);
             }
         }
     }
