@@ -57,6 +57,11 @@ pub struct PlanArgs {
     /// mesh: metres, its lowest vertex).
     #[arg(long, default_value_t = 16)]
     pub far_block: usize,
+    /// Far-field blocks double in size with distance, keeping each within about 1/R radian seen from the tile, so
+    /// a tile's far field grows with the logarithm of the terrain, not its area; 0 keeps every block at
+    /// --far-block.
+    #[arg(long, value_name = "R", default_value_t = 16)]
+    pub far_ratio: usize,
     /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated (a DEM
     /// only: a mesh keeps its triangles).
     #[arg(long, default_value_t = 1.0)]
@@ -125,6 +130,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         tile: args.tile,
         halo: args.halo,
         far_block: args.far_block,
+        far_ratio: args.far_ratio,
         max_error: args.max_error,
         params,
     };
@@ -143,6 +149,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let grid = tin::read_dem(&args.dem, &dem)?;
     spinner.finish_and_clear();
     let plan = tiles::make_plan(&grid, &source, dem, options, &tiles_dir)?;
+    let far_points = plan.tiles.iter().map(|t| plan.far_points(t).len()).max().unwrap_or(0);
     files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
     files.commit()?;
     let (rows, cols) = plan
@@ -151,7 +158,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
     out.say(format!(
         "{} ({} x {} samples) -> {}: {} tiles ({rows} x {cols}) of at most {} intervals, halo {} samples, far field \
-         {} points; tiles write to {}",
+         {} blocks (at most {} points per tile); tiles write to {}",
         args.dem.display(),
         grid.rows,
         grid.cols,
@@ -159,7 +166,8 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         plan.tiles.len(),
         args.tile,
         args.halo,
-        plan.far_field.len(),
+        plan.far_field.finest(),
+        far_points,
         Plan::resolve(&args.out, &plan.tiles_dir).display()
     ));
     out.json(&json!({
@@ -167,7 +175,8 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,
-        "far_points": plan.far_field.len(),
+        "far_blocks": plan.far_field.finest(),
+        "far_points": far_points,
         "tiles_dir": Plan::resolve(&args.out, &plan.tiles_dir),
     }))
 }

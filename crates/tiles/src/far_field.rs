@@ -1,13 +1,36 @@
 //! The far field: what a tile's horizons see of the terrain beyond its halo.
 //!
-//! The grid is cut into blocks of `b × b` samples; each block contributes one point, its lowest valid sample
-//! (ties: the first in row-major order) at that sample's position, lowered by the tiles' error bound `E`. Every
-//! tile's TIN reproduces every sample within `E` (its simplification stops at `E`; its sides are simplified to `E`,
+//! ## Points on or below the terrain
+//!
+//! The grid is cut into blocks of `b × b` samples; each block keeps one point, its lowest valid sample (ties: the
+//! first in row-major order) at that sample's position, lowered by the tiles' error bound `E`. Every tile's TIN
+//! reproduces every sample within `E` (its simplification stops at `E`; its sides are simplified to `E`,
 //! [`crate::boundary`]), so the merged terrain at that position is at least `z_min − E`: each far-field point lies on
 //! or below the terrain. A horizon computed over points on or below the terrain is on or below the horizon the
 //! terrain itself casts (a lower point subtends a smaller elevation angle from every eye), so regions built from
 //! it claim no more occlusion than the terrain gives. The halo's samples are lowered by `E` for the same reason
-//! ([`crate::job`]).
+//! ([`crate::job`]). Leaving points out only lowers horizons further, so any subset of these points is as safe.
+//!
+//! ## Coarser with distance: a min-pyramid
+//!
+//! Level 0 holds the blocks of `b` samples; a block of level `ℓ + 1` is the union of up to four blocks of level `ℓ`
+//! (`b·2^(ℓ+1)` samples a side, fewer along the south and east edges) and keeps the lowest of their points (the same
+//! tie rule, so it is the lowest valid sample of its samples), up to one block over the whole grid ([`FarField`],
+//! computed once in the plan).
+//!
+//! A tile's far field is a cut through the pyramid ([`FarField::select`]), from the top block down: a block that
+//! misses the tile's halo window is taken when its side is at most `1/ratio` of its distance from the tile (the
+//! Chebyshev gap, in samples), else its children are looked at; a level-0 block is taken whole when it misses the
+//! window, and otherwise gives its point only when that sample lies outside the window. Every sample outside the
+//! window thus lies in exactly one block taken, or in a level-0 block that meets the window. A block taken at level
+//! `ℓ > 0` subtends about `1/ratio` radian or less from the tile; and since its parent (twice as wide, at most one
+//! block side nearer) was split, a block at a distance `d` is wider than `d / (2 ratio + 1)`. Once the distance
+//! exceeds the tile's side, each doubling of it (a ring of area about `12 D²` at distance `D`) therefore adds at
+//! most about `12 (2 ratio + 1)²` blocks: a tile sees `O(ratio² log n)` far points instead of the `n / b²` of level
+//! 0, and a job's time and memory stay bounded by its tile as the terrain grows. With `ratio = 0` nothing is
+//! coarsened: every level-0 point outside the window is taken.
+//!
+//! The same pyramid over squares of metres gives a mesh tile's far field ([`crate::part`]).
 
 use serde::{Deserialize, Serialize};
 use tin::Grid;
@@ -23,38 +46,240 @@ pub struct FarPoint {
     pub z: f64,
 }
 
-/// The far field of `grid` with blocks of `block` samples (see the module docs), lowered by `max_error`. Blocks
-/// with no valid sample contribute nothing.
-pub fn far_field(grid: &Grid, block: usize, max_error: f64) -> Vec<FarPoint> {
-    let block = block.max(1);
-    let mut out = Vec::new();
-    for r0 in (0..grid.rows).step_by(block) {
-        for c0 in (0..grid.cols).step_by(block) {
-            let mut low: Option<(f64, usize, usize)> = None;
-            for r in r0..(r0 + block).min(grid.rows) {
-                for c in c0..(c0 + block).min(grid.cols) {
-                    let z = grid.z[r * grid.cols + c];
-                    if !z.is_nan() && low.is_none_or(|(lz, _, _)| z < lz) {
-                        low = Some((z, r, c));
+/// One level of a [`MinPyramid`]: its blocks row by row, each with its lowest point (`None` where it has none).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Level<T> {
+    /// Blocks down (north to south).
+    pub rows: usize,
+    /// Blocks across (west to east).
+    pub cols: usize,
+    /// The blocks' lowest points, row-major.
+    pub points: Vec<Option<T>>,
+}
+
+/// A min-pyramid over a grid of blocks: level 0 as given, every further level keeping the lowest point of each 2 × 2
+/// blocks of the level below, up to one block.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MinPyramid<T> {
+    /// Level 0 (the finest) first.
+    pub levels: Vec<Level<T>>,
+}
+
+impl<T> Default for MinPyramid<T> {
+    /// No level: selects nothing.
+    fn default() -> Self {
+        MinPyramid { levels: Vec::new() }
+    }
+}
+
+/// What [`MinPyramid::select`] does with a block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Choice {
+    /// Take its point.
+    Take,
+    /// Leave it and everything in it out.
+    Skip,
+    /// Look at its children instead (at level 0: leave it out).
+    Split,
+}
+
+impl<T: Copy> MinPyramid<T> {
+    /// The pyramid over level 0 (`rows × cols` blocks, row-major), `lower(a, b)` telling whether `a` is strictly
+    /// lower than `b` (a total order: ties broken the same way wherever they meet).
+    pub fn new(rows: usize, cols: usize, level0: Vec<Option<T>>, lower: impl Fn(&T, &T) -> bool) -> MinPyramid<T> {
+        debug_assert_eq!(level0.len(), rows * cols);
+        let mut levels = vec![Level {
+            rows,
+            cols,
+            points: level0,
+        }];
+        while let Some(below) = levels.last().filter(|l| l.rows > 1 || l.cols > 1) {
+            let (rows, cols) = (below.rows.div_ceil(2), below.cols.div_ceil(2));
+            let mut points = vec![None; rows * cols];
+            for (i, slot) in points.iter_mut().enumerate() {
+                let (r, c) = (i / cols, i % cols);
+                for rr in 2 * r..(2 * r + 2).min(below.rows) {
+                    for cc in 2 * c..(2 * c + 2).min(below.cols) {
+                        if let Some(p) = below.points[rr * below.cols + cc]
+                            && slot.as_ref().is_none_or(|q| lower(&p, q))
+                        {
+                            *slot = Some(p);
+                        }
                     }
                 }
             }
-            if let Some((z, r, c)) = low {
-                out.push(FarPoint {
+            levels.push(Level { rows, cols, points });
+        }
+        MinPyramid { levels }
+    }
+
+    /// A cut through the pyramid, from the top block down: `decide(level, row, col)` says for each block reached
+    /// whether to take its point, skip it, or look at its children. Points come out in a fixed order (depth first,
+    /// children row by row).
+    pub fn select(&self, mut decide: impl FnMut(usize, usize, usize) -> Choice) -> Vec<T> {
+        let mut out = Vec::new();
+        let Some(top) = self.levels.len().checked_sub(1) else {
+            return out;
+        };
+        let mut stack = Vec::new();
+        for r in (0..self.levels[top].rows).rev() {
+            for c in (0..self.levels[top].cols).rev() {
+                stack.push((top, r, c));
+            }
+        }
+        while let Some((level, r, c)) = stack.pop() {
+            let here = &self.levels[level];
+            match decide(level, r, c) {
+                Choice::Take => out.extend(here.points[r * here.cols + c]),
+                Choice::Skip => {}
+                Choice::Split if level > 0 => {
+                    let below = &self.levels[level - 1];
+                    for rr in (2 * r..(2 * r + 2).min(below.rows)).rev() {
+                        for cc in (2 * c..(2 * c + 2).min(below.cols)).rev() {
+                            stack.push((level - 1, rr, cc));
+                        }
+                    }
+                }
+                Choice::Split => {}
+            }
+        }
+        out
+    }
+}
+
+/// A grid's far field (see the module docs): the min-pyramid of its lowered samples over blocks of `block` samples.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FarField {
+    /// Side of a level-0 block (samples).
+    pub block: usize,
+    /// The grid's rows and columns.
+    pub grid: [usize; 2],
+    /// The pyramid.
+    pub pyramid: MinPyramid<FarPoint>,
+}
+
+/// Sample rectangles, both ends inclusive: `[first row, last row, first column, last column]`.
+pub type Rect = [usize; 4];
+
+/// The Chebyshev gap between two rectangles of samples (0 when they meet).
+fn gap(a: Rect, b: Rect) -> usize {
+    let rows = b[0].saturating_sub(a[1]).max(a[0].saturating_sub(b[1]));
+    let cols = b[2].saturating_sub(a[3]).max(a[2].saturating_sub(b[3]));
+    rows.max(cols)
+}
+
+/// Whether two rectangles of samples share a sample.
+fn meet(a: Rect, b: Rect) -> bool {
+    a[0] <= b[1] && b[0] <= a[1] && a[2] <= b[3] && b[2] <= a[3]
+}
+
+impl FarField {
+    /// The far field of `grid` with level-0 blocks of `block` samples, lowered by `max_error` (blocks with no valid
+    /// sample have no point).
+    pub fn new(grid: &Grid, block: usize, max_error: f64) -> FarField {
+        let block = block.max(1);
+        let (rows, cols) = (grid.rows.div_ceil(block), grid.cols.div_ceil(block));
+        let mut level0 = Vec::with_capacity(rows * cols);
+        for r0 in (0..grid.rows).step_by(block) {
+            for c0 in (0..grid.cols).step_by(block) {
+                let mut low: Option<(f64, usize, usize)> = None;
+                for r in r0..(r0 + block).min(grid.rows) {
+                    for c in c0..(c0 + block).min(grid.cols) {
+                        let z = grid.z[r * grid.cols + c];
+                        if !z.is_nan() && low.is_none_or(|(lz, _, _)| z < lz) {
+                            low = Some((z, r, c));
+                        }
+                    }
+                }
+                level0.push(low.map(|(z, r, c)| FarPoint {
                     row: r as u32,
                     col: c as u32,
                     z: z - max_error,
-                });
+                }));
             }
         }
+        // Lower height first, then the first in row-major order: the rule of a level-0 block, over any union.
+        let lower = |a: &FarPoint, b: &FarPoint| (a.z, a.row, a.col) < (b.z, b.row, b.col);
+        FarField {
+            block,
+            grid: [grid.rows, grid.cols],
+            pyramid: MinPyramid::new(rows, cols, level0, lower),
+        }
     }
-    out
+
+    /// Points of level 0 (what `ratio = 0` can take).
+    pub fn finest(&self) -> usize {
+        self.pyramid
+            .levels
+            .first()
+            .map_or(0, |l| l.points.iter().flatten().count())
+    }
+
+    /// The far field of the tile `tile` whose halo window is `window` (see the module docs).
+    pub fn select(&self, tile: Rect, window: Rect, ratio: usize) -> Vec<FarPoint> {
+        let [rows, cols] = self.grid;
+        self.pyramid.select(|level, r, c| {
+            let side = self.block << level;
+            let block = [
+                r * side,
+                ((r + 1) * side).min(rows) - 1,
+                c * side,
+                ((c + 1) * side).min(cols) - 1,
+            ];
+            if meet(block, window) {
+                if level > 0 {
+                    return Choice::Split;
+                }
+                let l = &self.pyramid.levels[0];
+                return match l.points[r * l.cols + c] {
+                    Some(p) if !meet([p.row as usize, p.row as usize, p.col as usize, p.col as usize], window) => {
+                        Choice::Take
+                    }
+                    _ => Choice::Skip,
+                };
+            }
+            if level == 0 || (ratio > 0 && side.saturating_mul(ratio) <= gap(block, tile)) {
+                Choice::Take
+            } else {
+                Choice::Split
+            }
+        })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use glam::DVec2;
+    use proptest::prelude::*;
+
+    fn grid(rows: usize, cols: usize, seed: u64) -> Grid {
+        let z: Vec<f64> = (0..rows * cols)
+            .map(|i| {
+                let h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15 ^ seed) >> 40;
+                if h.is_multiple_of(11) { f64::NAN } else { (h % 97) as f64 }
+            })
+            .collect();
+        Grid::new(rows, cols, 1.0, 1.0, DVec2::ZERO, z).expect("grid")
+    }
+
+    /// The lowest valid sample of a rectangle, by the pyramid's rule, lowered.
+    fn lowest(g: &Grid, r: Rect, e: f64) -> Option<FarPoint> {
+        let mut best: Option<FarPoint> = None;
+        for row in r[0]..=r[1] {
+            for col in r[2]..=r[3] {
+                let z = g.z[row * g.cols + col];
+                if !z.is_nan() && best.is_none_or(|b| z - e < b.z) {
+                    best = Some(FarPoint {
+                        row: row as u32,
+                        col: col as u32,
+                        z: z - e,
+                    });
+                }
+            }
+        }
+        best
+    }
 
     #[test]
     fn one_lowest_sample_per_block_lowered() {
@@ -62,24 +287,129 @@ mod tests {
             .map(|i| f64::from(i) * if i % 5 == 0 { -1.0 } else { 1.0 })
             .collect();
         let g = Grid::new(4, 4, 1.0, 1.0, DVec2::ZERO, z).expect("grid");
-        let f = far_field(&g, 2, 0.5);
-        assert_eq!(f.len(), 4);
+        let f = FarField::new(&g, 2, 0.5);
+        let l0 = &f.pyramid.levels[0];
+        assert_eq!((l0.rows, l0.cols, f.finest()), (2, 2, 4));
         // Block (0,0) holds samples 0, 1, 4, 5: the lowest is 5 (height -5).
         assert_eq!(
-            f[0],
-            FarPoint {
+            l0.points[0],
+            Some(FarPoint {
                 row: 1,
                 col: 1,
                 z: -5.5
-            }
+            })
         );
-        for p in &f {
-            let (r0, c0) = (p.row as usize / 2 * 2, p.col as usize / 2 * 2);
-            for r in r0..r0 + 2 {
-                for c in c0..c0 + 2 {
-                    assert!(p.z + 0.5 <= g.z[r * 4 + c]);
+        // The top: the lowest of all (sample 15, height -15).
+        assert_eq!(f.pyramid.levels.len(), 2);
+        assert_eq!(f.pyramid.levels[1].points[0].map(|p| (p.row, p.col)), Some((3, 3)));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Every block of every level holds the lowest valid sample of its samples, lowered.
+        #[test]
+        fn every_level_keeps_the_lowest_sample(rows in 2usize..40, cols in 2usize..40, block in 1usize..6, seed in any::<u64>()) {
+            let g = grid(rows, cols, seed);
+            let f = FarField::new(&g, block, 0.25);
+            prop_assert_eq!(f.pyramid.levels.last().map(|l| (l.rows, l.cols)), Some((1, 1)));
+            for (level, l) in f.pyramid.levels.iter().enumerate() {
+                let side = block << level;
+                for r in 0..l.rows {
+                    for c in 0..l.cols {
+                        let rect = [r * side, ((r + 1) * side).min(rows) - 1, c * side, ((c + 1) * side).min(cols) - 1];
+                        prop_assert_eq!(l.points[r * l.cols + c], lowest(&g, rect, 0.25));
+                    }
                 }
             }
         }
+
+        /// The blocks a tile takes cover every sample outside its halo window exactly once and none inside; each
+        /// point taken is the lowest sample of its block; `ratio = 0` takes exactly the level-0 points outside the
+        /// window, and a positive ratio never more.
+        #[test]
+        fn a_cut_covers_the_outside_once(rows in 2usize..60, cols in 2usize..60, block in 1usize..5, seed in any::<u64>(),
+                                         t in (0usize..60, 0usize..60, 0usize..60, 0usize..60), halo in 0usize..6,
+                                         ratio in 0usize..6) {
+            let g = grid(rows, cols, seed);
+            let f = FarField::new(&g, block, 0.0);
+            let (r0, r1) = ((t.0 % rows).min(t.1 % rows), (t.0 % rows).max(t.1 % rows));
+            let (c0, c1) = ((t.2 % cols).min(t.3 % cols), (t.2 % cols).max(t.3 % cols));
+            let tile = [r0, r1, c0, c1];
+            let window = [r0.saturating_sub(halo), (r1 + halo).min(rows - 1), c0.saturating_sub(halo), (c1 + halo).min(cols - 1)];
+            let mut covered = vec![0u8; rows * cols];
+            let taken = f.pyramid.select(|level, r, c| {
+                let side = block << level;
+                let rect = [r * side, ((r + 1) * side).min(rows) - 1, c * side, ((c + 1) * side).min(cols) - 1];
+                let choice = if meet(rect, window) { Choice::Split } else if level == 0 || (ratio > 0 && side * ratio <= gap(rect, tile)) { Choice::Take } else { Choice::Split };
+                if choice == Choice::Take {
+                    for row in rect[0]..=rect[1] {
+                        for col in rect[2]..=rect[3] {
+                            covered[row * cols + col] += 1;
+                        }
+                    }
+                }
+                choice
+            });
+            let _ = taken;
+            for row in 0..rows {
+                for col in 0..cols {
+                    let (br, bc) = (row / block * block, col / block * block);
+                    let block0 = [br, (br + block).min(rows) - 1, bc, (bc + block).min(cols) - 1];
+                    let expected = u8::from(!meet(block0, window));
+                    prop_assert_eq!(covered[row * cols + col], expected, "sample {} {}", row, col);
+                }
+            }
+            let points = f.select(tile, window, ratio);
+            for p in &points {
+                prop_assert!(!meet([p.row as usize, p.row as usize, p.col as usize, p.col as usize], window));
+                prop_assert!(p.z <= g.z[p.row as usize * cols + p.col as usize]);
+            }
+            let mut finest: Vec<(u32, u32)> = f.pyramid.levels[0].points.iter().flatten()
+                .filter(|p| !meet([p.row as usize, p.row as usize, p.col as usize, p.col as usize], window))
+                .map(|p| (p.row, p.col)).collect();
+            finest.sort_unstable();
+            let mut all: Vec<(u32, u32)> = f.select(tile, window, 0).iter().map(|p| (p.row, p.col)).collect();
+            all.sort_unstable();
+            prop_assert_eq!(&all, &finest);
+            prop_assert!(points.len() <= finest.len());
+        }
+    }
+
+    /// On a large grid a tile's far field stays within the module docs' bound (the near region at level 0, then at
+    /// most `12 (2 ratio + 1)²` blocks per doubling of the distance), far below the level-0 count.
+    #[test]
+    fn a_tile_sees_few_far_points_on_a_large_grid() {
+        let (n, block, ratio, side) = (1usize << 14, 16usize, 16usize, 256usize);
+        let k = n / block;
+        // Level 0 without a grid: one point per block, at its first sample.
+        let level0 = (0..k * k)
+            .map(|i| {
+                Some(FarPoint {
+                    row: ((i / k) * block) as u32,
+                    col: ((i % k) * block) as u32,
+                    z: 0.0,
+                })
+            })
+            .collect();
+        let lower = |a: &FarPoint, b: &FarPoint| (a.z, a.row, a.col) < (b.z, b.row, b.col);
+        let f = FarField {
+            block,
+            grid: [n, n],
+            pyramid: MinPyramid::new(k, k, level0, lower),
+        };
+        let tile = [0, side - 1, 0, side - 1];
+        let window = [0, side + 15, 0, side + 15];
+        let points = f.select(tile, window, ratio).len();
+        // Within one tile side of the tile: at most its area at level 0; beyond, log2(n / side) doublings.
+        let near = (2 * side + block) * (2 * side + block) / (block * block);
+        let doublings = (n / side).ilog2() as usize;
+        let bound = near + doublings * 12 * (2 * ratio + 1) * (2 * ratio + 1);
+        assert!(points <= bound, "{points} far points, bound {bound}");
+        assert!(points * 10 < f.finest(), "{points} far points of {}", f.finest());
+        assert_eq!(
+            f.select(tile, window, 0).len(),
+            f.finest() - (side + 16) * (side + 16) / (block * block)
+        );
     }
 }

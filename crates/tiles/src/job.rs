@@ -8,8 +8,8 @@
 //!    `halo` samples outside the tile, lowered by the error bound) and the far-field points outside the halo
 //!    ([`crate::far_field`]). Halo and far field lie on or below the merged terrain, so no horizon rises above the
 //!    terrain's own.
-//! 3. **Hierarchy.** Crystal grouping and the merge hierarchy of the tile's triangles, exactly as an untiled build
-//!    ([`pipeline::build_from_regions`]).
+//! 3. **Hierarchy.** The grouping of the plan's parameters (crystals and their merge hierarchy, or a quadtree) over the
+//!    tile's triangles, exactly as an untiled build ([`pipeline::build_from_regions`]).
 //!
 //! Memory: the job keeps the tile's window of the grid and its TIN stages; it reads the DEM file whole and drops
 //! what lies outside the window at once (the grid costs 8 bytes a sample, the TIN stages some 1.6 kB a vertex).
@@ -149,11 +149,9 @@ struct TileInput {
 /// A DEM tile: its simplified TIN, the lowered halo and the far field outside the halo.
 fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput, TilesError> {
     let start = Instant::now();
-    let h = plan.options.halo;
     let (tile, halo, info) = {
         let (grid, info) = read_grid(plan, plan_path)?;
-        let win_r = [spec.rows[0].saturating_sub(h), (spec.rows[1] + h).min(info.rows - 1)];
-        let win_c = [spec.cols[0].saturating_sub(h), (spec.cols[1] + h).min(info.cols - 1)];
+        let (win_r, win_c) = plan.halo_window(spec);
         let halo = (window(&grid, win_r, win_c)?, win_r, win_c);
         (window(&grid, spec.rows, spec.cols)?, halo, info)
     };
@@ -178,11 +176,8 @@ fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput
         }
     }
     let halo_points = beyond.len();
-    for p in &plan.far_field {
-        let (r, c) = (p.row as usize, p.col as usize);
-        if !inside(r, c, win_r, win_c) {
-            beyond.push(DVec3::from_array(info.position(r, c, p.z)));
-        }
+    for p in plan.far_points(spec) {
+        beyond.push(DVec3::from_array(info.position(p.row as usize, p.col as usize, p.z)));
     }
     Ok(TileInput {
         tin,

@@ -5,13 +5,15 @@
 //! vertices are its triangles' vertices, so the tiles' triangles are exactly the mesh's, and the merge joins the
 //! shared vertices (same positions) back into the same mesh. A part also carries the points its horizons see
 //! beyond the tile: every other vertex within `halo` metres of the tile's vertices' bounding box, and the far
-//! field (per square of `far_block` metres, its lowest vertex) outside that. These are vertices of the mesh itself,
+//! field outside that: per square of `far_block` metres its lowest vertex, the squares growing with distance as a
+//! DEM's blocks do ([`crate::far_field`]). These are vertices of the mesh itself,
 //! so they lie on the terrain.
 
 use serde::{Deserialize, Serialize};
 use tin::Tin;
 
 use crate::TilesError;
+use crate::far_field::{Choice, MinPyramid};
 
 /// Magic bytes of a part file (framed like a `.tch`: [`cull::file::frame`]).
 pub const PART_MAGIC: &[u8; 8] = b"TCPART\0\0";
@@ -55,7 +57,7 @@ impl MeshPart {
 
 /// Cuts `tin` into tiles of `tile` metres (see the module docs): `(tile row, tile column, part)` for every tile
 /// that holds a triangle, row by row from the north.
-pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64) -> Vec<(usize, usize, MeshPart)> {
+pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64, far_ratio: usize) -> Vec<(usize, usize, MeshPart)> {
     let b = tin.bbox();
     let cell = |v: f64, lo: f64, k: usize| (((v - lo) / tile).floor().max(0.0) as usize).min(k - 1);
     let kc = ((b.max.x - b.min.x) / tile).ceil().max(1.0) as usize;
@@ -66,18 +68,22 @@ pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64) -> Vec<(usize
         let (r, col) = (cell(b.max.y - c.y, 0.0, kr), cell(c.x, b.min.x, kc));
         members[r * kc + col].push(t as u32);
     }
-    // The far field: per square of `far_block` metres, its lowest vertex (the first in vertex order on ties).
+    // The far field: per square of `far_block` metres, its lowest vertex (the first in vertex order on ties), and
+    // the min-pyramid of these squares.
     let fc = ((b.max.x - b.min.x) / far_block).ceil().max(1.0) as usize;
     let fr = ((b.max.y - b.min.y) / far_block).ceil().max(1.0) as usize;
     let fcell = |v: f64, lo: f64, k: usize| (((v - lo) / far_block).floor().max(0.0) as usize).min(k - 1);
+    let z = |v: u32| tin.position(v).z;
+    let lower = |a: &u32, b: &u32| (z(*a), *a) < (z(*b), *b);
     let mut lowest: Vec<Option<u32>> = vec![None; fr * fc];
-    for (v, p) in tin.positions().iter().enumerate() {
+    for v in 0..tin.num_vertices() as u32 {
+        let p = tin.position(v);
         let slot = &mut lowest[fcell(b.max.y - p.y, 0.0, fr) * fc + fcell(p.x, b.min.x, fc)];
-        if slot.is_none_or(|w| p.z < tin.position(w).z) {
-            *slot = Some(v as u32);
+        if slot.is_none_or(|w| lower(&v, &w)) {
+            *slot = Some(v);
         }
     }
-    let far: Vec<u32> = lowest.into_iter().flatten().collect();
+    let pyramid = MinPyramid::new(fr, fc, lowest, lower);
 
     let mut local = vec![u32::MAX; tin.num_vertices()];
     let mut out = Vec::new();
@@ -96,6 +102,7 @@ pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64) -> Vec<(usize
             lo = lo.min(tin.position(v).truncate());
             hi = hi.max(tin.position(v).truncate());
         }
+        let tile_box = (lo, hi);
         let (lo, hi) = (lo - halo, hi + halo);
         let near = |p: glam::DVec3| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y;
         let part = MeshPart {
@@ -108,10 +115,10 @@ pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64) -> Vec<(usize
                 .filter(|&v| local[v as usize] == u32::MAX && near(tin.position(v)))
                 .map(|v| tin.position(v).to_array())
                 .collect(),
-            far: far
-                .iter()
-                .filter(|&&v| local[v as usize] == u32::MAX && !near(tin.position(v)))
-                .map(|&v| tin.position(v).to_array())
+            far: far_vertices(&pyramid, far_block, (b.min.x, b.max.y), tile_box, (lo, hi), far_ratio)
+                .into_iter()
+                .filter(|&v| local[v as usize] == u32::MAX && !near(tin.position(v)))
+                .map(|v| tin.position(v).to_array())
                 .collect(),
         };
         for &v in &vertices {
@@ -120,4 +127,45 @@ pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64) -> Vec<(usize
         out.push((k / kc, k % kc, part));
     }
     out
+}
+
+/// A mesh tile's far field: the cut through the pyramid of squares of `far_block` metres (their grid's north-west
+/// corner at `corner`) that [`crate::far_field`] describes, for the tile whose vertices span `tile` and whose halo
+/// spans `window` (x,y boxes). Level-0 squares meeting the window are taken too, for the caller to filter vertex by
+/// vertex.
+fn far_vertices(
+    pyramid: &MinPyramid<u32>,
+    far_block: f64,
+    corner: (f64, f64),
+    tile: (glam::DVec2, glam::DVec2),
+    window: (glam::DVec2, glam::DVec2),
+    ratio: usize,
+) -> Vec<u32> {
+    let Some(level0) = pyramid.levels.first() else {
+        return Vec::new();
+    };
+    let (rows, cols) = (level0.rows, level0.cols);
+    pyramid.select(|level, r, c| {
+        let cells = 1usize << level;
+        let side = far_block * cells as f64;
+        let (r1, c1) = (((r + 1) * cells).min(rows), ((c + 1) * cells).min(cols));
+        let lo = glam::DVec2::new(
+            corner.0 + (c * cells) as f64 * far_block,
+            corner.1 - r1 as f64 * far_block,
+        );
+        let hi = glam::DVec2::new(
+            corner.0 + c1 as f64 * far_block,
+            corner.1 - (r * cells) as f64 * far_block,
+        );
+        let meets = lo.x <= window.1.x && window.0.x <= hi.x && lo.y <= window.1.y && window.0.y <= hi.y;
+        if meets {
+            return if level == 0 { Choice::Take } else { Choice::Split };
+        }
+        let gap = (tile.0 - hi).max(lo - tile.1).max(glam::DVec2::ZERO).max_element();
+        if level == 0 || (ratio > 0 && side * ratio as f64 <= gap) {
+            Choice::Take
+        } else {
+            Choice::Split
+        }
+    })
 }

@@ -11,10 +11,10 @@ use serde::{Deserialize, Serialize};
 use tin::{DemOptions, Grid};
 
 use crate::TilesError;
-use crate::far_field::{FarPoint, far_field};
+use crate::far_field::{FarField, FarPoint};
 
 /// The plan format's version; a plan of another version is refused.
-pub const PLAN_VERSION: u32 = 1;
+pub const PLAN_VERSION: u32 = 2;
 
 /// The DEM's grid, as the plan saw it; every job checks that the file still has it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -84,8 +84,11 @@ pub struct PlanOptions {
     pub tile: usize,
     /// Width of the full-resolution halo around a tile (samples, or metres).
     pub halo: usize,
-    /// Side of the far field's blocks (samples, or metres).
+    /// Side of the far field's finest blocks (samples, or metres).
     pub far_block: usize,
+    /// Far-field blocks grow with distance so that each spans at most about `1 / far_ratio` radian from the tile
+    /// ([`crate::far_field`]); 0 keeps every block at `far_block`.
+    pub far_ratio: usize,
     /// Vertical error bound of every tile's simplification (m); 0 keeps every sample that is not exactly
     /// interpolated.
     pub max_error: f64,
@@ -109,9 +112,6 @@ impl PlanOptions {
                 self.max_error
             ));
         }
-        if !matches!(self.params.grouping, pipeline::Grouping::Crystal) {
-            return bad("tiled builds group with crystals (--grouping crystal)".into());
-        }
         Ok(())
     }
 }
@@ -129,8 +129,9 @@ pub struct Plan {
     pub grid: Option<GridInfo>,
     /// How it was cut.
     pub options: PlanOptions,
-    /// The far field: per block of samples, its lowest sample lowered by the error bound.
-    pub far_field: Vec<FarPoint>,
+    /// A DEM's far field: the min-pyramid of its samples lowered by the error bound (empty for a mesh, whose parts
+    /// hold their own).
+    pub far_field: FarField,
     /// The tiles, row by row.
     pub tiles: Vec<TileSpec>,
     /// Where the tiles' outputs go, relative to the plan's folder.
@@ -177,7 +178,7 @@ pub fn make_plan(
         source: source.to_path_buf(),
         dem,
         grid: Some(GridInfo::of(grid)),
-        far_field: far_field(grid, options.far_block, options.max_error),
+        far_field: FarField::new(grid, options.far_block, options.max_error),
         options,
         tiles,
         tiles_dir: tiles_dir.to_path_buf(),
@@ -193,7 +194,13 @@ pub fn make_mesh_plan(
     tiles_dir: &Path,
 ) -> Result<(Plan, Vec<crate::part::MeshPart>), TilesError> {
     options.validate()?;
-    let parts = crate::part::mesh_parts(tin, options.tile as f64, options.halo as f64, options.far_block as f64);
+    let parts = crate::part::mesh_parts(
+        tin,
+        options.tile as f64,
+        options.halo as f64,
+        options.far_block as f64,
+        options.far_ratio,
+    );
     let mut tiles = Vec::with_capacity(parts.len());
     let mut out = Vec::with_capacity(parts.len());
     for (index, (tile_row, tile_col, part)) in parts.into_iter().enumerate() {
@@ -213,7 +220,7 @@ pub fn make_mesh_plan(
         source: source.to_path_buf(),
         dem: DemOptions::default(),
         grid: None,
-        far_field: Vec::new(),
+        far_field: FarField::default(),
         options,
         tiles,
         tiles_dir: tiles_dir.to_path_buf(),
@@ -273,6 +280,31 @@ impl Plan {
         } else {
             plan_path.parent().unwrap_or(Path::new(".")).join(p)
         }
+    }
+
+    /// The halo window of a DEM's tile: its samples and `halo` more on every side, within the grid (rows, then
+    /// columns, both ends inclusive).
+    pub fn halo_window(&self, spec: &TileSpec) -> ([usize; 2], [usize; 2]) {
+        let h = self.options.halo;
+        let (rows, cols) = self.grid.as_ref().map_or((0, 0), |g| (g.rows, g.cols));
+        (
+            [
+                spec.rows[0].saturating_sub(h),
+                (spec.rows[1] + h).min(rows.saturating_sub(1)),
+            ],
+            [
+                spec.cols[0].saturating_sub(h),
+                (spec.cols[1] + h).min(cols.saturating_sub(1)),
+            ],
+        )
+    }
+
+    /// The far-field points of a DEM's tile ([`FarField::select`] outside its halo window).
+    pub fn far_points(&self, spec: &TileSpec) -> Vec<FarPoint> {
+        let (r, c) = self.halo_window(spec);
+        let tile = [spec.rows[0], spec.rows[1], spec.cols[0], spec.cols[1]];
+        self.far_field
+            .select(tile, [r[0], r[1], c[0], c[1]], self.options.far_ratio)
     }
 
     /// Tile `index`, or an error naming the range.

@@ -12,8 +12,20 @@ use tiles::{Plan, PlanOptions};
 use tin::{DemOptions, Grid, SynthOptions, Tin};
 use truth::visible::GroundTruth;
 
-/// Writes `grid` as `.npy` + sidecar in `dir`, plans it and returns the plan and its path.
+/// Writes `grid` as `.npy` + sidecar in `dir`, plans it (crystal grouping) and returns the plan and its path.
 fn plan_grid(dir: &Path, grid: &Grid, tile: usize, halo: usize, max_error: f64) -> (Plan, PathBuf) {
+    plan_grid_grouped(dir, grid, tile, halo, max_error, pipeline::Grouping::Crystal)
+}
+
+/// [`plan_grid`] with a given grouping.
+fn plan_grid_grouped(
+    dir: &Path,
+    grid: &Grid,
+    tile: usize,
+    halo: usize,
+    max_error: f64,
+    grouping: pipeline::Grouping,
+) -> (Plan, PathBuf) {
     let npy = dir.join("terrain.npy");
     let mut bytes = Vec::new();
     tin::dem::npy::write_npy_to(grid, &mut bytes).expect("npy");
@@ -22,6 +34,7 @@ fn plan_grid(dir: &Path, grid: &Grid, tile: usize, halo: usize, max_error: f64) 
     let mut params = BuildParams {
         sectors: 8,
         subsectors: 2,
+        grouping,
         ..BuildParams::default()
     };
     params.crystal.min_group = 4;
@@ -29,6 +42,7 @@ fn plan_grid(dir: &Path, grid: &Grid, tile: usize, halo: usize, max_error: f64) 
         tile,
         halo,
         far_block: 3,
+        far_ratio: 2,
         max_error,
         params,
     };
@@ -104,8 +118,15 @@ fn halo_and_far_field_lie_on_or_below_the_merged_terrain() {
     let (plan, path) = plan_grid(dir.path(), &grid, 12, 4, e);
     let tin = tin_of(&build_all(&plan, &path));
     let loc = truth::locate::Locator::new(&tin);
-    assert!(!plan.far_field.is_empty());
-    for p in &plan.far_field {
+    assert!(plan.far_field.finest() > 0);
+    // Every point of every level of the pyramid (what any tile may select).
+    for p in plan
+        .far_field
+        .pyramid
+        .levels
+        .iter()
+        .flat_map(|l| l.points.iter().flatten())
+    {
         let at = plan
             .grid
             .as_ref()
@@ -126,16 +147,13 @@ fn halo_and_far_field_lie_on_or_below_the_merged_terrain() {
     }
 }
 
-#[test]
-fn safe_culling_of_a_merged_terrain_never_culls_a_visible_triangle() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let grid = synth(48 * 48, 5);
-    let (plan, path) = plan_grid(dir.path(), &grid, 12, 3, 0.5);
-    let h = build_all(&plan, &path);
-    let tin = tin_of(&h);
+/// Asserts that the safe culler culls no visible triangle of `h` (exact checker) from 40 seeded eyes 2, 20 and 200 m
+/// above its terrain, and culls something.
+fn assert_safe_culling(h: &Hierarchy) {
+    let tin = tin_of(h);
     let truth = GroundTruth::new(&tin);
     let loc = truth.locator();
-    let culler = AnyCuller::Safe(SafeCuller::new(&h, SafeParams::default()));
+    let culler = AnyCuller::Safe(SafeCuller::new(h, SafeParams::default()));
     let (lo, hi) = (tin.bbox().min, tin.bbox().max);
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
     let mut next = || {
@@ -164,6 +182,51 @@ fn safe_culling_of_a_merged_terrain_never_culls_a_visible_triangle() {
         culled += mask.iter().filter(|&&m| !m).count();
     }
     assert!(culled > 0, "the safe culler culled nothing on the merged terrain");
+}
+
+#[test]
+fn safe_culling_of_a_merged_terrain_never_culls_a_visible_triangle() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(48 * 48, 5);
+    let (plan, path) = plan_grid(dir.path(), &grid, 12, 3, 0.5);
+    assert_safe_culling(&build_all(&plan, &path));
+}
+
+/// Tiles grouped by quadtree merge into a quadtree hierarchy: each tile's cells under its tile node, the file marked
+/// quadtree (so `stewart` accepts it and `thesis` refuses it), as deterministic and as safe as crystal tiles.
+#[test]
+fn quadtree_tiles_merge_into_a_quadtree_hierarchy() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(48 * 48, 6);
+    let depth = 3;
+    let grouping = pipeline::Grouping::Quadtree(pipeline::QuadtreeParams {
+        depth: Some(depth),
+        ..Default::default()
+    });
+    let (plan, path) = plan_grid_grouped(dir.path(), &grid, 24, 3, 0.5, grouping);
+    assert_eq!(plan.tiles.len(), 4);
+    let h = build_all(&plan, &path);
+    assert_eq!(
+        h.to_bytes().expect("bytes"),
+        build_all(&plan, &path).to_bytes().expect("bytes")
+    );
+    assert!(h.build.grouping.is_quadtree(), "{:?}", h.build.grouping);
+    cull::CullMethod::Stewart
+        .check(&h)
+        .expect("stewart takes a tiled quadtree");
+    assert!(cull::CullMethod::Thesis.check(&h).is_err());
+    // One root over the 4 tile nodes, each over its tile's quadtree; every cell stores its regions.
+    assert_eq!(h.roots.len(), 1);
+    let root = &h.nodes[h.roots[0] as usize];
+    assert_eq!(root.children.len(), 4);
+    let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count();
+    assert!(leaves >= 4 * 4usize.pow(depth - 1), "{leaves} leaves");
+    assert_eq!(h.always_visible[0], h.always_visible[1], "a quadtree leaves no orphans");
+    let stewart = AnyCuller::new(&h, cull::CullMethod::Stewart);
+    let eye = h.mesh.positions[0];
+    let list = stewart.cull(&Camera::all_around([eye[0], eye[1], eye[2] + 10.0]));
+    assert!(list.stats.nodes_tested > 0);
+    assert_safe_culling(&h);
 }
 
 #[test]
@@ -247,6 +310,7 @@ fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
         tile: (side / 3.5) as usize,
         halo: (side / 20.0) as usize,
         far_block: (side / 30.0) as usize,
+        far_ratio: 2,
         max_error: 0.0,
         params,
     };
