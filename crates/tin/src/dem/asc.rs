@@ -16,7 +16,7 @@ use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, GridShape, check_window, finish, open, read_bytes};
+use super::{DemOptions, GridShape, check_window, file_len, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -50,6 +50,7 @@ pub(super) fn read_asc_window(
 ) -> Result<(GridShape, Vec<f64>)> {
     let err = |m: String| TinError::format(path, m);
     let mut lines = Lines::open(path)?;
+    let file_len = lines.len;
     let mut h = Header::default();
     let mut window: Option<(GridShape, Option<f64>)> = None;
     let nc = cols[1] - cols[0] + 1;
@@ -63,7 +64,8 @@ pub(super) fn read_asc_window(
             }
             let (shape, nodata) = std::mem::take(&mut h).shape(path, opts)?;
             check_window(&shape, rows, cols, path)?;
-            z.reserve_exact((rows[1] - rows[0] + 1) * nc);
+            // Every value takes at least two bytes: never reserve more than the file can hold.
+            z.reserve_exact(((rows[1] - rows[0] + 1) * nc).min(file_len / 2 + 1));
             window = Some((shape, nodata));
         }
         let Some((shape, nodata)) = window else { break };
@@ -107,15 +109,20 @@ struct Lines<'p> {
     buf: Vec<u8>,
     n: usize,
     path: &'p Path,
+    /// The file's length in bytes.
+    len: usize,
 }
 
 impl<'p> Lines<'p> {
     fn open(path: &'p Path) -> Result<Self> {
+        let file = open(path)?;
+        let len = file_len(&file, path)?;
         Ok(Lines {
-            reader: std::io::BufReader::with_capacity(1 << 16, open(path)?),
+            reader: std::io::BufReader::with_capacity(1 << 16, file),
             buf: Vec::new(),
             n: 0,
             path,
+            len: usize::try_from(len).unwrap_or(usize::MAX),
         })
     }
 

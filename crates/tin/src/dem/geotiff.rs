@@ -204,6 +204,9 @@ pub(super) fn read_geotiff_window(
             })?;
             let (dw, dh) = dec.chunk_data_dimensions(index);
             let (dw, dh) = (dw as usize, dh as usize);
+            if dw == 0 || dh == 0 {
+                return Err(err(format!("strip or tile {index} has {dw} x {dh} samples")));
+            }
             let (sample_type, values) = to_f64(chunk);
             let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
             let stride = meta.stride;
