@@ -257,7 +257,11 @@ mod tests {
         let z: Vec<f64> = (0..rows * cols)
             .map(|i| {
                 let h = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15 ^ seed) >> 40;
-                if h.is_multiple_of(11) { f64::NAN } else { (h % 97) as f64 }
+                if h.is_multiple_of(11) {
+                    f64::NAN
+                } else {
+                    (h % 97) as f64
+                }
             })
             .collect();
         Grid::new(rows, cols, 1.0, 1.0, DVec2::ZERO, z).expect("grid")

@@ -11,8 +11,11 @@
 //! 3. **Hierarchy.** The grouping of the plan's parameters (crystals and their merge hierarchy, or a quadtree) over the
 //!    tile's triangles, exactly as an untiled build ([`pipeline::build_from_regions`]).
 //!
-//! Memory: the job keeps the tile's window of the grid and its TIN stages; it reads the DEM file whole and drops
-//! what lies outside the window at once (the grid costs 8 bytes a sample, the TIN stages some 1.6 kB a vertex).
+//! Memory: the job reads only the DEM's header and the tile's halo window ([`tin::dem::read_dem_window`]: the
+//! window's slices of a `.npy` or `.hgt`, the strips or tiles of a GeoTIFF that meet it, a streamed `.asc`; a PNG is
+//! decoded whole and cut), so it keeps the window of the grid (8 bytes a sample) and the tile's TIN stages (some
+//! 1.6 kB a vertex), bounded by the tile and its halo, and its far field, which grows with the logarithm of the
+//! terrain ([`crate::far_field`]).
 
 use std::path::Path;
 use std::time::Instant;
@@ -46,7 +49,7 @@ pub struct TileReport {
     pub far_points: usize,
     /// Largest error of the tile's simplification over its non-side samples (m).
     pub max_error: f64,
-    /// Reading the DEM and cutting the window (s).
+    /// Reading the DEM's header and the tile's halo window (s).
     pub read_seconds: f64,
     /// Simplifying the tile (s).
     pub simplify_seconds: f64,
@@ -56,15 +59,23 @@ pub struct TileReport {
     pub build: BuildReport,
 }
 
-/// Reads the plan's DEM and checks that it still has the plan's grid; returns both.
-pub fn read_grid<'p>(plan: &'p Plan, plan_path: &Path) -> Result<(Grid, &'p GridInfo), TilesError> {
+/// Reads the header of the plan's DEM and checks that it still has the plan's grid; returns the DEM's path and the
+/// plan's grid.
+fn check_grid<'p>(plan: &'p Plan, plan_path: &Path) -> Result<(std::path::PathBuf, &'p GridInfo), TilesError> {
     let info = plan
         .grid
         .as_ref()
         .ok_or_else(|| TilesError::Parameter("the plan is a mesh's: its tiles read their parts".into()))?;
     let source = Plan::resolve(plan_path, &plan.source);
-    let grid = tin::read_dem(&source, &plan.dem)?;
-    if &GridInfo::of(&grid) != info {
+    let shape = tin::dem::read_dem_header(&source, &plan.dem)?;
+    let found = GridInfo {
+        rows: shape.rows,
+        cols: shape.cols,
+        dx: shape.dx,
+        dy: shape.dy,
+        origin: shape.origin.to_array(),
+    };
+    if &found != info {
         return Err(TilesError::Parameter(format!(
             "{} no longer has the plan's grid ({} x {} samples at {} x {} m): plan again",
             source.display(),
@@ -74,21 +85,23 @@ pub fn read_grid<'p>(plan: &'p Plan, plan_path: &Path) -> Result<(Grid, &'p Grid
             info.dy
         )));
     }
-    Ok((grid, info))
+    Ok((source, info))
 }
 
-/// The samples of `grid` in rows `r0..=r1`, columns `c0..=c1`, as a grid of their own.
-fn window(grid: &Grid, r: [usize; 2], c: [usize; 2]) -> Result<Grid, TilesError> {
+/// The samples in rows `r0..=r1`, columns `c0..=c1` of the whole grid `info`, as a grid of their own, cut from
+/// `from`, a window of it whose north-west sample is `(at[0], at[1])`. The origin is computed from the whole grid's,
+/// as cutting the whole grid would give it.
+fn window(info: &GridInfo, from: &Grid, at: [usize; 2], r: [usize; 2], c: [usize; 2]) -> Result<Grid, TilesError> {
     let mut z = Vec::with_capacity((r[1] - r[0] + 1) * (c[1] - c[0] + 1));
-    for row in r[0]..=r[1] {
-        z.extend_from_slice(&grid.z[row * grid.cols + c[0]..=row * grid.cols + c[1]]);
+    for row in r[0] - at[0]..=r[1] - at[0] {
+        z.extend_from_slice(&from.z[row * from.cols + c[0] - at[1]..=row * from.cols + c[1] - at[1]]);
     }
-    let origin = grid.origin + DVec2::new(c[0] as f64 * grid.dx, -(r[0] as f64) * grid.dy);
+    let origin = DVec2::from_array(info.origin) + DVec2::new(c[0] as f64 * info.dx, -(r[0] as f64) * info.dy);
     Ok(Grid::new(
         r[1] - r[0] + 1,
         c[1] - c[0] + 1,
-        grid.dx,
-        grid.dy,
+        info.dx,
+        info.dy,
         origin,
         z,
     )?)
@@ -149,13 +162,10 @@ struct TileInput {
 /// A DEM tile: its simplified TIN, the lowered halo and the far field outside the halo.
 fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput, TilesError> {
     let start = Instant::now();
-    let (tile, halo, info) = {
-        let (grid, info) = read_grid(plan, plan_path)?;
-        let (win_r, win_c) = plan.halo_window(spec);
-        let halo = (window(&grid, win_r, win_c)?, win_r, win_c);
-        (window(&grid, spec.rows, spec.cols)?, halo, info)
-    };
-    let (halo, win_r, win_c) = halo;
+    let (source, info) = check_grid(plan, plan_path)?;
+    let (win_r, win_c) = plan.halo_window(spec);
+    let halo = tin::dem::read_dem_window(&source, &plan.dem, win_r, win_c)?;
+    let tile = window(info, &halo, [win_r[0], win_c[0]], spec.rows, spec.cols)?;
     let read_seconds = start.elapsed().as_secs_f64();
 
     let start = Instant::now();

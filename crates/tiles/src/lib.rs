@@ -7,7 +7,7 @@
 //! - [`job`]: `tincull tiles build plan.json --tile I` builds one tile: its TIN (sides simplified identically by
 //!   both neighbours, [`boundary`]), its vertices' horizons over the tile, a full-resolution halo and the far field
 //!   (all on or below the terrain), and its partial hierarchy, written as a `.tch`.
-//! - [`merge`]: `tincull tiles merge plan.json -o terrain.tch` joins the tiles' meshes and hierarchies; every tile is
+//! - [`merge`](mod@merge): `tincull tiles merge plan.json -o terrain.tch` joins the tiles' meshes and hierarchies; every tile is
 //!   a node near the top.
 //!
 //! **Safety.** The default culler (`safe`) decides at run time from the mesh alone, so the merged hierarchy culls

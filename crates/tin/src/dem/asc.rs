@@ -6,12 +6,17 @@
 //! so its sample (cell centre) lies half a cell further in; the `…center` keys give that sample directly. The grid
 //! origin is the centre of the north-west sample: `x = xll + dx/2`, `y = yll + dy/2 + (nrows − 1)·dy` for corners.
 //! Samples equal to `NODATA_value` (and NaN) become voids. Errors name the line.
+//!
+//! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
+//! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values
+//! outside the window are not checked.
 
+use std::io::BufRead;
 use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, finish, read_bytes};
+use super::{DemOptions, GridShape, check_window, file_len, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -20,6 +25,130 @@ pub fn read_asc(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check()?;
     let bytes = read_bytes(path)?;
     parse_asc(&bytes, path, opts)
+}
+
+/// The grid of an ESRI ASCII grid from its header, without reading its values.
+pub fn read_asc_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    opts.check()?;
+    let mut lines = Lines::open(path)?;
+    let mut h = Header::default();
+    while let Some((n, line)) = lines.next()? {
+        if !h.line(n, line, path)? {
+            break;
+        }
+    }
+    Ok(h.shape(path, opts)?.0)
+}
+
+/// The samples of a window of an ESRI ASCII grid (voids NaN, not scaled) and its whole grid, streaming the text
+/// (see the module documentation).
+pub(super) fn read_asc_window(
+    path: &Path,
+    opts: &DemOptions,
+    rows: [usize; 2],
+    cols: [usize; 2],
+) -> Result<(GridShape, Vec<f64>)> {
+    let err = |m: String| TinError::format(path, m);
+    let mut lines = Lines::open(path)?;
+    let file_len = lines.len;
+    let mut h = Header::default();
+    let mut window: Option<(GridShape, Option<f64>)> = None;
+    let nc = cols[1] - cols[0] + 1;
+    let mut z = Vec::new();
+    // Index of the next value in the whole grid (row-major).
+    let mut k = 0usize;
+    'lines: while let Some((n, line)) = lines.next()? {
+        if window.is_none() {
+            if h.line(n, line, path)? {
+                continue;
+            }
+            let (shape, nodata) = std::mem::take(&mut h).shape(path, opts)?;
+            check_window(&shape, rows, cols, path)?;
+            // Every value takes at least two bytes: never reserve more than the file can hold.
+            z.reserve_exact(((rows[1] - rows[0] + 1) * nc).min(file_len / 2 + 1));
+            window = Some((shape, nodata));
+        }
+        let Some((shape, nodata)) = window else { break };
+        for word in line.split_whitespace() {
+            let (r, c) = (k / shape.cols, k % shape.cols);
+            if r > rows[1] {
+                break 'lines;
+            }
+            if r >= rows[0] && (cols[0]..=cols[1]).contains(&c) {
+                let v: f64 = word
+                    .parse()
+                    .map_err(|_| err(format!("line {n}: {word:?} is not a number (row {r}, column {c})")))?;
+                z.push(if nodata == Some(v) { f64::NAN } else { v });
+            }
+            k += 1;
+        }
+    }
+    let (shape, _) = match window {
+        Some(w) => w,
+        None => {
+            // No values at all: the header's own errors, or the window's, or truncation.
+            let (shape, nodata) = h.shape(path, opts)?;
+            check_window(&shape, rows, cols, path)?;
+            (shape, nodata)
+        }
+    };
+    if z.len() < (rows[1] - rows[0] + 1) * nc {
+        return Err(err(format!(
+            "truncated: {k} values, but nrows x ncols = {} x {} = {}",
+            shape.rows,
+            shape.cols,
+            shape.rows * shape.cols
+        )));
+    }
+    Ok((shape, z))
+}
+
+/// The lines of a text file, read one at a time (1-based numbers), naming the file and line in errors.
+struct Lines<'p> {
+    reader: std::io::BufReader<std::fs::File>,
+    buf: Vec<u8>,
+    n: usize,
+    path: &'p Path,
+    /// The file's length in bytes.
+    len: usize,
+}
+
+impl<'p> Lines<'p> {
+    fn open(path: &'p Path) -> Result<Self> {
+        let file = open(path)?;
+        let len = file_len(&file, path)?;
+        Ok(Lines {
+            reader: std::io::BufReader::with_capacity(1 << 16, file),
+            buf: Vec::new(),
+            n: 0,
+            path,
+            len: usize::try_from(len).unwrap_or(usize::MAX),
+        })
+    }
+
+    /// The next line without its line ending (as [`str::lines`] gives it), or None at the end.
+    fn next(&mut self) -> Result<Option<(usize, &str)>> {
+        self.buf.clear();
+        let read = self
+            .reader
+            .read_until(b'\n', &mut self.buf)
+            .map_err(|e| TinError::io(self.path, e))?;
+        if read == 0 {
+            return Ok(None);
+        }
+        self.n += 1;
+        let mut line = &self.buf[..];
+        if let Some(l) = line.strip_suffix(b"\n") {
+            line = l.strip_suffix(b"\r").unwrap_or(l);
+        }
+        let text = std::str::from_utf8(line).map_err(|_| {
+            TinError::format(
+                self.path,
+                format!("line {}: not text (a binary or foreign file?)", self.n),
+            )
+        })?;
+        Ok(Some((self.n, text)))
+    }
 }
 
 #[derive(Default)]
@@ -34,27 +163,18 @@ struct Header {
     nodata: Option<f64>,
 }
 
-/// Parses an ESRI ASCII grid held in memory; `path` names it in errors.
-pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
-    let err = |m: String| TinError::format(path, m);
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
-        err(format!("line {line}: not text (a binary or foreign file?)"))
-    })?;
-    let mut h = Header::default();
-    let mut lines = text.lines().enumerate().peekable();
-    // Header: lines whose first word is not a number.
-    while let Some(&(i, line)) = lines.peek() {
+impl Header {
+    /// Takes line `n` (1-based) of the header: false when it is not a header line but the first line of values
+    /// (its first word is a number). Blank lines are header lines.
+    fn line(&mut self, n: usize, line: &str, path: &Path) -> Result<bool> {
+        let err = |m: String| TinError::format(path, m);
         let mut words = line.split_whitespace();
         let Some(key) = words.next() else {
-            lines.next();
-            continue;
+            return Ok(true);
         };
         if key.parse::<f64>().is_ok() {
-            break;
+            return Ok(false);
         }
-        lines.next();
-        let n = i + 1;
         let value = words
             .next()
             .ok_or_else(|| err(format!("line {n}: header key {key:?} has no value")))?;
@@ -84,36 +204,36 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
         };
         match key.to_ascii_lowercase().as_str() {
             "ncols" => {
-                slot_taken(h.ncols.is_some())?;
-                h.ncols = Some(count()?);
+                slot_taken(self.ncols.is_some())?;
+                self.ncols = Some(count()?);
             }
             "nrows" => {
-                slot_taken(h.nrows.is_some())?;
-                h.nrows = Some(count()?);
+                slot_taken(self.nrows.is_some())?;
+                self.nrows = Some(count()?);
             }
             k @ ("xllcorner" | "xllcenter") => {
-                slot_taken(h.xll.is_some())?;
-                h.xll = Some((number()?, k == "xllcorner"));
+                slot_taken(self.xll.is_some())?;
+                self.xll = Some((number()?, k == "xllcorner"));
             }
             k @ ("yllcorner" | "yllcenter") => {
-                slot_taken(h.yll.is_some())?;
-                h.yll = Some((number()?, k == "yllcorner"));
+                slot_taken(self.yll.is_some())?;
+                self.yll = Some((number()?, k == "yllcorner"));
             }
             "cellsize" => {
-                slot_taken(h.cellsize.is_some())?;
-                h.cellsize = Some(number()?);
+                slot_taken(self.cellsize.is_some())?;
+                self.cellsize = Some(number()?);
             }
             "dx" => {
-                slot_taken(h.dx.is_some())?;
-                h.dx = Some(number()?);
+                slot_taken(self.dx.is_some())?;
+                self.dx = Some(number()?);
             }
             "dy" => {
-                slot_taken(h.dy.is_some())?;
-                h.dy = Some(number()?);
+                slot_taken(self.dy.is_some())?;
+                self.dy = Some(number()?);
             }
             "nodata_value" => {
-                slot_taken(h.nodata.is_some())?;
-                h.nodata = Some(number()?);
+                slot_taken(self.nodata.is_some())?;
+                self.nodata = Some(number()?);
             }
             _ => {
                 return Err(err(format!(
@@ -121,31 +241,69 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
                 )));
             }
         }
+        Ok(true)
     }
-    let missing = |key: &str| err(format!("the header has no {key} (not an ESRI ASCII grid?)"));
-    let cols = h.ncols.ok_or_else(|| missing("ncols"))?;
-    let rows = h.nrows.ok_or_else(|| missing("nrows"))?;
-    let (xll, x_corner) = h.xll.ok_or_else(|| missing("xllcorner or xllcenter"))?;
-    let (yll, y_corner) = h.yll.ok_or_else(|| missing("yllcorner or yllcenter"))?;
-    let header_spacing = match (h.cellsize, h.dx, h.dy) {
-        (Some(c), None, None) => (c, c),
-        (None, Some(dx), Some(dy)) => (dx, dy),
-        (None, None, None) => return Err(missing("cellsize (or dx and dy)")),
-        _ => {
-            return Err(err("the header must give either cellsize or both dx and dy".into()));
+
+    /// The grid the header describes (with [`DemOptions::spacing`] applied) and its nodata value.
+    fn shape(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Option<f64>)> {
+        let err = |m: String| TinError::format(path, m);
+        let h = self;
+        let missing = |key: &str| err(format!("the header has no {key} (not an ESRI ASCII grid?)"));
+        let cols = h.ncols.ok_or_else(|| missing("ncols"))?;
+        let rows = h.nrows.ok_or_else(|| missing("nrows"))?;
+        let (xll, x_corner) = h.xll.ok_or_else(|| missing("xllcorner or xllcenter"))?;
+        let (yll, y_corner) = h.yll.ok_or_else(|| missing("yllcorner or yllcenter"))?;
+        let header_spacing = match (h.cellsize, h.dx, h.dy) {
+            (Some(c), None, None) => (c, c),
+            (None, Some(dx), Some(dy)) => (dx, dy),
+            (None, None, None) => return Err(missing("cellsize (or dx and dy)")),
+            _ => {
+                return Err(err("the header must give either cellsize or both dx and dy".into()));
+            }
+        };
+        if !(header_spacing.0 > 0.0 && header_spacing.1 > 0.0) {
+            return Err(err(format!(
+                "cell size must be positive, got {} x {}",
+                header_spacing.0, header_spacing.1
+            )));
         }
-    };
-    if !(header_spacing.0 > 0.0 && header_spacing.1 > 0.0) {
-        return Err(err(format!(
-            "cell size must be positive, got {} x {}",
-            header_spacing.0, header_spacing.1
-        )));
+        let (dx, dy) = opts.spacing.unwrap_or(header_spacing);
+        rows.checked_mul(cols)
+            .filter(|&n| n <= (1 << 31))
+            .ok_or_else(|| err(format!("{rows} x {cols} samples is too many")))?;
+        let x0 = if x_corner { xll + 0.5 * dx } else { xll };
+        let y_south = if y_corner { yll + 0.5 * dy } else { yll };
+        let origin = DVec2::new(x0, y_south + (rows as f64 - 1.0) * dy);
+        let shape = GridShape {
+            rows,
+            cols,
+            dx,
+            dy,
+            origin,
+        };
+        Ok((shape, h.nodata))
     }
-    let (dx, dy) = opts.spacing.unwrap_or(header_spacing);
-    let expected = rows
-        .checked_mul(cols)
-        .filter(|&n| n <= (1 << 31))
-        .ok_or_else(|| err(format!("{rows} x {cols} samples is too many")))?;
+}
+
+/// Parses an ESRI ASCII grid held in memory; `path` names it in errors.
+pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
+    let err = |m: String| TinError::format(path, m);
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+        err(format!("line {line}: not text (a binary or foreign file?)"))
+    })?;
+    let mut h = Header::default();
+    let mut lines = text.lines().enumerate().peekable();
+    // Header: lines whose first word is not a number.
+    while let Some(&(i, line)) = lines.peek() {
+        if !h.line(i + 1, line, path)? {
+            break;
+        }
+        lines.next();
+    }
+    let (shape, nodata) = h.shape(path, opts)?;
+    let (rows, cols) = (shape.rows, shape.cols);
+    let expected = rows * cols;
     // Every value takes at least two bytes: never reserve more than the file can hold (a lying header must not
     // allocate gigabytes).
     let mut z = Vec::with_capacity(expected.min(bytes.len() / 2 + 1));
@@ -165,7 +323,7 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
                     z.len() % cols
                 ))
             })?;
-            z.push(if h.nodata == Some(v) { f64::NAN } else { v });
+            z.push(if nodata == Some(v) { f64::NAN } else { v });
         }
     }
     if z.len() < expected {
@@ -174,8 +332,5 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
             z.len()
         )));
     }
-    let x0 = if x_corner { xll + 0.5 * dx } else { xll };
-    let y_south = if y_corner { yll + 0.5 * dy } else { yll };
-    let origin = DVec2::new(x0, y_south + (rows as f64 - 1.0) * dy);
-    finish(path, rows, cols, (dx, dy), origin, z, opts)
+    finish(path, rows, cols, (shape.dx, shape.dy), shape.origin, z, opts)
 }

@@ -30,7 +30,7 @@
 //! [`read_geotiff_info`] also returns what was found ([`GeoTiffInfo`]: the CRS, units, raster type, the native
 //! bounding box), which `tincull info` prints.
 
-use std::io::Cursor;
+use std::io::{Cursor, Read, Seek};
 use std::path::Path;
 
 use glam::DVec2;
@@ -38,7 +38,7 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::hgt::METRES_PER_DEGREE;
-use super::{DemOptions, finish, read_bytes};
+use super::{DemOptions, GridShape, check_window, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -130,7 +130,133 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
     opts.check()?;
     let err = |m: String| TinError::format(path, m);
     let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
-    let mut dec = Decoder::new(Cursor::new(bytes)).map_err(|e| tiff_err("not a readable TIFF", e))?;
+    let (mut dec, meta) = open_tiff(Cursor::new(bytes), path, opts)?;
+    let (rows, cols) = (meta.shape.rows, meta.shape.cols);
+    let image = dec
+        .read_image()
+        .map_err(|e| tiff_err(&format!("cannot decode the samples ({})", meta.info.compression), e))?;
+    let (sample_type, values) = to_f64(image);
+    let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
+    let n = rows
+        .checked_mul(cols)
+        .ok_or_else(|| err(format!("{cols} x {rows} samples overflow")))?;
+    let stride = meta.stride;
+    if values.len() < n * stride {
+        return Err(err(format!(
+            "decoded {} samples, expected {} ({cols} x {rows} x {stride})",
+            values.len(),
+            n * stride
+        )));
+    }
+    let z: Vec<f64> = values
+        .iter()
+        .skip(meta.band - 1)
+        .step_by(stride)
+        .take(n)
+        .map(|&v| meta.height(v, sample_type))
+        .collect();
+    let info = GeoTiffInfo {
+        sample_type: sample_type.to_string(),
+        ..meta.info
+    };
+    let s = meta.shape;
+    let grid = finish(path, rows, cols, (s.dx, s.dy), s.origin, z, opts)?;
+    Ok((grid, info))
+}
+
+/// The grid of a GeoTIFF from its tags, without decoding its samples.
+pub fn read_geotiff_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    opts.check()?;
+    let file = std::io::BufReader::new(open(path)?);
+    Ok(open_tiff(file, path, opts)?.1.shape)
+}
+
+/// The samples of a window of a GeoTIFF (voids NaN, not scaled) and its whole grid: only the strips or tiles
+/// (of the first plane) that meet the window are decoded.
+pub(super) fn read_geotiff_window(
+    path: &Path,
+    opts: &DemOptions,
+    rows: [usize; 2],
+    cols: [usize; 2],
+) -> Result<(GridShape, Vec<f64>)> {
+    let err = |m: String| TinError::format(path, m);
+    let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
+    let file = std::io::BufReader::new(open(path)?);
+    let (mut dec, meta) = open_tiff(file, path, opts)?;
+    let shape = meta.shape;
+    check_window(&shape, rows, cols, path)?;
+    let (cw, ch) = dec.chunk_dimensions();
+    let (cw, ch) = (cw as usize, ch as usize);
+    if cw == 0 || ch == 0 {
+        return Err(err(format!("chunks of {cw} x {ch} samples")));
+    }
+    let across = shape.cols.div_ceil(cw);
+    let nc = cols[1] - cols[0] + 1;
+    let mut z = vec![0.0; (rows[1] - rows[0] + 1) * nc];
+    for ty in rows[0] / ch..=rows[1] / ch {
+        for tx in cols[0] / cw..=cols[1] / cw {
+            let index = u32::try_from(ty * across + tx).map_err(|_| err("too many strips or tiles".into()))?;
+            let chunk = dec.read_chunk(index).map_err(|e| {
+                tiff_err(
+                    &format!("cannot decode strip or tile {index} ({})", meta.info.compression),
+                    e,
+                )
+            })?;
+            let (dw, dh) = dec.chunk_data_dimensions(index);
+            let (dw, dh) = (dw as usize, dh as usize);
+            if dw == 0 || dh == 0 {
+                return Err(err(format!("strip or tile {index} has {dw} x {dh} samples")));
+            }
+            let (sample_type, values) = to_f64(chunk);
+            let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
+            let stride = meta.stride;
+            if values.len() < dw * dh * stride {
+                return Err(err(format!(
+                    "strip or tile {index}: decoded {} samples, expected {} ({dw} x {dh} x {stride})",
+                    values.len(),
+                    dw * dh * stride
+                )));
+            }
+            // The chunk's samples inside the window, in whole-grid rows and columns.
+            let (y0, x0) = (ty * ch, tx * cw);
+            for r in rows[0].max(y0)..=rows[1].min(y0 + dh - 1) {
+                for c in cols[0].max(x0)..=cols[1].min(x0 + dw - 1) {
+                    let v = values[((r - y0) * dw + (c - x0)) * stride + meta.band - 1];
+                    z[(r - rows[0]) * nc + (c - cols[0])] = meta.height(v, sample_type);
+                }
+            }
+        }
+    }
+    Ok((shape, z))
+}
+
+/// What the tags of a GeoTIFF say: its grid, the band to read and how voids are marked.
+struct Meta {
+    shape: GridShape,
+    /// The band read (1-based) and the samples per pixel of a decoded chunk or image.
+    band: usize,
+    stride: usize,
+    nodata: Option<f64>,
+    /// What the tags say, but the sample type (known once samples are decoded).
+    info: GeoTiffInfo,
+}
+
+impl Meta {
+    /// The height of a decoded sample: NaN for voids (NaN, the nodata value, or for float32 samples the nodata
+    /// value rounded to float32).
+    fn height(&self, v: f64, sample_type: &str) -> f64 {
+        let void = v.is_nan()
+            || self.nodata.is_some_and(|nd| v == nd)
+            || (sample_type == "float32" && self.nodata.is_some_and(|nd| v as f32 == nd as f32));
+        if void { f64::NAN } else { v }
+    }
+}
+
+/// Opens a TIFF, reads its tags and georeference ([`Meta`]).
+fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Result<(Decoder<R>, Meta)> {
+    let err = |m: String| TinError::format(path, m);
+    let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
+    let mut dec = Decoder::new(reader).map_err(|e| tiff_err("not a readable TIFF", e))?;
     // Bounded memory on hostile headers: at most 1 GiB of decoded samples (a 16k x 16k float32 DEM) and 256 MiB
     // per compressed strip or tile.
     let mut limits = Limits::default();
@@ -203,39 +329,7 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
         (_, Some(b)) => b,
     };
 
-    let image = dec.read_image().map_err(|e| {
-        tiff_err(
-            &format!("cannot decode the samples ({compression}, predictor {predictor})"),
-            e,
-        )
-    })?;
-    let (sample_type, values) = to_f64(image);
-    let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
     let stride = if planar == 2 { 1 } else { usize::from(spp) };
-    let n = rows
-        .checked_mul(cols)
-        .ok_or_else(|| err(format!("{cols} x {rows} samples overflow")))?;
-    if values.len() < n * stride {
-        return Err(err(format!(
-            "decoded {} samples, expected {} ({cols} x {rows} x {stride})",
-            values.len(),
-            n * stride
-        )));
-    }
-    let nd32 = nodata.map(|v| v as f32);
-    let z: Vec<f64> = values
-        .iter()
-        .skip(usize::from(band) - 1)
-        .step_by(stride)
-        .take(n)
-        .map(|&v| {
-            let void = v.is_nan()
-                || nodata.is_some_and(|nd| v == nd)
-                || (sample_type == "float32" && nd32.is_some_and(|nd| v as f32 == nd));
-            if void { f64::NAN } else { v }
-        })
-        .collect();
-
     // The georeference: native coordinates of the centre of sample (0, 0) and the native spacing.
     let c = match georef.raster_type {
         RasterType::PixelIsArea => 0.5,
@@ -284,6 +378,14 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
         }
     };
     let spacing = opts.spacing.unwrap_or(spacing);
+    let (dx, dy) = spacing;
+    let shape = GridShape {
+        rows,
+        cols,
+        dx,
+        dy,
+        origin,
+    };
     let info = GeoTiffInfo {
         crs_kind: georef.kind,
         epsg: georef.epsg,
@@ -293,13 +395,19 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
         native_bbox,
         native_spacing: (sx, sy),
         nodata,
-        sample_type: sample_type.to_string(),
+        sample_type: String::new(),
         compression: format!("{compression}, predictor {predictor}"),
         layout: layout.to_string(),
         bands: (spp, band),
     };
-    let grid = finish(path, rows, cols, spacing, origin, z, opts)?;
-    Ok((grid, info))
+    let meta = Meta {
+        shape,
+        band: usize::from(band),
+        stride,
+        nodata,
+        info,
+    };
+    Ok((dec, meta))
 }
 
 /// Samples per degree for a spacing of `s` degrees: a whole number n when `s` is within 1e-9 (relative) of 1/n.
@@ -343,7 +451,7 @@ fn to_f64(image: DecodingResult) -> (Option<&'static str>, Vec<f64>) {
 }
 
 /// An optional unsigned tag, naming the file and tag on error.
-fn find_u64(dec: &mut Decoder<Cursor<&[u8]>>, tag: Tag, path: &Path) -> Result<Option<u64>> {
+fn find_u64<R: Read + Seek>(dec: &mut Decoder<R>, tag: Tag, path: &Path) -> Result<Option<u64>> {
     match dec.find_tag(tag) {
         Ok(None) => Ok(None),
         Ok(Some(v)) => v
@@ -355,7 +463,7 @@ fn find_u64(dec: &mut Decoder<Cursor<&[u8]>>, tag: Tag, path: &Path) -> Result<O
 }
 
 /// An optional tag of doubles.
-fn find_f64s(dec: &mut Decoder<Cursor<&[u8]>>, tag: Tag, name: &str, path: &Path) -> Result<Option<Vec<f64>>> {
+fn find_f64s<R: Read + Seek>(dec: &mut Decoder<R>, tag: Tag, name: &str, path: &Path) -> Result<Option<Vec<f64>>> {
     let e = |m: String| TinError::format(path, format!("tag {name} ({}): {m}", tag.to_u16()));
     match dec.find_tag(tag) {
         Ok(None) => Ok(None),
@@ -381,7 +489,7 @@ struct Georef {
 }
 
 /// Reads the GeoKeys, the pixel scale and tie point (or the transformation).
-fn read_georef(dec: &mut Decoder<Cursor<&[u8]>>, path: &Path) -> Result<Georef> {
+fn read_georef<R: Read + Seek>(dec: &mut Decoder<R>, path: &Path) -> Result<Georef> {
     let err = |m: String| TinError::format(path, m);
     let dir = match dec.find_tag(Tag::GeoKeyDirectoryTag) {
         Ok(Some(v)) => v

@@ -20,7 +20,7 @@ use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, finish, read_bytes};
+use super::{DemOptions, GridShape, check_window, file_len, finish, open, read_at, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -67,46 +67,99 @@ pub fn parse_tile_name(file_name: &str) -> Option<TileName> {
 /// Reads an SRTM tile (see the module documentation).
 pub fn read_hgt(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check()?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tile = parse_tile_name(&name).ok_or_else(|| {
-        TinError::format(
-            path,
-            format!("cannot tell the tile's position from the name {name:?}: expected e.g. N43W123.hgt"),
-        )
-    })?;
+    let tile = tile_of(path)?;
     let bytes = read_bytes(path)?;
     parse_hgt(&bytes, tile, path, opts)
 }
 
-/// Parses the bytes of a tile at `tile`; `path` names it in errors.
-pub fn parse_hgt(bytes: &[u8], tile: TileName, path: &Path, opts: &DemOptions) -> Result<Grid> {
-    let n = match bytes.len() {
-        2_884_802 => 1201,
-        25_934_402 => 3601,
-        len => {
-            return Err(TinError::format(
-                path,
-                format!(
-                    "{len} bytes is not an SRTM tile: expected 2884802 (1201 x 1201, 3 arc-seconds) or 25934402 \
-                     (3601 x 3601, 1 arc-second)"
-                ),
-            ));
-        }
-    };
-    let z: Vec<f64> = bytes
-        .chunks_exact(2)
-        .map(|b| match i16::from_be_bytes([b[0], b[1]]) {
-            VOID => f64::NAN,
-            h => f64::from(h),
-        })
-        .collect();
+/// The grid of an SRTM tile from its name and size, without reading its samples.
+pub fn read_hgt_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    opts.check()?;
+    let tile = tile_of(path)?;
+    let len = file_len(&open(path)?, path)?;
+    Ok(shape(side(len, path)?, tile, opts))
+}
+
+/// The samples of a window of an SRTM tile (voids NaN, not scaled) and its whole grid: each row's slice is read at
+/// its offset.
+pub(super) fn read_hgt_window(
+    path: &Path,
+    opts: &DemOptions,
+    rows: [usize; 2],
+    cols: [usize; 2],
+) -> Result<(GridShape, Vec<f64>)> {
+    let tile = tile_of(path)?;
+    let mut file = open(path)?;
+    let n = side(file_len(&file, path)?, path)?;
+    let shape = shape(n, tile, opts);
+    check_window(&shape, rows, cols, path)?;
+    let nc = cols[1] - cols[0] + 1;
+    let mut buf = vec![0u8; 2 * nc];
+    let mut z = Vec::with_capacity((rows[1] - rows[0] + 1) * nc);
+    for r in rows[0]..=rows[1] {
+        read_at(&mut file, 2 * (r * n + cols[0]) as u64, &mut buf, path)?;
+        z.extend(buf.chunks_exact(2).map(height));
+    }
+    Ok((shape, z))
+}
+
+/// The tile's position from the file name.
+fn tile_of(path: &Path) -> Result<TileName> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    parse_tile_name(&name).ok_or_else(|| {
+        TinError::format(
+            path,
+            format!("cannot tell the tile's position from the name {name:?}: expected e.g. N43W123.hgt"),
+        )
+    })
+}
+
+/// The side (1201 or 3601 samples) of a tile of `len` bytes.
+fn side(len: u64, path: &Path) -> Result<usize> {
+    match len {
+        2_884_802 => Ok(1201),
+        25_934_402 => Ok(3601),
+        len => Err(TinError::format(
+            path,
+            format!(
+                "{len} bytes is not an SRTM tile: expected 2884802 (1201 x 1201, 3 arc-seconds) or 25934402 \
+                 (3601 x 3601, 1 arc-second)"
+            ),
+        )),
+    }
+}
+
+/// The grid of a tile of `n` x `n` samples at `tile` (see the module documentation).
+fn shape(n: usize, tile: TileName, opts: &DemOptions) -> GridShape {
     let dy = METRES_PER_DEGREE / (n as f64 - 1.0);
     let centre_lat = (f64::from(tile.lat) + 0.5).to_radians();
     let spacing = opts.spacing.unwrap_or((dy * centre_lat.cos(), dy));
     let south = f64::from(tile.lat) * METRES_PER_DEGREE;
     let origin = DVec2::new(0.0, south + (n as f64 - 1.0) * spacing.1);
-    finish(path, n, n, spacing, origin, z, opts)
+    GridShape {
+        rows: n,
+        cols: n,
+        dx: spacing.0,
+        dy: spacing.1,
+        origin,
+    }
+}
+
+/// The height of one big-endian sample (NaN for a void).
+fn height(b: &[u8]) -> f64 {
+    match i16::from_be_bytes([b[0], b[1]]) {
+        VOID => f64::NAN,
+        h => f64::from(h),
+    }
+}
+
+/// Parses the bytes of a tile at `tile`; `path` names it in errors.
+pub fn parse_hgt(bytes: &[u8], tile: TileName, path: &Path, opts: &DemOptions) -> Result<Grid> {
+    let n = side(bytes.len() as u64, path)?;
+    let z: Vec<f64> = bytes.chunks_exact(2).map(height).collect();
+    let s = shape(n, tile, opts);
+    finish(path, n, n, (s.dx, s.dy), s.origin, z, opts)
 }

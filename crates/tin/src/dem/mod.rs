@@ -13,6 +13,15 @@
 //! - [`DemOptions::spacing`], when given, overrides whatever spacing the file or its sidecar states.
 //! - Formats without a georeference (PNG, `.npy` whose sidecar has no easting/northing) put the **south-west sample at
 //!   (0, 0)**, so all coordinates are non-negative.
+//!
+//! Windows: [`read_dem_header`] gives a DEM's [`GridShape`] without reading its samples, and [`read_dem_window`]
+//! reads a rectangle of samples, exactly (bit for bit) what [`read_dem`] and cutting the rectangle out give, with
+//! memory bounded by the window where the format allows it:
+//! - `.npy` (C or Fortran order) and `.hgt`: the window's slice of each row (column) is read at its offset;
+//! - `.asc`: the text is streamed, only the window's values are parsed and reading stops after its last row (values
+//!   outside the window are not checked);
+//! - GeoTIFF: only the strips or tiles that meet the window are decoded;
+//! - PNG: one compressed stream, so the whole image is read and the window cut from it.
 
 pub mod asc;
 #[cfg(feature = "geotiff")]
@@ -78,13 +87,198 @@ pub fn read_dem(path: &Path, opts: &DemOptions) -> Result<Grid> {
     Ok(grid)
 }
 
-/// Refuses a grid with a sample whose coordinates no stage can handle ([`crate::COORDINATE_LIMIT`]), naming the
-/// file and the 1-based row and column (row 1 is the northern edge).
-fn check_range(g: &Grid, path: &Path) -> Result<()> {
-    let corners = [(0, 0), (g.rows.saturating_sub(1), g.cols.saturating_sub(1))];
-    for (r, c) in corners {
-        let (x, y) = (g.origin.x + c as f64 * g.dx, g.origin.y - r as f64 * g.dy);
-        for (axis, v) in [("x", x), ("y", y)] {
+/// The size and placement of a DEM's grid, read without its samples ([`read_dem_header`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridShape {
+    /// Number of rows (north to south).
+    pub rows: usize,
+    /// Number of columns (west to east).
+    pub cols: usize,
+    /// Sample spacing east-west (m).
+    pub dx: f64,
+    /// Sample spacing north-south (m).
+    pub dy: f64,
+    /// World x,y of sample (0, 0), the north-west corner: [`Grid::origin`] of the whole grid.
+    pub origin: DVec2,
+}
+
+impl GridShape {
+    /// The shape of `grid`.
+    pub fn of(grid: &Grid) -> GridShape {
+        GridShape {
+            rows: grid.rows,
+            cols: grid.cols,
+            dx: grid.dx,
+            dy: grid.dy,
+            origin: grid.origin,
+        }
+    }
+
+    /// The world x,y of sample `(row, col)` of the whole grid.
+    fn at(&self, row: usize, col: usize) -> DVec2 {
+        DVec2::new(
+            self.origin.x + col as f64 * self.dx,
+            self.origin.y - row as f64 * self.dy,
+        )
+    }
+
+    /// The origin of the window whose north-west sample is `(row, col)`: the formula cutting a window out of a
+    /// whole [`Grid`] uses, so a window read alone has the same origin bit for bit.
+    pub fn window_origin(&self, row: usize, col: usize) -> DVec2 {
+        self.origin + DVec2::new(col as f64 * self.dx, -(row as f64) * self.dy)
+    }
+
+    /// What [`Grid::new`] checks of the shape (at least 2 x 2 samples, positive finite spacing, finite origin),
+    /// naming the file.
+    fn check(&self, path: &Path) -> Result<()> {
+        let (dx, dy, origin) = (self.dx, self.dy, self.origin);
+        let problem = if self.rows < 2 || self.cols < 2 {
+            format!("a grid needs at least 2 x 2 samples, got {} x {}", self.rows, self.cols)
+        } else if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
+            format!("grid spacing must be positive and finite, got {dx}, {dy}")
+        } else if !origin.is_finite() {
+            format!("grid origin must be finite, got {origin}")
+        } else {
+            return Ok(());
+        };
+        Err(TinError::format(path, problem))
+    }
+}
+
+/// Reads the size and placement of a DEM's grid ([`GridShape`]) without its samples: headers and sidecars only
+/// (a PNG's header; a GeoTIFF's tags). The same conventions and [`DemOptions`] as [`read_dem`]; the coordinates of
+/// the grid's corners are checked as [`read_dem`] checks them, its heights are not.
+pub fn read_dem_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    let shape = read_header_unchecked(path, opts)?;
+    shape.check(path)?;
+    check_corners(&shape, [0, shape.rows - 1], [0, shape.cols - 1], path)?;
+    Ok(shape)
+}
+
+/// Reads the samples of rows `rows[0]..=rows[1]` and columns `cols[0]..=cols[1]` (0-based, inclusive; row 0 north)
+/// of a DEM as a grid of their own, whose origin is the centre of the window's north-west sample
+/// ([`GridShape::window_origin`]). The result is bit for bit what [`read_dem`] and cutting the window out give
+/// (voids as NaN, [`DemOptions::z_scale`] applied alike), but only the window is read where the format allows it
+/// (see the module documentation). The window's corners and heights are checked as [`read_dem`] checks a whole
+/// grid, errors naming the 1-based row and column in the whole file; a window outside the grid, or of fewer than
+/// 2 x 2 samples (see [`read_dem_window_heights`]), is refused.
+pub fn read_dem_window(path: &Path, opts: &DemOptions, rows: [usize; 2], cols: [usize; 2]) -> Result<Grid> {
+    let (shape, z) = read_dem_window_heights(path, opts, rows, cols)?;
+    finish(
+        path,
+        rows[1] - rows[0] + 1,
+        cols[1] - cols[0] + 1,
+        (shape.dx, shape.dy),
+        shape.window_origin(rows[0], cols[0]),
+        z,
+        &DemOptions { z_scale: 1.0, ..*opts },
+    )
+}
+
+/// Like [`read_dem_window`], for any window of at least one sample: the whole grid's [`GridShape`] and the
+/// window's heights in row-major order (voids as NaN, scaled by [`DemOptions::z_scale`]).
+pub fn read_dem_window_heights(
+    path: &Path,
+    opts: &DemOptions,
+    rows: [usize; 2],
+    cols: [usize; 2],
+) -> Result<(GridShape, Vec<f64>)> {
+    opts.check()?;
+    let (shape, mut z) = read_window_unchecked(path, opts, rows, cols)?;
+    scale(&mut z, opts);
+    check_corners(&shape, rows, cols, path)?;
+    check_heights(&z, rows[0], cols, path)?;
+    Ok((shape, z))
+}
+
+/// Refuses a window that is empty or not inside the grid of `shape`, naming the file.
+fn check_window(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &Path) -> Result<()> {
+    shape.check(path)?;
+    if rows[0] > rows[1] || cols[0] > cols[1] || rows[1] >= shape.rows || cols[1] >= shape.cols {
+        return Err(TinError::InvalidParameter(format!(
+            "{}: the window of rows {}..={} and columns {}..={} (0-based) is not inside its grid of {} x {} samples",
+            path.display(),
+            rows[0],
+            rows[1],
+            cols[0],
+            cols[1],
+            shape.rows,
+            shape.cols
+        )));
+    }
+    Ok(())
+}
+
+/// The header of a DEM, not yet checked.
+fn read_header_unchecked(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    opts.check()?;
+    match extension(path)?.as_str() {
+        "npy" => npy::read_npy_header(path, opts),
+        "asc" => asc::read_asc_header(path, opts),
+        "hgt" => hgt::read_hgt_header(path, opts),
+        #[cfg(feature = "png")]
+        "png" => png::read_png_header(path, opts),
+        #[cfg(feature = "geotiff")]
+        "tif" | "tiff" => geotiff::read_geotiff_header(path, opts),
+        _ => read_dem_unchecked(path, opts).map(|g| GridShape::of(&g)),
+    }
+}
+
+/// A window of a DEM (unscaled heights, voids NaN) and the whole grid's shape, the window checked against it.
+fn read_window_unchecked(
+    path: &Path,
+    opts: &DemOptions,
+    rows: [usize; 2],
+    cols: [usize; 2],
+) -> Result<(GridShape, Vec<f64>)> {
+    let ext = extension(path)?;
+    let whole = |grid: Grid| -> Result<(GridShape, Vec<f64>)> {
+        let shape = GridShape::of(&grid);
+        check_window(&shape, rows, cols, path)?;
+        Ok((shape, cut(&grid.z, grid.cols, rows, cols)))
+    };
+    let unscaled = DemOptions { z_scale: 1.0, ..*opts };
+    match ext.as_str() {
+        "npy" => npy::read_npy_window(path, opts, rows, cols),
+        "asc" => asc::read_asc_window(path, opts, rows, cols),
+        "hgt" => hgt::read_hgt_window(path, opts, rows, cols),
+        #[cfg(feature = "geotiff")]
+        "tif" | "tiff" => geotiff::read_geotiff_window(path, opts, rows, cols),
+        _ => whole(read_dem_unchecked(path, &unscaled)?),
+    }
+}
+
+/// The row-major samples of rows `rows[0]..=rows[1]`, columns `cols[0]..=cols[1]` of a row-major array of `width`
+/// columns.
+fn cut(z: &[f64], width: usize, rows: [usize; 2], cols: [usize; 2]) -> Vec<f64> {
+    let mut out = Vec::with_capacity((rows[1] - rows[0] + 1) * (cols[1] - cols[0] + 1));
+    for r in rows[0]..=rows[1] {
+        out.extend_from_slice(&z[r * width + cols[0]..=r * width + cols[1]]);
+    }
+    out
+}
+
+/// The lower-case extension of `path`, or the error for a file without one the readers know.
+fn extension(path: &Path) -> Result<String> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "npy" | "asc" | "hgt" | "png" | "tif" | "tiff" => Ok(ext),
+        _ => Err(TinError::format(
+            path,
+            format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt, .png, .tif or .tiff"),
+        )),
+    }
+}
+
+/// Refuses a window (or a whole grid) whose corner samples have coordinates no stage can handle, naming the file
+/// and the corner's 1-based row and column in the whole grid.
+fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &Path) -> Result<()> {
+    for (r, c) in [(rows[0], cols[0]), (rows[1], cols[1])] {
+        let p = shape.at(r, c);
+        for (axis, v) in [("x", p.x), ("y", p.y)] {
             if !crate::predicates::coordinate_in_range(v) {
                 return Err(TinError::format(
                     path,
@@ -98,15 +292,22 @@ fn check_range(g: &Grid, path: &Path) -> Result<()> {
             }
         }
     }
-    for (i, &z) in g.z.iter().enumerate() {
-        if !z.is_nan() && !crate::predicates::coordinate_in_range(z) {
+    Ok(())
+}
+
+/// Refuses heights no stage can handle in the window whose north-west sample is in row `row0` and whose columns
+/// are `cols` of the whole grid, naming the file and the 1-based row and column in the whole grid.
+fn check_heights(z: &[f64], row0: usize, cols: [usize; 2], path: &Path) -> Result<()> {
+    let width = cols[1] - cols[0] + 1;
+    for (i, &h) in z.iter().enumerate() {
+        if !h.is_nan() && !crate::predicates::coordinate_in_range(h) {
             return Err(TinError::format(
                 path,
                 format!(
-                    "row {}, column {}: height {z:e} is outside the coordinates every stage accepts (0 or 2^-100 to \
+                    "row {}, column {}: height {h:e} is outside the coordinates every stage accepts (0 or 2^-100 to \
                      2^100 in magnitude)",
-                    i / g.cols.max(1) + 1,
-                    i % g.cols.max(1) + 1
+                    row0 + i / width + 1,
+                    cols[0] + i % width + 1
                 ),
             ));
         }
@@ -114,13 +315,17 @@ fn check_range(g: &Grid, path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a grid with a sample whose coordinates no stage can handle ([`crate::COORDINATE_LIMIT`]), naming the
+/// file and the 1-based row and column (row 1 is the northern edge).
+fn check_range(g: &Grid, path: &Path) -> Result<()> {
+    let (rows, cols) = ([0, g.rows.saturating_sub(1)], [0, g.cols.saturating_sub(1)]);
+    check_corners(&GridShape::of(g), rows, cols, path)?;
+    check_heights(&g.z, 0, cols, path)
+}
+
 fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check()?;
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    match ext.as_str() {
+    match extension(path)?.as_str() {
         "npy" => npy::read_npy(path, opts),
         "asc" => asc::read_asc(path, opts),
         "hgt" => hgt::read_hgt(path, opts),
@@ -138,7 +343,7 @@ fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
             path,
             "GeoTIFF rasters need the `geotiff` feature of the tin crate, which this build lacks",
         )),
-        _ => Err(TinError::format(
+        ext => Err(TinError::format(
             path,
             format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt, .png, .tif or .tiff"),
         )),
@@ -160,13 +365,41 @@ fn finish(
     mut z: Vec<f64>,
     opts: &DemOptions,
 ) -> Result<Grid> {
-    if opts.z_scale != 1.0 {
-        for h in &mut z {
-            *h *= opts.z_scale;
-        }
-    }
+    scale(&mut z, opts);
     Grid::new(rows, cols, dx, dy, origin, z).map_err(|e| match e {
         TinError::InvalidParameter(m) => TinError::format(path, m),
         e => e,
     })
+}
+
+/// Multiplies the heights by [`DemOptions::z_scale`] (voids stay NaN).
+fn scale(z: &mut [f64], opts: &DemOptions) {
+    if opts.z_scale != 1.0 {
+        for h in z {
+            *h *= opts.z_scale;
+        }
+    }
+}
+
+/// Opens a file, naming it in the error.
+fn open(path: &Path) -> Result<std::fs::File> {
+    std::fs::File::open(path).map_err(|e| TinError::io(path, e))
+}
+
+/// The length of an open file, naming it in the error.
+fn file_len(file: &std::fs::File, path: &Path) -> Result<u64> {
+    Ok(file.metadata().map_err(|e| TinError::io(path, e))?.len())
+}
+
+/// Reads `buf.len()` bytes at `offset`, naming the file in the error (a file cut short is an error, not a panic).
+fn read_at(file: &mut std::fs::File, offset: u64, buf: &mut [u8], path: &Path) -> Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    file.seek(SeekFrom::Start(offset))
+        .and_then(|_| file.read_exact(buf))
+        .map_err(|e| {
+            TinError::format(
+                path,
+                format!("cannot read {} bytes at byte {offset} (truncated?): {e}", buf.len()),
+            )
+        })
 }

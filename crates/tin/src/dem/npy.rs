@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec2;
 
-use super::{DemOptions, finish, read_bytes};
+use super::{DemOptions, GridShape, check_window, file_len, finish, open, read_at, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -57,6 +57,87 @@ pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check()?;
     let bytes = read_bytes(path)?;
     let array = parse_npy(&bytes, path)?;
+    let (shape, nodata) = placement(path, array.rows, array.cols, opts)?;
+    let mut z = array.values;
+    void_nodata(&mut z, nodata);
+    finish(
+        path,
+        shape.rows,
+        shape.cols,
+        (shape.dx, shape.dy),
+        shape.origin,
+        z,
+        opts,
+    )
+}
+
+/// The grid of a `.npy` DEM: its header and sidecar, without its samples (the file's length is checked against
+/// the header).
+pub fn read_npy_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    opts.check()?;
+    let mut file = open(path)?;
+    let layout = read_layout(&mut file, path)?;
+    Ok(placement(path, layout.rows, layout.cols, opts)?.0)
+}
+
+/// The samples of a window of a `.npy` DEM (voids NaN, not scaled) and its whole grid: each row's slice of a
+/// C-ordered array (each column's slice of a Fortran-ordered one) is read at its offset.
+pub(super) fn read_npy_window(
+    path: &Path,
+    opts: &DemOptions,
+    rows: [usize; 2],
+    cols: [usize; 2],
+) -> Result<(GridShape, Vec<f64>)> {
+    let mut file = open(path)?;
+    let layout = read_layout(&mut file, path)?;
+    let (shape, nodata) = placement(path, layout.rows, layout.cols, opts)?;
+    check_window(&shape, rows, cols, path)?;
+    let (nr, nc) = (rows[1] - rows[0] + 1, cols[1] - cols[0] + 1);
+    let size = layout.size;
+    let mut z = vec![0.0; nr * nc];
+    let offset = |k: usize| (layout.data_start + k * size) as u64;
+    if layout.fortran {
+        let mut buf = vec![0u8; nr * size];
+        for c in 0..nc {
+            read_at(&mut file, offset((cols[0] + c) * layout.rows + rows[0]), &mut buf, path)?;
+            for (r, b) in buf.chunks_exact(size).enumerate() {
+                z[r * nc + c] = layout.element(b);
+            }
+        }
+    } else {
+        let mut buf = vec![0u8; nc * size];
+        for r in 0..nr {
+            read_at(&mut file, offset((rows[0] + r) * layout.cols + cols[0]), &mut buf, path)?;
+            for (h, b) in z[r * nc..(r + 1) * nc].iter_mut().zip(buf.chunks_exact(size)) {
+                *h = layout.element(b);
+            }
+        }
+    }
+    void_nodata(&mut z, nodata);
+    Ok((shape, z))
+}
+
+/// Reads the header of an open `.npy` file and checks the file's length against it.
+fn read_layout(file: &mut std::fs::File, path: &Path) -> Result<Layout> {
+    let len = file_len(file, path)?;
+    let mut prefix = vec![0u8; len.min(12) as usize];
+    read_at(file, 0, &mut prefix, path)?;
+    let start = if prefix.get(6).is_some_and(|&v| v >= 2) { 12 } else { 10 };
+    let header_len = match prefix.len() {
+        12 if start == 12 => u32::from_le_bytes([prefix[8], prefix[9], prefix[10], prefix[11]]) as u64,
+        n if n >= 10 => u64::from(u16::from_le_bytes([prefix[8], prefix[9]])),
+        _ => 0,
+    };
+    let want = (start + header_len).min(len);
+    let mut head = vec![0u8; want as usize];
+    read_at(file, 0, &mut head, path)?;
+    let layout = parse_layout(&head, path)?;
+    layout.check_data_len(len.saturating_sub(layout.data_start as u64), path)?;
+    Ok(layout)
+}
+
+/// The whole grid's shape from the sidecar (when there is one) and the options, and the nodata value.
+fn placement(path: &Path, rows: usize, cols: usize, opts: &DemOptions) -> Result<(GridShape, Option<f64>)> {
     let sidecar_path = sidecar_path(path);
     let sidecar = if sidecar_path.exists() {
         Some(read_sidecar(&sidecar_path)?)
@@ -65,19 +146,19 @@ pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
     };
     let side = sidecar.clone().unwrap_or_default();
     if let Some(r) = side.rows
-        && r != array.rows
+        && r != rows
     {
         return Err(TinError::format(
             &sidecar_path,
-            format!("rows = {r}, but the array has {} rows", array.rows),
+            format!("rows = {r}, but the array has {rows} rows"),
         ));
     }
     if let Some(c) = side.cols
-        && c != array.cols
+        && c != cols
     {
         return Err(TinError::format(
             &sidecar_path,
-            format!("cols = {c}, but the array has {} columns", array.cols),
+            format!("cols = {c}, but the array has {cols} columns"),
         ));
     }
     let spacing = opts.spacing.or(side.spacing).ok_or_else(|| {
@@ -98,20 +179,30 @@ pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
     })?;
     let north = side
         .northing_max
-        .or_else(|| side.northing_min.map(|s| s + (array.rows as f64 - 1.0) * spacing.1));
+        .or_else(|| side.northing_min.map(|s| s + (rows as f64 - 1.0) * spacing.1));
     let origin = match (side.easting_min, north) {
         (Some(e), Some(n)) => DVec2::new(e, n),
-        _ => DVec2::new(0.0, (array.rows as f64 - 1.0) * spacing.1),
+        _ => DVec2::new(0.0, (rows as f64 - 1.0) * spacing.1),
     };
-    let mut z = array.values;
-    if let Some(nodata) = side.nodata {
-        for h in &mut z {
+    let shape = GridShape {
+        rows,
+        cols,
+        dx: spacing.0,
+        dy: spacing.1,
+        origin,
+    };
+    Ok((shape, side.nodata))
+}
+
+/// Turns samples equal to the nodata value into voids.
+fn void_nodata(z: &mut [f64], nodata: Option<f64>) {
+    if let Some(nodata) = nodata {
+        for h in z {
             if *h == nodata {
                 *h = f64::NAN;
             }
         }
     }
-    finish(path, array.rows, array.cols, spacing, origin, z, opts)
 }
 
 /// Writes `grid` as a `.npy` of little-endian f64 heights in row-major order (voids as NaN), format version 1.0.
@@ -208,8 +299,70 @@ enum Kind {
     Float,
 }
 
-/// Parses the bytes of a `.npy` file holding a 2-D numeric array; `path` names it in errors.
-pub fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyArray> {
+/// What a `.npy` header says: the array's size, element type and order, and where its data starts.
+#[derive(Clone, Debug)]
+struct Layout {
+    rows: usize,
+    cols: usize,
+    descr: String,
+    fortran: bool,
+    little: bool,
+    kind: Kind,
+    size: usize,
+    data_start: usize,
+}
+
+impl Layout {
+    /// Refuses data of `len` bytes that is not exactly the array's.
+    fn check_data_len(&self, len: u64, path: &Path) -> Result<()> {
+        let (rows, cols, size) = (self.rows, self.cols, self.size);
+        let expected = rows
+            .checked_mul(cols)
+            .and_then(|n| n.checked_mul(size))
+            .ok_or_else(|| TinError::format(path, format!("array of {rows} x {cols} is too large")))?
+            as u64;
+        if len < expected {
+            return Err(TinError::format(
+                path,
+                format!("truncated: {len} data bytes, expected {expected} ({rows} x {cols} x {size} bytes)"),
+            ));
+        }
+        if len > expected {
+            return Err(TinError::format(
+                path,
+                format!(
+                    "{} bytes of unexpected data after the {rows} x {cols} array",
+                    len - expected
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The value of one element's `size` bytes.
+    fn element(&self, b: &[u8]) -> f64 {
+        let size = self.size;
+        let mut buf = [0u8; 8];
+        buf[..size].copy_from_slice(&b[..size]);
+        if !self.little {
+            buf[..size].reverse();
+        }
+        // buf now holds the value in little-endian order, zero-padded.
+        match (self.kind, size) {
+            (Kind::Float, 4) => f64::from(f32::from_le_bytes([buf[0], buf[1], buf[2], buf[3]])),
+            (Kind::Float, _) => f64::from_le_bytes(buf),
+            (Kind::Uint, _) => u64::from_le_bytes(buf) as f64,
+            (Kind::Int, _) => {
+                // Sign-extend from `size` bytes.
+                let shift = 64 - 8 * size as u32;
+                ((u64::from_le_bytes(buf) << shift) as i64 >> shift) as f64
+            }
+        }
+    }
+}
+
+/// Parses the header of a `.npy` file (`bytes` holds at least the header); `path` names it in errors.
+fn parse_layout(bytes: &[u8], path: &Path) -> Result<Layout> {
     let err = |m: String| TinError::format(path, m);
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(err("not a NumPy .npy file (bad magic bytes)".into()));
@@ -253,43 +406,26 @@ pub fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyArray> {
             "unsupported element type {descr:?}: expected integers (i1..i8, u1..u8) or floats (f4, f8)"
         ))
     })?;
-    let expected = rows
-        .checked_mul(cols)
-        .and_then(|n| n.checked_mul(size))
-        .ok_or_else(|| err(format!("array of {rows} x {cols} is too large")))?;
-    let data = &bytes[data_start..];
-    if data.len() < expected {
-        return Err(err(format!(
-            "truncated: {} data bytes, expected {expected} ({rows} x {cols} x {size} bytes)",
-            data.len()
-        )));
-    }
-    if data.len() > expected {
-        return Err(err(format!(
-            "{} bytes of unexpected data after the {rows} x {cols} array",
-            data.len() - expected
-        )));
-    }
-    let element = |k: usize| -> f64 {
-        let b = &data[k * size..(k + 1) * size];
-        let mut buf = [0u8; 8];
-        buf[..size].copy_from_slice(b);
-        if !little {
-            buf[..size].reverse();
-        }
-        // buf now holds the value in little-endian order, zero-padded.
-        match (kind, size) {
-            (Kind::Float, 4) => f64::from(f32::from_le_bytes([buf[0], buf[1], buf[2], buf[3]])),
-            (Kind::Float, _) => f64::from_le_bytes(buf),
-            (Kind::Uint, _) => u64::from_le_bytes(buf) as f64,
-            (Kind::Int, _) => {
-                // Sign-extend from `size` bytes.
-                let shift = 64 - 8 * size as u32;
-                ((u64::from_le_bytes(buf) << shift) as i64 >> shift) as f64
-            }
-        }
-    };
-    let values = if fortran {
+    Ok(Layout {
+        rows,
+        cols,
+        descr,
+        fortran,
+        little,
+        kind,
+        size,
+        data_start,
+    })
+}
+
+/// Parses the bytes of a `.npy` file holding a 2-D numeric array; `path` names it in errors.
+pub fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyArray> {
+    let layout = parse_layout(bytes, path)?;
+    let data = &bytes[layout.data_start..];
+    layout.check_data_len(data.len() as u64, path)?;
+    let (rows, cols, size) = (layout.rows, layout.cols, layout.size);
+    let element = |k: usize| layout.element(&data[k * size..(k + 1) * size]);
+    let values = if layout.fortran {
         let mut v = vec![0.0; rows * cols];
         for c in 0..cols {
             for r in 0..rows {
@@ -303,7 +439,7 @@ pub fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyArray> {
     Ok(NpyArray {
         rows,
         cols,
-        descr,
+        descr: layout.descr,
         values,
     })
 }

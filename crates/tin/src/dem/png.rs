@@ -4,13 +4,16 @@
 //! no georeference, so [`DemOptions::spacing`] is required, and the south-west sample is put at (0, 0). Every value
 //! is a height (PNG has no nodata convention). Row 0 (the top of the image) is north. Other colour types and bit
 //! depths are rejected.
+//!
+//! A window ([`super::read_dem_window`]) is cut from the whole image: PNG is one compressed stream, so the whole
+//! image is decoded. [`read_png_header`] reads the header only.
 
 use std::io::Cursor;
 use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, finish, read_bytes};
+use super::{DemOptions, GridShape, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -24,21 +27,41 @@ pub fn read_png(path: &Path, opts: &DemOptions) -> Result<Grid> {
     parse_png(&bytes, path, opts)
 }
 
-/// Parses a PNG height map held in memory; `path` names it in errors.
-pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
-    let spacing = opts.spacing.ok_or_else(|| {
+/// The grid of a PNG height map from its header, without decoding its samples.
+pub fn read_png_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    opts.check()?;
+    let spacing = spacing(path, opts)?;
+    let file = std::io::BufReader::new(open(path)?);
+    let mut decoder = png::Decoder::new_with_limits(file, png::Limits { bytes: 1 << 31 });
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let reader = decoder
+        .read_info()
+        .map_err(|e| TinError::format(path, format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    check_info(info, path)?;
+    let (cols, rows) = (info.width as usize, info.height as usize);
+    Ok(GridShape {
+        rows,
+        cols,
+        dx: spacing.0,
+        dy: spacing.1,
+        origin: DVec2::new(0.0, (rows as f64 - 1.0) * spacing.1),
+    })
+}
+
+/// The spacing, which a PNG needs from the options.
+fn spacing(path: &Path, opts: &DemOptions) -> Result<(f64, f64)> {
+    opts.spacing.ok_or_else(|| {
         TinError::InvalidParameter(format!(
             "{}: a PNG height map has no georeference: the sample spacing must be given",
             path.display()
         ))
-    })?;
+    })
+}
+
+/// Refuses images too large, and other than 8- or 16-bit grayscale.
+fn check_info(info: &png::Info, path: &Path) -> Result<()> {
     let err = |m: String| TinError::format(path, m);
-    let mut decoder = png::Decoder::new_with_limits(Cursor::new(bytes), png::Limits { bytes: 1 << 31 });
-    decoder.set_transformations(png::Transformations::IDENTITY);
-    let mut reader = decoder
-        .read_info()
-        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
-    let info = reader.info();
     let (color, depth) = (info.color_type, info.bit_depth);
     if u64::from(info.width) * u64::from(info.height) > MAX_SAMPLES {
         return Err(err(format!(
@@ -52,6 +75,21 @@ pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
             depth as u8
         )));
     }
+    Ok(())
+}
+
+/// Parses a PNG height map held in memory; `path` names it in errors.
+pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
+    let spacing = spacing(path, opts)?;
+    let err = |m: String| TinError::format(path, m);
+    let mut decoder = png::Decoder::new_with_limits(Cursor::new(bytes), png::Limits { bytes: 1 << 31 });
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    check_info(info, path)?;
+    let depth = info.bit_depth;
     let size = reader
         .output_buffer_size()
         .ok_or_else(|| err("image too large".into()))?;
