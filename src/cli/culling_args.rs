@@ -26,10 +26,10 @@ pub struct SafeArgs {
     pub occluder_budget: Option<usize>,
     /// Safe culler: most work units per cull (nodes tested while refining, occluder edges and chains written; a
     /// count, so culls stay reproducible). Once spent, the nodes still queued are tested against the horizon as it
-    /// stands, largest first, split up to N more times and otherwise drawn whole: the cost of a cull is bounded
+    /// stands, largest first, split up to N/8 more times and otherwise drawn whole: the cost of a cull is bounded
     /// whatever the view, at the price of drawing more in views that see much terrain (never of culling a visible
     /// triangle). The default caps views that see most of a 1M-vertex terrain (from the sky) and is not reached by
-    /// smaller or less open views; about 2000 keeps a cull near 1 ms at any mesh size, drawing much more.
+    /// smaller or less open views; about 5000 kept a cull of a 1M-vertex terrain near 1 ms, drawing much more.
     #[arg(long, default_value_t = cull::DEFAULT_WORK_BUDGET, value_name = "N")]
     pub work_budget: usize,
     /// Safe culler: a visible node whose circle spans fewer than N horizon columns is drawn whole instead of being

@@ -73,12 +73,15 @@
 //!   of its queued ancestors, and the queue pops keys in order), so every occluder in the horizon lies nearer than every
 //!   one of its points, as when that occluder was written: the theorem applies to them against the horizon as it stands;
 //! - the queued nodes are taken largest first (by triangles): each is culled if its cylinder is hidden (the same test
-//!   as above, `H` only), else split into its children while fewer than `B` nodes were split this way, else drawn whole.
-//!   Drawing a node whole draws a superset of what refining it would have drawn.
+//!   as above, `H` only), else split into its children while fewer than `⌈B / 8⌉` nodes were split this way, else
+//!   drawn whole. Drawing a node whole draws a superset of what refining it would have drawn. The splits get an eighth
+//!   of the budget: in a view that sees most of the terrain (the views that spend it) few of them cull anything, and
+//!   with as many splits as units they cost as much again as the refining.
 //!
 //! Hence at most `B` refining tests (each pushing at most `c` children, `c` the most children of a node: 2 in a crystal
-//! hierarchy and its halving trees), at most `B` splits pushing `c` each, and every pushed node tested once: at most
-//! `(1 + 2c) B + r` nodes tested (`r` roots), and at most `B` edges and chains written. The verdicts "hidden" are the
+//! hierarchy and its halving trees), at most `⌈B / 8⌉` splits pushing `c` each, and every pushed node tested once: at
+//! most `(1 + c) B + c ⌈B / 8⌉ + r` nodes tested (`r` roots; `3.25 B + 2 + r` with `c = 2`), and at most `B` edges and
+//! chains written. The verdicts "hidden" are the
 //! same theorem's; with a spent budget the culler draws more, never less, than without one (its horizon is never
 //! higher when any node is tested).
 //!
@@ -119,8 +122,8 @@ pub struct SafeParams {
     /// see much of the terrain (fewer occluders only cull less, never wrongly).
     pub occluder_budget: usize,
     /// Most work units per cull: nodes tested while refining, occluder edges and chains written. Once spent, the
-    /// culler stops refining and writing: every node still queued is tested once against the horizon as it stands
-    /// and drawn whole unless hidden. A count, not a time, so culls are reproducible; see the module documentation.
+    /// culler stops refining and writing: every node still queued is tested against the horizon as it stands
+    /// (split at most `⌈B / 8⌉` times in all) and drawn whole unless hidden. A count, not a time, so culls are reproducible; see the module documentation.
     pub work_budget: usize,
     /// A visible inner node whose circle spans fewer than this many columns (about `radius · columns / distance`)
     /// is drawn whole instead of refined, and writes its crests as occluders; 0 refines every visible node.
@@ -843,8 +846,8 @@ impl SafeCuller {
         if !scratch.queue.is_empty() {
             // The budget is spent. Every occluder in the horizon is nearer than every point of every node still
             // queued (as when it was written), so the horizon stays valid for them and their descendants. The
-            // largest nodes first: each is tested once by its cylinder and culled if hidden, else split while `B`
-            // more tests are left, else drawn whole.
+            // largest nodes first: each is tested once by its cylinder and culled if hidden, else split while fewer
+            // than `⌈B / 8⌉` were, else drawn whole.
             scratch.by_size.clear();
             for Reverse((_, id)) in scratch.queue.drain() {
                 let [s, e] = self.nodes[id as usize].triangles;
@@ -867,7 +870,7 @@ impl SafeCuller {
                         continue;
                     }
                 }
-                if node.kids[0] < node.kids[1] && splits < self.params.work_budget {
+                if node.kids[0] < node.kids[1] && splits < self.params.work_budget.div_ceil(8) {
                     splits += 1;
                     for &c in &self.children[node.kids[0] as usize..node.kids[1] as usize] {
                         let [s, e] = self.nodes[c as usize].triangles;
