@@ -6,30 +6,17 @@
 //! cargo run --release -p tiles --example far_counts
 //! ```
 //!
-//! Only the geometry matters (every block has a point), so level 0 is made up rather than read from a grid.
+//! Only the geometry matters (every block has a point), so the far field is that of a flat grid, made without one
+//! ([`FarField::flat`]).
 
-use tiles::far_field::{FarField, FarPoint, MinPyramid};
+use tiles::far_field::FarField;
 
 fn main() {
     let (block, halo, side) = (16usize, 16usize, 1024usize);
     println!("grid_side,samples,level0_blocks,ratio,far_points");
     for n in [3_162usize, 10_000, 40_000] {
+        let far = FarField::flat([n, n], block);
         let k = n.div_ceil(block);
-        let level0 = (0..k * k)
-            .map(|i| {
-                Some(FarPoint {
-                    row: ((i / k) * block) as u32,
-                    col: ((i % k) * block) as u32,
-                    z: 0.0,
-                })
-            })
-            .collect();
-        let lower = |a: &FarPoint, b: &FarPoint| (a.z, a.row, a.col) < (b.z, b.row, b.col);
-        let far = FarField {
-            block,
-            grid: [n, n],
-            pyramid: MinPyramid::new(k, k, level0, lower),
-        };
         let t0 = n / 2 - side / 2;
         let tile = [t0, t0 + side, t0, t0 + side];
         let window = [t0 - halo, t0 + side + halo, t0 - halo, t0 + side + halo];

@@ -158,6 +158,12 @@ pub struct FarField {
     pub pyramid: MinPyramid<FarPoint>,
 }
 
+/// Whether `a` is lower than `b`: the lower height first, then the first in row-major order (the rule of a level-0
+/// block, over any union of blocks).
+fn lower(a: &FarPoint, b: &FarPoint) -> bool {
+    (a.z, a.row, a.col) < (b.z, b.row, b.col)
+}
+
 /// Sample rectangles, both ends inclusive: `[first row, last row, first column, last column]`.
 pub type Rect = [usize; 4];
 
@@ -198,11 +204,30 @@ impl FarField {
                 }));
             }
         }
-        // Lower height first, then the first in row-major order: the rule of a level-0 block, over any union.
-        let lower = |a: &FarPoint, b: &FarPoint| (a.z, a.row, a.col) < (b.z, b.row, b.col);
         FarField {
             block,
             grid: [grid.rows, grid.cols],
+            pyramid: MinPyramid::new(rows, cols, level0, lower),
+        }
+    }
+
+    /// The far field of a flat grid of `grid` (rows, columns) samples at height 0, every block's point at its first
+    /// sample, built without the grid: what a tile's far field would count on a grid too large to hold.
+    pub fn flat(grid: [usize; 2], block: usize) -> FarField {
+        let block = block.max(1);
+        let (rows, cols) = (grid[0].div_ceil(block), grid[1].div_ceil(block));
+        let level0 = (0..rows * cols)
+            .map(|i| {
+                Some(FarPoint {
+                    row: ((i / cols) * block) as u32,
+                    col: ((i % cols) * block) as u32,
+                    z: 0.0,
+                })
+            })
+            .collect();
+        FarField {
+            block,
+            grid,
             pyramid: MinPyramid::new(rows, cols, level0, lower),
         }
     }
@@ -385,23 +410,7 @@ mod tests {
     #[test]
     fn a_tile_sees_few_far_points_on_a_large_grid() {
         let (n, block, ratio, side) = (1usize << 14, 16usize, 16usize, 256usize);
-        let k = n / block;
-        // Level 0 without a grid: one point per block, at its first sample.
-        let level0 = (0..k * k)
-            .map(|i| {
-                Some(FarPoint {
-                    row: ((i / k) * block) as u32,
-                    col: ((i % k) * block) as u32,
-                    z: 0.0,
-                })
-            })
-            .collect();
-        let lower = |a: &FarPoint, b: &FarPoint| (a.z, a.row, a.col) < (b.z, b.row, b.col);
-        let f = FarField {
-            block,
-            grid: [n, n],
-            pyramid: MinPyramid::new(k, k, level0, lower),
-        };
+        let f = FarField::flat([n, n], block);
         let tile = [0, side - 1, 0, side - 1];
         let window = [0, side + 15, 0, side + 15];
         let points = f.select(tile, window, ratio).len();

@@ -1,7 +1,10 @@
 //! DEM readers: small fixtures written by the tests, malformed files, and the real data sets when present.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::write_npy;
 use glam::DVec2;
 use tin::dem::hgt::{METRES_PER_DEGREE, TileName, parse_tile_name};
 use tin::{DemOptions, Grid, TinError, read_dem};
@@ -35,31 +38,6 @@ fn same_heights(a: &[f64], b: &[f64]) -> bool {
 }
 
 // ---------------------------------------------------------------- npy
-
-/// Writes a `.npy` file with the given header fields and raw data.
-fn write_npy(path: &Path, version: u8, descr: &str, fortran: bool, shape: &str, data: &[u8]) {
-    let dict = format!(
-        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
-        if fortran { "True" } else { "False" }
-    );
-    let prefix = if version == 1 { 10 } else { 12 };
-    let mut header = dict.into_bytes();
-    while (prefix + header.len() + 1) % 64 != 0 {
-        header.push(b' ');
-    }
-    header.push(b'\n');
-    let mut bytes = b"\x93NUMPY".to_vec();
-    bytes.push(version);
-    bytes.push(0);
-    if version == 1 {
-        bytes.extend((header.len() as u16).to_le_bytes());
-    } else {
-        bytes.extend((header.len() as u32).to_le_bytes());
-    }
-    bytes.extend(header);
-    bytes.extend(data);
-    std::fs::write(path, bytes).expect("write npy");
-}
 
 const VALUES: [f64; 6] = [1.0, -2.0, 3.5, 400.0, -32768.0, 6.25];
 

@@ -2,6 +2,8 @@
 //! for bit, for every format (`.npy` in several element types and both orders, `.hgt`, `.asc`, PNG, GeoTIFF), for
 //! fixed windows (corners, single samples, strips, the whole grid) and random ones; and their errors.
 
+mod common;
+
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -30,39 +32,21 @@ fn fval(r: usize, c: usize) -> f64 {
 
 /// Writes a `.npy` file of `R` x `C` elements, each encoded by `enc`.
 fn write_npy(path: &Path, version: u8, descr: &str, fortran: bool, enc: impl Fn(usize, usize) -> Vec<u8>) {
-    let dict = format!(
-        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': ({R}, {C}), }}",
-        if fortran { "True" } else { "False" }
-    );
-    let prefix = if version == 1 { 10 } else { 12 };
-    let mut header = dict.into_bytes();
-    while (prefix + header.len() + 1) % 64 != 0 {
-        header.push(b' ');
-    }
-    header.push(b'\n');
-    let mut bytes = b"\x93NUMPY".to_vec();
-    bytes.push(version);
-    bytes.push(0);
-    if version == 1 {
-        bytes.extend((header.len() as u16).to_le_bytes());
-    } else {
-        bytes.extend((header.len() as u32).to_le_bytes());
-    }
-    bytes.extend(header);
+    let mut data = Vec::new();
     if fortran {
         for c in 0..C {
             for r in 0..R {
-                bytes.extend(enc(r, c));
+                data.extend(enc(r, c));
             }
         }
     } else {
         for r in 0..R {
             for c in 0..C {
-                bytes.extend(enc(r, c));
+                data.extend(enc(r, c));
             }
         }
     }
-    std::fs::write(path, bytes).expect("write npy");
+    common::write_npy(path, version, descr, fortran, &format!("({R}, {C})"), &data);
 }
 
 fn write_sidecar(npy: &Path, json: &str) {
