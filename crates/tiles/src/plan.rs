@@ -235,16 +235,23 @@ impl Plan {
             path: path.to_path_buf(),
             source,
         })?;
-        let plan: Plan = serde_json::from_str(&text).map_err(|e| TilesError::Plan {
+        let bad = |reason: String| TilesError::Plan {
             path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
-        if plan.version != PLAN_VERSION {
-            return Err(TilesError::Plan {
-                path: path.to_path_buf(),
-                reason: format!("plan version {} is not {PLAN_VERSION}", plan.version),
-            });
+            reason,
+        };
+        // The version first: a plan of another version may not parse as this one.
+        #[derive(Deserialize)]
+        struct Versioned {
+            version: u32,
         }
+        let versioned: Versioned = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        if versioned.version != PLAN_VERSION {
+            return Err(bad(format!(
+                "plan version {} is not {PLAN_VERSION} (made by another tincull): plan again",
+                versioned.version
+            )));
+        }
+        let plan: Plan = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         plan.options.validate()?;
         for (i, t) in plan.tiles.iter().enumerate() {
             let ok = t.index == i
@@ -321,6 +328,22 @@ impl Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_plan_of_another_version_asks_to_plan_again() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("plan.json");
+        std::fs::write(
+            &path,
+            r#"{"version": 1, "far_field": [{"row": 0, "col": 0, "z": 1.0}]}"#,
+        )
+        .expect("write");
+        let e = Plan::load(&path).expect_err("version 1").to_string();
+        assert!(e.contains("plan version 1 is not 2") && e.contains("plan again"), "{e}");
+        assert!(e.contains("plan.json"), "{e}");
+        std::fs::write(&path, "[1, 2]").expect("write");
+        assert!(Plan::load(&path).is_err());
+    }
 
     #[test]
     fn cuts_share_their_ends_and_cover_the_grid() {
