@@ -98,6 +98,17 @@ fn errors_name_what_is_wrong() {
     );
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
     fails_with(&["tiles", "build", s(&plan)], "--tile");
+    // Each DEM tile reads its own far-field file, written beside the plan; damaged or missing, it is named.
+    let far = dir.path().join("plan.tiles").join("far-00004.bin");
+    let bytes = std::fs::read(&far).expect("the plan writes every tile's far field");
+    std::fs::write(&far, &bytes[..bytes.len() - 3]).expect("truncate");
+    fails_with(&["tiles", "build", s(&plan), "--tile", "4"], "far-00004.bin");
+    let mut flipped = bytes.clone();
+    *flipped.last_mut().expect("bytes") ^= 1;
+    std::fs::write(&far, &flipped).expect("flip");
+    fails_with(&["tiles", "build", s(&plan), "--tile", "4"], "checksum");
+    std::fs::remove_file(&far).expect("remove");
+    fails_with(&["tiles", "build", s(&plan), "--tile", "4"], "far-00004.bin");
     fails_with(
         &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
         "directory",

@@ -26,7 +26,8 @@ pub struct TilesArgs {
 /// The steps of a tiled build.
 #[derive(Debug, Subcommand)]
 pub enum TilesCommand {
-    /// Cut a DEM grid (or a mesh) into tiles and write the plan (JSON): tiles, halo, far field, build parameters.
+    /// Cut a DEM grid (or a mesh) into tiles and write the plan (JSON: tiles, halo, build parameters) and each
+    /// tile's far field (a DEM, read in strips of rows) or part (a mesh) beside it.
     Plan(Box<PlanArgs>),
     /// Build one tile of a plan (`--tile I`: one job, as a cluster runs it) or every tile here (`--all`).
     Build(TileBuildArgs),
@@ -145,11 +146,23 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         return plan_mesh(args, out, files, options, &source, &tiles_dir);
     }
     let dem = args.read.options();
-    let spinner = out.spinner("reading DEM");
-    let grid = tin::read_dem(&args.dem, &dem)?;
-    spinner.finish_and_clear();
-    let plan = tiles::make_plan(&grid, &source, dem, options, &tiles_dir)?;
-    let far_points = plan.tiles.iter().map(|t| plan.far_points(t).len()).max().unwrap_or(0);
+    let bar = out.progress(0, "reading DEM rows");
+    let (plan, field) = tiles::make_plan(&source, dem, options, &tiles_dir, |done, rows| {
+        bar.set_length(rows as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    let grid = plan.grid.clone().context("a DEM's plan has its grid")?;
+    let dir = Plan::resolve(&args.out, &plan.tiles_dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut far_points = 0;
+    for spec in &plan.tiles {
+        if let Some(far) = &spec.far {
+            let (bytes, count) = plan.far_file(&field, spec)?;
+            files.add_bytes(&Plan::resolve(&args.out, far), &bytes)?;
+            far_points = far_points.max(count);
+        }
+    }
     files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
     files.commit()?;
     let (rows, cols) = plan
@@ -166,18 +179,18 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         plan.tiles.len(),
         args.tile,
         args.halo,
-        plan.far_field.finest(),
+        field.finest(),
         far_points,
-        Plan::resolve(&args.out, &plan.tiles_dir).display()
+        dir.display()
     ));
     out.json(&json!({
         "plan": args.out,
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,
-        "far_blocks": plan.far_field.finest(),
+        "far_blocks": field.finest(),
         "far_points": far_points,
-        "tiles_dir": Plan::resolve(&args.out, &plan.tiles_dir),
+        "tiles_dir": dir,
     }))
 }
 

@@ -30,10 +30,55 @@
 //! 0, and a job's time and memory stay bounded by its tile as the terrain grows. With `ratio = 0` nothing is
 //! coarsened: every level-0 point outside the window is taken.
 //!
+//! ## Stored per tile
+//!
+//! The plan computes the pyramid and every tile's cut once, and writes each cut to the tile's own far-field file
+//! ([`far_to_bytes`]: checksummed, beside the plan), so a job reads only its own `O(ratio² log n)` points: neither
+//! the plan file nor a job grows with the terrain's area.
+//!
 //! The same pyramid over squares of metres gives a mesh tile's far field ([`crate::part`]).
+
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 use tin::Grid;
+
+use crate::TilesError;
+
+/// Magic bytes of a tile's far-field file (framed like a `.tch`: [`cull::file::frame`]).
+pub const FAR_MAGIC: &[u8; 8] = b"TCFAR\0\0\0";
+/// Version of the far-field file format.
+pub const FAR_VERSION: u32 = 1;
+
+/// A tile's far-field points as a checksummed file.
+pub fn far_to_bytes(points: &[FarPoint]) -> Result<Vec<u8>, TilesError> {
+    crate::framed::encode(FAR_MAGIC, FAR_VERSION, &points, "a far field")
+}
+
+/// Reads a tile's far-field file written by [`far_to_bytes`], checking that every point is a sample of a grid of
+/// `grid` (rows, columns) with a finite height; `name` names the file in errors.
+pub fn far_from_bytes(bytes: &[u8], grid: [usize; 2], name: &Path) -> Result<Vec<FarPoint>, TilesError> {
+    let points: Vec<FarPoint> = crate::framed::decode(bytes, FAR_MAGIC, FAR_VERSION, name, "far field")?;
+    if let Some((i, p)) = points
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.row as usize >= grid[0] || p.col as usize >= grid[1] || !p.z.is_finite())
+    {
+        return Err(TilesError::Plan {
+            path: name.to_path_buf(),
+            reason: format!(
+                "far-field point {} (row {}, column {}, height {}) is not a sample of the {} x {} grid",
+                i + 1,
+                p.row,
+                p.col,
+                p.z,
+                grid[0],
+                grid[1]
+            ),
+        });
+    }
+    Ok(points)
+}
 
 /// One far-field point: a sample position and its lowered height.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -164,6 +209,43 @@ fn lower(a: &FarPoint, b: &FarPoint) -> bool {
     (a.z, a.row, a.col) < (b.z, b.row, b.col)
 }
 
+/// About how many samples [`FarField::read`] reads at a time.
+const STRIP_SAMPLES: usize = 1 << 22;
+
+/// Folds the samples `z` of the rows from `first` on (row-major, `cols` columns; `first` a multiple of `block`) into
+/// the level-0 blocks `level0` (row-major, `cols.div_ceil(block)` a row): each block keeps its lowest valid sample
+/// (the first in row-major order on ties) lowered by `max_error`. A block's rows all lie in one call, so calls over
+/// strips of whole block rows give what one call over the whole grid gives.
+fn lowest_in_blocks(
+    level0: &mut [Option<FarPoint>],
+    block: usize,
+    cols: usize,
+    first: usize,
+    z: &[f64],
+    max_error: f64,
+) {
+    debug_assert!(first.is_multiple_of(block) && z.len().is_multiple_of(cols));
+    let (rows, block_cols) = (z.len() / cols, cols.div_ceil(block));
+    for r0 in (0..rows).step_by(block) {
+        for c0 in (0..cols).step_by(block) {
+            let mut low: Option<(f64, usize, usize)> = None;
+            for r in r0..(r0 + block).min(rows) {
+                for c in c0..(c0 + block).min(cols) {
+                    let h = z[r * cols + c];
+                    if !h.is_nan() && low.is_none_or(|(lz, _, _)| h < lz) {
+                        low = Some((h, r, c));
+                    }
+                }
+            }
+            level0[(first + r0) / block * block_cols + c0 / block] = low.map(|(h, r, c)| FarPoint {
+                row: (first + r) as u32,
+                col: c as u32,
+                z: h - max_error,
+            });
+        }
+    }
+}
+
 /// Sample rectangles, both ends inclusive: `[first row, last row, first column, last column]`.
 pub type Rect = [usize; 4];
 
@@ -184,29 +266,52 @@ impl FarField {
     /// sample have no point).
     pub fn new(grid: &Grid, block: usize, max_error: f64) -> FarField {
         let block = block.max(1);
-        let (rows, cols) = (grid.rows.div_ceil(block), grid.cols.div_ceil(block));
-        let mut level0 = Vec::with_capacity(rows * cols);
-        for r0 in (0..grid.rows).step_by(block) {
-            for c0 in (0..grid.cols).step_by(block) {
-                let mut low: Option<(f64, usize, usize)> = None;
-                for r in r0..(r0 + block).min(grid.rows) {
-                    for c in c0..(c0 + block).min(grid.cols) {
-                        let z = grid.z[r * grid.cols + c];
-                        if !z.is_nan() && low.is_none_or(|(lz, _, _)| z < lz) {
-                            low = Some((z, r, c));
-                        }
-                    }
-                }
-                level0.push(low.map(|(z, r, c)| FarPoint {
-                    row: r as u32,
-                    col: c as u32,
-                    z: z - max_error,
-                }));
-            }
-        }
+        let mut level0 = vec![None; grid.rows.div_ceil(block) * grid.cols.div_ceil(block)];
+        lowest_in_blocks(&mut level0, block, grid.cols, 0, &grid.z, max_error);
+        FarField::of_level0([grid.rows, grid.cols], block, level0)
+    }
+
+    /// The far field of the DEM at `path` (read with `opts`), as [`FarField::new`] computes it from the whole grid,
+    /// reading the DEM in strips of rows ([`tin::read_dem_strips`]): memory is the level-0 blocks (a `block²`-th of
+    /// the samples) and one strip. `progress(rows read, rows)` follows the reading. Returns the grid's shape too.
+    pub fn read(
+        path: &Path,
+        opts: &tin::DemOptions,
+        block: usize,
+        max_error: f64,
+        progress: impl FnMut(usize, usize),
+    ) -> Result<(FarField, tin::GridShape), TilesError> {
+        FarField::read_in_strips(path, opts, block, max_error, STRIP_SAMPLES, progress)
+    }
+
+    /// [`FarField::read`] in strips of about `strip_samples` samples (tests vary it).
+    fn read_in_strips(
+        path: &Path,
+        opts: &tin::DemOptions,
+        block: usize,
+        max_error: f64,
+        strip_samples: usize,
+        mut progress: impl FnMut(usize, usize),
+    ) -> Result<(FarField, tin::GridShape), TilesError> {
+        let block = block.max(1);
+        let shape = tin::read_dem_header(path, opts)?;
+        let mut level0 = vec![None; shape.rows.div_ceil(block) * shape.cols.div_ceil(block)];
+        // Strips of whole block rows, of about `strip_samples` samples.
+        let strip = block * (strip_samples / (block * shape.cols).max(1)).max(1);
+        let shape = tin::read_dem_strips(path, opts, strip, |first, z| {
+            lowest_in_blocks(&mut level0, block, shape.cols, first, z, max_error);
+            progress(first + z.len() / shape.cols, shape.rows);
+            Ok(())
+        })?;
+        Ok((FarField::of_level0([shape.rows, shape.cols], block, level0), shape))
+    }
+
+    /// The pyramid over the level-0 points of a grid of `grid` (rows, columns) samples.
+    fn of_level0(grid: [usize; 2], block: usize, level0: Vec<Option<FarPoint>>) -> FarField {
+        let (rows, cols) = (grid[0].div_ceil(block), grid[1].div_ceil(block));
         FarField {
             block,
-            grid: [grid.rows, grid.cols],
+            grid,
             pyramid: MinPyramid::new(rows, cols, level0, lower),
         }
     }
@@ -215,8 +320,8 @@ impl FarField {
     /// sample, built without the grid: what a tile's far field would count on a grid too large to hold.
     pub fn flat(grid: [usize; 2], block: usize) -> FarField {
         let block = block.max(1);
-        let (rows, cols) = (grid[0].div_ceil(block), grid[1].div_ceil(block));
-        let level0 = (0..rows * cols)
+        let cols = grid[1].div_ceil(block);
+        let level0 = (0..grid[0].div_ceil(block) * cols)
             .map(|i| {
                 Some(FarPoint {
                     row: ((i / cols) * block) as u32,
@@ -225,11 +330,7 @@ impl FarField {
                 })
             })
             .collect();
-        FarField {
-            block,
-            grid,
-            pyramid: MinPyramid::new(rows, cols, level0, lower),
-        }
+        FarField::of_level0(grid, block, level0)
     }
 
     /// Points of level 0 (what `ratio = 0` can take).
@@ -311,6 +412,41 @@ mod tests {
     }
 
     #[test]
+    fn a_far_field_file_round_trips_and_rejects_points_off_the_grid() {
+        let name = std::path::Path::new("far-00003.bin");
+        let points = vec![
+            FarPoint {
+                row: 0,
+                col: 4,
+                z: -1.5,
+            },
+            FarPoint { row: 9, col: 0, z: 2.0 },
+        ];
+        let bytes = far_to_bytes(&points).expect("encode");
+        assert_eq!(far_from_bytes(&bytes, [10, 5], name).expect("decode"), points);
+        let e = far_from_bytes(&bytes, [9, 5], name)
+            .expect_err("row 9 of 9 rows")
+            .to_string();
+        assert!(e.contains("far-00003.bin") && e.contains("point 2 (row 9"), "{e}");
+        let nan = far_to_bytes(&[FarPoint {
+            row: 0,
+            col: 0,
+            z: f64::NAN,
+        }])
+        .expect("encode");
+        assert!(far_from_bytes(&nan, [1, 1], name).is_err());
+        let e = far_from_bytes(&bytes[..bytes.len() - 1], [10, 5], name)
+            .expect_err("truncated")
+            .to_string();
+        assert!(e.contains("far-00003.bin"), "{e}");
+        let part = crate::part::MeshPart::default().to_bytes().expect("a part");
+        assert!(
+            far_from_bytes(&part, [10, 5], name).is_err(),
+            "a part is not a far field"
+        );
+    }
+
+    #[test]
     fn one_lowest_sample_per_block_lowered() {
         let z: Vec<f64> = (0..16)
             .map(|i| f64::from(i) * if i % 5 == 0 { -1.0 } else { 1.0 })
@@ -331,6 +467,32 @@ mod tests {
         // The top: the lowest of all (sample 15, height -15).
         assert_eq!(f.pyramid.levels.len(), 2);
         assert_eq!(f.pyramid.levels[1].points[0].map(|p| (p.row, p.col)), Some((3, 3)));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 40, ..ProptestConfig::default() })]
+
+        /// Reading a DEM file in strips of rows (windows of a `.npy`, a whole `.asc` handed out in strips) gives the
+        /// far field of the whole grid, bit for bit, and reports every row.
+        #[test]
+        fn strips_of_a_file_give_the_whole_grids_far_field(rows in 1usize..30, cols in 1usize..30, seed in 0u64..1000,
+                                                           block in 1usize..6, strip in 1usize..200) {
+            let g = grid(rows.max(2), cols.max(2), seed);
+            let dir = tempfile::tempdir().expect("tempdir");
+            let npy = dir.path().join("g.npy");
+            let mut bytes = Vec::new();
+            tin::dem::npy::write_npy_to(&g, &mut bytes).expect("npy");
+            std::fs::write(&npy, bytes).expect("write");
+            std::fs::write(tin::dem::npy::sidecar_path(&npy), tin::dem::npy::sidecar_json(&g)).expect("sidecar");
+            let mut last = 0;
+            let (f, shape) = FarField::read_in_strips(&npy, &tin::DemOptions::default(), block, 0.25, strip, |done, all| {
+                assert!(done > last && all == g.rows);
+                last = done;
+            }).expect("read");
+            prop_assert_eq!(last, g.rows);
+            prop_assert_eq!((shape.rows, shape.cols), (g.rows, g.cols));
+            prop_assert_eq!(f, FarField::new(&g, block, 0.25));
+        }
     }
 
     proptest! {

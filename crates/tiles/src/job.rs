@@ -14,8 +14,9 @@
 //! Memory: the job reads only the DEM's header and the tile's halo window ([`tin::dem::read_dem_window`]: the
 //! window's slices of a `.npy` or `.hgt`, the strips or tiles of a GeoTIFF that meet it, a streamed `.asc`; a PNG is
 //! decoded whole and cut), so it keeps the window of the grid (8 bytes a sample) and the tile's TIN stages (some
-//! 1.6 kB a vertex), bounded by the tile and its halo, and its far field, which grows with the logarithm of the
-//! terrain ([`crate::far_field`]).
+//! 1.6 kB a vertex), bounded by the tile and its halo, and its far field, read from the tile's own file and growing
+//! with the logarithm of the terrain ([`crate::far_field`]); the plan file it reads holds a few hundred bytes a
+//! tile.
 
 use std::path::Path;
 use std::time::Instant;
@@ -186,7 +187,7 @@ fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput
         }
     }
     let halo_points = beyond.len();
-    for p in plan.far_points(spec) {
+    for p in plan.far_points(plan_path, spec)? {
         beyond.push(DVec3::from_array(info.position(p.row as usize, p.col as usize, p.z)));
     }
     Ok(TileInput {
@@ -204,11 +205,7 @@ fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput
 fn mesh_input(plan_path: &Path, part: &Path) -> Result<TileInput, TilesError> {
     let start = Instant::now();
     let path = Plan::resolve(plan_path, part);
-    let bytes = std::fs::read(&path).map_err(|source| TilesError::Io {
-        path: path.clone(),
-        source,
-    })?;
-    let part = MeshPart::from_bytes(&bytes, &path)?;
+    let part = MeshPart::from_bytes(&crate::framed::read(&path)?, &path)?;
     let tin = Tin::from_parts(
         part.positions.iter().map(|p| DVec3::from_array(*p)).collect(),
         part.triangles,

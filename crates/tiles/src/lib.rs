@@ -1,9 +1,10 @@
 //! Tiled builds: terrains larger than one machine's memory, cut into tiles that build independently (on one machine
 //! or many) and merge into one hierarchy (thesis §7.1, "out-of-core").
 //!
-//! - [`plan`]: `tincull tiles plan DEM --tile N` cuts a DEM grid into tiles that share their sides and computes the
-//!   far field once ([`far_field`]); `tincull tiles plan MESH --tile M` cuts a mesh's triangles into squares of `M`
-//!   metres and writes each tile's part ([`part`]).
+//! - [`plan`]: `tincull tiles plan DEM --tile N` reads a DEM grid in strips of rows, cuts it into tiles that share
+//!   their sides and computes the far field once, writing each tile's cut of it beside the plan ([`far_field`]);
+//!   `tincull tiles plan MESH --tile M` cuts a mesh's triangles into squares of `M` metres and writes each tile's
+//!   part ([`part`]).
 //! - [`job`]: `tincull tiles build plan.json --tile I` builds one tile: its TIN (sides simplified identically by
 //!   both neighbours, [`boundary`]), its vertices' horizons over the tile, a full-resolution halo and the far field
 //!   (all on or below the terrain), and its partial hierarchy, written as a `.tch`.
@@ -19,6 +20,7 @@
 
 pub mod boundary;
 pub mod far_field;
+mod framed;
 pub mod job;
 pub mod merge;
 pub mod part;

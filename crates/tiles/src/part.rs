@@ -36,22 +36,12 @@ pub struct MeshPart {
 impl MeshPart {
     /// The part as a checksummed file.
     pub fn to_bytes(&self) -> Result<Vec<u8>, TilesError> {
-        let payload =
-            postcard::to_stdvec(self).map_err(|e| TilesError::Parameter(format!("cannot encode a part: {e}")))?;
-        Ok(cull::file::frame(PART_MAGIC, PART_VERSION, &payload))
+        crate::framed::encode(PART_MAGIC, PART_VERSION, self, "a part")
     }
 
     /// Reads a part file; `name` names it in errors.
     pub fn from_bytes(bytes: &[u8], name: &std::path::Path) -> Result<MeshPart, TilesError> {
-        let bad = |reason: String| TilesError::Plan {
-            path: name.to_path_buf(),
-            reason,
-        };
-        let (version, payload) = cull::file::unframe(bytes, PART_MAGIC).map_err(|e| bad(e.to_string()))?;
-        if version != PART_VERSION {
-            return Err(bad(format!("part version {version} is not {PART_VERSION}")));
-        }
-        postcard::from_bytes(payload).map_err(|e| bad(format!("malformed part: {e}")))
+        crate::framed::decode(bytes, PART_MAGIC, PART_VERSION, name, "part")
     }
 }
 

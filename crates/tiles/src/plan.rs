@@ -2,19 +2,21 @@
 //!
 //! Tiles cut the grid's sample intervals evenly: with `k` tiles across `n` samples, tile `i` spans samples
 //! `round(i·(n−1)/k) ..= round((i+1)·(n−1)/k)`, so neighbouring tiles share one row or column of samples, which both
-//! simplify identically ([`crate::boundary`]). The far field is computed here, once, for every job.
+//! simplify identically ([`crate::boundary`]). The far field's pyramid is computed here, once, and each tile's cut
+//! through it goes to the tile's own file ([`crate::far_field`]), so the plan file stays small (a few hundred bytes
+//! a tile) and a job reads only what it needs, however large the terrain.
 
 use std::path::{Path, PathBuf};
 
 use pipeline::BuildParams;
 use serde::{Deserialize, Serialize};
-use tin::{DemOptions, Grid};
+use tin::{DemOptions, GridShape};
 
 use crate::TilesError;
-use crate::far_field::{FarField, FarPoint};
+use crate::far_field::{FarField, FarPoint, far_from_bytes, far_to_bytes};
 
 /// The plan format's version; a plan of another version is refused.
-pub const PLAN_VERSION: u32 = 2;
+pub const PLAN_VERSION: u32 = 3;
 
 /// The DEM's grid, as the plan saw it; every job checks that the file still has it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -32,14 +34,14 @@ pub struct GridInfo {
 }
 
 impl GridInfo {
-    /// The grid description of `grid`.
-    pub fn of(grid: &Grid) -> GridInfo {
+    /// The grid description of a DEM of shape `shape`.
+    pub fn of(shape: &GridShape) -> GridInfo {
         GridInfo {
-            rows: grid.rows,
-            cols: grid.cols,
-            dx: grid.dx,
-            dy: grid.dy,
-            origin: grid.origin.to_array(),
+            rows: shape.rows,
+            cols: shape.cols,
+            dx: shape.dx,
+            dy: shape.dy,
+            origin: shape.origin.to_array(),
         }
     }
 
@@ -72,6 +74,9 @@ pub struct TileSpec {
     /// A mesh's tile: its part file ([`crate::part`]), relative to the plan's folder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub part: Option<PathBuf>,
+    /// A DEM's tile: its far-field file ([`crate::far_field::far_to_bytes`]), relative to the plan's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub far: Option<PathBuf>,
     /// The tile's partial hierarchy, relative to the plan's folder.
     pub output: PathBuf,
 }
@@ -129,9 +134,6 @@ pub struct Plan {
     pub grid: Option<GridInfo>,
     /// How it was cut.
     pub options: PlanOptions,
-    /// A DEM's far field: the min-pyramid of its samples lowered by the error bound (empty for a mesh, whose parts
-    /// hold their own).
-    pub far_field: FarField,
     /// The tiles, row by row.
     pub tiles: Vec<TileSpec>,
     /// Where the tiles' outputs go, relative to the plan's folder.
@@ -145,16 +147,19 @@ fn cuts(n: usize, k: usize) -> Vec<usize> {
         .collect()
 }
 
-/// Cuts `grid` (read from `source` with `dem`) into tiles. `tiles_dir` is where the jobs will write, relative to the
-/// plan's folder.
+/// Reads the DEM at `source` (with `dem`) in strips of rows, computing its far field ([`FarField::read`]; memory
+/// bounded by a strip and the far field's blocks, not the grid; `progress(rows read, rows)`), and cuts it into
+/// tiles. `tiles_dir` is where the jobs will write, relative to the plan's folder. Each tile's far-field file
+/// ([`TileSpec::far`]) is to be written beside the plan with [`Plan::far_file`].
 pub fn make_plan(
-    grid: &Grid,
     source: &Path,
     dem: DemOptions,
     options: PlanOptions,
     tiles_dir: &Path,
-) -> Result<Plan, TilesError> {
+    progress: impl FnMut(usize, usize),
+) -> Result<(Plan, FarField), TilesError> {
     options.validate()?;
+    let (field, grid) = FarField::read(source, &dem, options.far_block, options.max_error, progress)?;
     let kr = (grid.rows - 1).div_ceil(options.tile).max(1);
     let kc = (grid.cols - 1).div_ceil(options.tile).max(1);
     let (rc, cc) = (cuts(grid.rows, kr), cuts(grid.cols, kc));
@@ -169,20 +174,21 @@ pub fn make_plan(
                 rows: [rc[tr], rc[tr + 1]],
                 cols: [cc[tc], cc[tc + 1]],
                 part: None,
+                far: Some(tiles_dir.join(format!("far-{index:05}.bin"))),
                 output: tiles_dir.join(format!("tile-{index:05}.tch")),
             });
         }
     }
-    Ok(Plan {
+    let plan = Plan {
         version: PLAN_VERSION,
         source: source.to_path_buf(),
         dem,
-        grid: Some(GridInfo::of(grid)),
-        far_field: FarField::new(grid, options.far_block, options.max_error),
+        grid: Some(GridInfo::of(&grid)),
         options,
         tiles,
         tiles_dir: tiles_dir.to_path_buf(),
-    })
+    };
+    Ok((plan, field))
 }
 
 /// Cuts a mesh into tiles of `options.tile` metres (see [`crate::part`]); returns the plan and each tile's part,
@@ -211,6 +217,7 @@ pub fn make_mesh_plan(
             rows: [0, 0],
             cols: [0, 0],
             part: Some(tiles_dir.join(format!("part-{index:05}.bin"))),
+            far: None,
             output: tiles_dir.join(format!("tile-{index:05}.tch")),
         });
         out.push(part);
@@ -220,7 +227,6 @@ pub fn make_mesh_plan(
         source: source.to_path_buf(),
         dem: DemOptions::default(),
         grid: None,
-        far_field: FarField::default(),
         options,
         tiles,
         tiles_dir: tiles_dir.to_path_buf(),
@@ -258,12 +264,13 @@ impl Plan {
                 && match &plan.grid {
                     Some(g) => {
                         t.part.is_none()
+                            && t.far.is_some()
                             && t.rows[0] < t.rows[1]
                             && t.cols[0] < t.cols[1]
                             && t.rows[1] < g.rows
                             && t.cols[1] < g.cols
                     }
-                    None => t.part.is_some(),
+                    None => t.part.is_some() && t.far.is_none(),
                 };
             if !ok {
                 return Err(TilesError::Plan {
@@ -306,12 +313,31 @@ impl Plan {
         )
     }
 
-    /// The far-field points of a DEM's tile ([`FarField::select`] outside its halo window).
-    pub fn far_points(&self, spec: &TileSpec) -> Vec<FarPoint> {
+    /// The far-field points of a DEM's tile: `field`'s cut outside its halo window ([`FarField::select`]).
+    pub fn far_cut(&self, field: &FarField, spec: &TileSpec) -> Vec<FarPoint> {
         let (r, c) = self.halo_window(spec);
         let tile = [spec.rows[0], spec.rows[1], spec.cols[0], spec.cols[1]];
-        self.far_field
-            .select(tile, [r[0], r[1], c[0], c[1]], self.options.far_ratio)
+        field.select(tile, [r[0], r[1], c[0], c[1]], self.options.far_ratio)
+    }
+
+    /// The content of a DEM tile's far-field file ([`TileSpec::far`]): its [`Plan::far_cut`] of `field`, and how
+    /// many points that is.
+    pub fn far_file(&self, field: &FarField, spec: &TileSpec) -> Result<(Vec<u8>, usize), TilesError> {
+        let points = self.far_cut(field, spec);
+        Ok((far_to_bytes(&points)?, points.len()))
+    }
+
+    /// Reads a DEM tile's far-field points from its file (the plan at `plan_path` wrote it), checking that they are
+    /// samples of the plan's grid.
+    pub fn far_points(&self, plan_path: &Path, spec: &TileSpec) -> Result<Vec<FarPoint>, TilesError> {
+        let (Some(grid), Some(far)) = (&self.grid, &spec.far) else {
+            return Err(TilesError::Parameter(format!(
+                "tile {} has no far-field file",
+                spec.index
+            )));
+        };
+        let path = Plan::resolve(plan_path, far);
+        far_from_bytes(&crate::framed::read(&path)?, [grid.rows, grid.cols], &path)
     }
 
     /// Tile `index`, or an error naming the range.
@@ -339,7 +365,7 @@ mod tests {
         )
         .expect("write");
         let e = Plan::load(&path).expect_err("version 1").to_string();
-        assert!(e.contains("plan version 1 is not 2") && e.contains("plan again"), "{e}");
+        assert!(e.contains("plan version 1 is not 3") && e.contains("plan again"), "{e}");
         assert!(e.contains("plan.json"), "{e}");
         std::fs::write(&path, "[1, 2]").expect("write");
         assert!(Plan::load(&path).is_err());

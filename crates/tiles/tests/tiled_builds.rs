@@ -46,9 +46,15 @@ fn plan_grid_grouped(
         max_error,
         params,
     };
-    let plan = tiles::make_plan(grid, &npy, DemOptions::default(), options, Path::new("plan.tiles")).expect("plan");
+    let (plan, field) =
+        tiles::make_plan(&npy, DemOptions::default(), options, Path::new("plan.tiles"), |_, _| {}).expect("plan");
     let path = dir.join("plan.json");
     std::fs::write(&path, plan.to_json().expect("json")).expect("write plan");
+    std::fs::create_dir_all(dir.join("plan.tiles")).expect("tiles dir");
+    for spec in &plan.tiles {
+        let far = Plan::resolve(&path, spec.far.as_ref().expect("a DEM tile's far field"));
+        std::fs::write(far, plan.far_file(&field, spec).expect("far field").0).expect("write far field");
+    }
     (Plan::load(&path).expect("load"), path)
 }
 
@@ -118,15 +124,21 @@ fn halo_and_far_field_lie_on_or_below_the_merged_terrain() {
     let (plan, path) = plan_grid(dir.path(), &grid, 12, 4, e);
     let tin = tin_of(&build_all(&plan, &path));
     let loc = truth::locate::Locator::new(&tin);
-    assert!(plan.far_field.finest() > 0);
-    // Every point of every level of the pyramid (what any tile may select).
-    for p in plan
-        .far_field
+    // Every point of every level of the pyramid (what any tile may select), and what each tile's file holds.
+    let field = tiles::far_field::FarField::new(&grid, 3, e);
+    assert!(field.finest() > 0);
+    let mut points: Vec<_> = field
         .pyramid
         .levels
         .iter()
-        .flat_map(|l| l.points.iter().flatten())
-    {
+        .flat_map(|l| l.points.iter().flatten().copied())
+        .collect();
+    for spec in &plan.tiles {
+        let stored = plan.far_points(&path, spec).expect("far field");
+        assert_eq!(stored, plan.far_cut(&field, spec), "tile {}", spec.index);
+        points.extend(stored);
+    }
+    for p in points {
         let at = plan
             .grid
             .as_ref()

@@ -16,7 +16,9 @@ pub mod synth;
 pub mod validate;
 
 pub use delaunay::{DedupePolicy, DelaunayReport, triangulate};
-pub use dem::{DemOptions, GridShape, read_dem, read_dem_header, read_dem_window, read_dem_window_heights};
+pub use dem::{
+    DemOptions, GridShape, read_dem, read_dem_header, read_dem_strips, read_dem_window, read_dem_window_heights,
+};
 pub use error::{Result, TinError};
 pub use grid::Grid;
 pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points};

@@ -1,6 +1,7 @@
 //! Windowed DEM reading: `read_dem_header` and `read_dem_window` against `read_dem` and cutting the window out, bit
 //! for bit, for every format (`.npy` in several element types and both orders, `.hgt`, `.asc`, PNG, GeoTIFF), for
-//! fixed windows (corners, single samples, strips, the whole grid) and random ones; and their errors.
+//! fixed windows (corners, single samples, strips, the whole grid) and random ones; `read_dem_strips` over every
+//! strip height; and their errors.
 
 mod common;
 
@@ -10,7 +11,7 @@ use std::sync::OnceLock;
 
 use glam::DVec2;
 use proptest::prelude::*;
-use tin::dem::{GridShape, read_dem_header, read_dem_window, read_dem_window_heights};
+use tin::dem::{GridShape, read_dem_header, read_dem_strips, read_dem_window, read_dem_window_heights};
 use tin::{DemOptions, Grid, TinError, read_dem};
 
 const R: usize = 23;
@@ -360,6 +361,31 @@ fn fixed_windows_equal_the_cut_whole_grid() {
         for (r, c) in windows {
             check(f, r, c);
         }
+    }
+}
+
+/// Strips of every height, in order, put together are the whole grid, bit for bit, and report its shape.
+#[test]
+fn strips_of_every_height_make_the_whole_grid() {
+    for f in fixtures() {
+        let g = &f.whole;
+        for strip in [1, 2, 5, g.rows - 1, g.rows, g.rows + 3] {
+            let mut z = Vec::new();
+            let shape = read_dem_strips(&f.path, &f.opts, strip, |first, heights| {
+                assert_eq!(first * g.cols, z.len(), "{}: strips in order", f.name);
+                assert!(heights.len() <= strip * g.cols && heights.len() % g.cols == 0);
+                z.extend_from_slice(heights);
+                Ok(())
+            })
+            .expect("strips");
+            assert_eq!(bits(&z), bits(&g.z), "{}: strips of {strip} rows", f.name);
+            assert_eq!(shape, GridShape::of(g), "{}", f.name);
+        }
+        // An error from the callback stops the reading and comes back.
+        let e = read_dem_strips(&f.path, &f.opts, 4, |_, _| {
+            Err(TinError::InvalidParameter("stop".into()))
+        });
+        assert!(e.is_err_and(|e| e.to_string().contains("stop")), "{}", f.name);
     }
 }
 

@@ -22,6 +22,9 @@
 //!   outside the window are not checked);
 //! - GeoTIFF: only the strips or tiles that meet the window are decoded;
 //! - PNG: one compressed stream, so the whole image is read and the window cut from it.
+//!
+//! [`read_dem_strips`] reads a whole DEM in strips of rows (windows where they are cheap), for work that needs every
+//! sample once but not all at once (the far field of a tiled plan).
 
 pub mod asc;
 #[cfg(feature = "geotiff")]
@@ -189,6 +192,35 @@ pub fn read_dem_window_heights(
     check_corners(&shape, rows, cols, path)?;
     check_heights(&z, rows[0], cols, path)?;
     Ok((shape, z))
+}
+
+/// Reads a whole DEM strip by strip, north to south, calling `each(first_row, heights)` with the row-major samples of
+/// `strip_rows` (at least 1) consecutive rows (fewer in the last strip), all columns, exactly as [`read_dem`] reads
+/// them (voids NaN, [`DemOptions::z_scale`] applied, every height checked); returns the grid's shape. Memory: one
+/// strip for `.npy`, `.hgt` and GeoTIFF (each strip a window, [`read_dem_window_heights`]); `.asc` and PNG are read
+/// whole once (a window of `.asc` streams the text from its start, so strips would read it again and again) and
+/// handed out in strips.
+pub fn read_dem_strips(
+    path: &Path,
+    opts: &DemOptions,
+    strip_rows: usize,
+    mut each: impl FnMut(usize, &[f64]) -> Result<()>,
+) -> Result<GridShape> {
+    let strip_rows = strip_rows.max(1);
+    if matches!(extension(path)?.as_str(), "asc" | "png") {
+        let grid = read_dem(path, opts)?;
+        for (i, strip) in grid.z.chunks(strip_rows * grid.cols).enumerate() {
+            each(i * strip_rows, strip)?;
+        }
+        return Ok(GridShape::of(&grid));
+    }
+    let shape = read_dem_header(path, opts)?;
+    for first in (0..shape.rows).step_by(strip_rows) {
+        let last = (first + strip_rows).min(shape.rows) - 1;
+        let (_, z) = read_dem_window_heights(path, opts, [first, last], [0, shape.cols - 1])?;
+        each(first, &z)?;
+    }
+    Ok(shape)
 }
 
 /// Refuses a window that is empty or not inside the grid of `shape`, naming the file.

@@ -1,0 +1,49 @@
+//! The checksummed files a plan writes beside itself for its jobs (a mesh tile's part, a DEM tile's far field):
+//! a value in postcard, framed like a `.tch` ([`cull::file::frame`]: magic, version, length, CRC-32).
+
+use std::path::Path;
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+
+use crate::TilesError;
+
+/// `value` as a framed file; `what` names it in errors.
+pub(crate) fn encode<T: Serialize>(
+    magic: &[u8; 8],
+    version: u32,
+    value: &T,
+    what: &str,
+) -> Result<Vec<u8>, TilesError> {
+    let payload =
+        postcard::to_stdvec(value).map_err(|e| TilesError::Parameter(format!("cannot encode {what}: {e}")))?;
+    Ok(cull::file::frame(magic, version, &payload))
+}
+
+/// Reads a framed file written by [`encode`] with the same magic and version; errors name `path` and say what is
+/// wrong (`what` names the kind of file).
+pub(crate) fn decode<T: DeserializeOwned>(
+    bytes: &[u8],
+    magic: &[u8; 8],
+    version: u32,
+    path: &Path,
+    what: &str,
+) -> Result<T, TilesError> {
+    let bad = |reason: String| TilesError::Plan {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let (found, payload) = cull::file::unframe(bytes, magic).map_err(|e| bad(e.to_string()))?;
+    if found != version {
+        return Err(bad(format!("{what} version {found} is not {version}")));
+    }
+    postcard::from_bytes(payload).map_err(|e| bad(format!("malformed {what}: {e}")))
+}
+
+/// Reads the file at `path` whole.
+pub(crate) fn read(path: &Path) -> Result<Vec<u8>, TilesError> {
+    std::fs::read(path).map_err(|source| TilesError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
