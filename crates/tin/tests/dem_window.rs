@@ -472,12 +472,23 @@ fn truncated_files_are_errors_naming_them() {
     for k in 0..R * C - 7 {
         text.push_str(&format!("{} ", ival(k / C, k % C)));
     }
-    std::fs::write(&p, text).expect("write");
+    std::fs::write(&p, &text).expect("write");
     let e = read_dem_window(&p, &opts, [R - 2, R - 1], [0, C - 1]).expect_err("truncated");
     assert!(names_file(e, &p).contains("truncated"));
     let w = read_dem_window(&p, &opts, [0, 3], [0, 3]).expect("values before the cut");
     assert_eq!(w.z[5], ival(1, 1) as f64);
     assert!(read_dem(&p, &opts).is_err());
+    let strips = |p: &Path| read_dem_strips(p, &opts, 3, |_, _| Ok(()));
+    assert!(names_file(strips(&p).expect_err("truncated"), &p).contains("truncated"));
+    // .asc with a value too many, or a word that is not a number: strips read every value, as read_dem does.
+    let p = dir.path().join("long.asc");
+    std::fs::write(&p, format!("{text}{} 1 2 3 4 5 6 7 8", ival(0, 0))).expect("write");
+    assert!(read_dem(&p, &opts).is_err());
+    assert!(names_file(strips(&p).expect_err("too many"), &p).contains("more than the"));
+    let p = dir.path().join("word.asc");
+    std::fs::write(&p, format!("{text}1 2 3 4 5 6 x")).expect("write");
+    assert!(read_dem(&p, &opts).is_err());
+    assert!(names_file(strips(&p).expect_err("a word"), &p).contains("\"x\" is not a number"));
     // A header without values.
     let p = dir.path().join("bare.asc");
     std::fs::write(
@@ -509,6 +520,23 @@ fn heights_out_of_range_name_the_whole_files_row_and_column() {
     let text = names_file(e, &p);
     assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
     let text = names_file(read_dem(&p, &opts).expect_err("whole"), &p);
+    assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
+    let strips = |p: &Path| read_dem_strips(p, &opts, 2, |_, _| Ok(())).expect_err("out of range");
+    let text = names_file(strips(&p), &p);
+    assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
+    // The same in a streamed `.asc`: the strip's first row is counted in.
+    let asc = dir.path().join("huge.asc");
+    let mut body = format!("ncols {C}\nnrows {R}\nxllcenter 0\nyllcenter 0\ncellsize 1\n");
+    for k in 0..R * C {
+        let (r, c) = (k / C, k % C);
+        body.push_str(&if (r, c) == (5, 7) {
+            "1e200 ".to_string()
+        } else {
+            format!("{} ", ival(r, c))
+        });
+    }
+    std::fs::write(&asc, body).expect("write");
+    let text = names_file(strips(&asc), &asc);
     assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
     // A window without the sample reads.
     let w = read_dem_window(&p, &opts, [0, 3], [0, 16]).expect("reads");

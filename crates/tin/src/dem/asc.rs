@@ -9,7 +9,8 @@
 //!
 //! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
 //! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values
-//! outside the window are not checked.
+//! outside the window are not checked. Strips ([`super::read_dem_strips`]) stream the whole text once, every value
+//! parsed and checked as [`read_asc`] does, holding one strip of values.
 
 use std::io::BufRead;
 use std::path::Path;
@@ -101,6 +102,68 @@ pub(super) fn read_asc_window(
         )));
     }
     Ok((shape, z))
+}
+
+/// Streams a whole ESRI ASCII grid once, handing its values out in strips of `strip_rows` rows (voids NaN, not
+/// scaled): `each(first_row, values)`. Every value is parsed, and too few or too many are errors, as in
+/// [`parse_asc`]; `shape` is the grid its header describes ([`read_asc_header`]).
+pub(super) fn read_asc_strips(
+    path: &Path,
+    shape: &GridShape,
+    opts: &DemOptions,
+    strip_rows: usize,
+    each: &mut dyn FnMut(usize, &mut Vec<f64>) -> Result<()>,
+) -> Result<()> {
+    let err = |m: String| TinError::format(path, m);
+    let mut lines = Lines::open(path)?;
+    let mut h = Header::default();
+    let mut nodata = None;
+    let mut in_header = true;
+    let (rows, cols) = (shape.rows, shape.cols);
+    let expected = rows * cols;
+    let strip = strip_rows.max(1) * cols;
+    let mut z = Vec::with_capacity(strip.min(lines.len / 2 + 1));
+    // Values read so far, and the first row of the strip being filled.
+    let (mut k, mut first) = (0usize, 0usize);
+    while let Some((n, line)) = lines.next()? {
+        if in_header {
+            if h.line(n, line, path)? {
+                continue;
+            }
+            in_header = false;
+            nodata = std::mem::take(&mut h).shape(path, opts)?.1;
+        }
+        for word in line.split_whitespace() {
+            if k == expected {
+                return Err(err(format!(
+                    "line {n}: more than the {expected} values that nrows x ncols = {rows} x {cols} announce"
+                )));
+            }
+            let v: f64 = word.parse().map_err(|_| {
+                err(format!(
+                    "line {n}: {word:?} is not a number (row {}, column {})",
+                    k / cols,
+                    k % cols
+                ))
+            })?;
+            z.push(if nodata == Some(v) { f64::NAN } else { v });
+            k += 1;
+            if z.len() == strip {
+                each(first, &mut z)?;
+                first += strip_rows.max(1);
+                z.clear();
+            }
+        }
+    }
+    if k < expected {
+        return Err(err(format!(
+            "truncated: {k} values, but nrows x ncols = {rows} x {cols} = {expected}"
+        )));
+    }
+    if !z.is_empty() {
+        each(first, &mut z)?;
+    }
+    Ok(())
 }
 
 /// The lines of a text file, read one at a time (1-based numbers), naming the file and line in errors.

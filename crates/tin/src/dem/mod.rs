@@ -197,9 +197,8 @@ pub fn read_dem_window_heights(
 /// Reads a whole DEM strip by strip, north to south, calling `each(first_row, heights)` with the row-major samples of
 /// `strip_rows` (at least 1) consecutive rows (fewer in the last strip), all columns, exactly as [`read_dem`] reads
 /// them (voids NaN, [`DemOptions::z_scale`] applied, every height checked); returns the grid's shape. Memory: one
-/// strip for `.npy`, `.hgt` and GeoTIFF (each strip a window, [`read_dem_window_heights`]); `.asc` and PNG are read
-/// whole once (a window of `.asc` streams the text from its start, so strips would read it again and again) and
-/// handed out in strips.
+/// strip for `.npy`, `.hgt` and GeoTIFF (each strip a window, [`read_dem_window_heights`]) and `.asc` (the text
+/// streamed once); a PNG (at most [`png::MAX_SAMPLES`] samples) is decoded whole once and handed out in strips.
 pub fn read_dem_strips(
     path: &Path,
     opts: &DemOptions,
@@ -207,20 +206,33 @@ pub fn read_dem_strips(
     mut each: impl FnMut(usize, &[f64]) -> Result<()>,
 ) -> Result<GridShape> {
     let strip_rows = strip_rows.max(1);
-    if matches!(extension(path)?.as_str(), "asc" | "png") {
-        let grid = read_dem(path, opts)?;
-        for (i, strip) in grid.z.chunks(strip_rows * grid.cols).enumerate() {
-            each(i * strip_rows, strip)?;
+    match extension(path)?.as_str() {
+        "png" => {
+            let grid = read_dem(path, opts)?;
+            for (i, strip) in grid.z.chunks(strip_rows * grid.cols).enumerate() {
+                each(i * strip_rows, strip)?;
+            }
+            Ok(GridShape::of(&grid))
         }
-        return Ok(GridShape::of(&grid));
+        "asc" => {
+            let shape = read_dem_header(path, opts)?;
+            asc::read_asc_strips(path, &shape, opts, strip_rows, &mut |first, z| {
+                scale(z, opts);
+                check_heights(z, first, [0, shape.cols - 1], path)?;
+                each(first, z)
+            })?;
+            Ok(shape)
+        }
+        _ => {
+            let shape = read_dem_header(path, opts)?;
+            for first in (0..shape.rows).step_by(strip_rows) {
+                let last = (first + strip_rows).min(shape.rows) - 1;
+                let (_, z) = read_dem_window_heights(path, opts, [first, last], [0, shape.cols - 1])?;
+                each(first, &z)?;
+            }
+            Ok(shape)
+        }
     }
-    let shape = read_dem_header(path, opts)?;
-    for first in (0..shape.rows).step_by(strip_rows) {
-        let last = (first + strip_rows).min(shape.rows) - 1;
-        let (_, z) = read_dem_window_heights(path, opts, [first, last], [0, shape.cols - 1])?;
-        each(first, &z)?;
-    }
-    Ok(shape)
 }
 
 /// Refuses a window that is empty or not inside the grid of `shape`, naming the file.
