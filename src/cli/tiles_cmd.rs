@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use rayon::prelude::*;
 use serde_json::json;
-use tiles::{Plan, PlanOptions, TileReport};
+use tiles::{Plan, PlanOptions, TileReport, TilesError};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::{Outputs, write_one};
@@ -345,8 +345,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.check_or_stdout(&args.out, &mut out)?;
     let start = Instant::now();
-    let bar = out.progress(plan.tiles.len() as u64, "reading");
-    let mut hierarchies = Vec::with_capacity(plan.tiles.len());
+    // Every tile must be built before any is read.
     for t in &plan.tiles {
         let path = Plan::resolve(&args.plan, &t.output);
         if !path.exists() {
@@ -358,12 +357,16 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
                 t.index
             );
         }
-        hierarchies.push(cull::Hierarchy::load(&path).with_context(|| format!("tile {}", t.index))?);
-        bar.inc(1);
     }
+    let bar = out.progress(plan.tiles.len() as u64, "merging");
+    let h = tiles::merge::merge_with(&plan, |i| {
+        let path = Plan::resolve(&args.plan, &plan.tiles[i].output);
+        let h = cull::Hierarchy::load(&path)
+            .map_err(|e| TilesError::Parameter(format!("tile {i} ({}): {e}", path.display())))?;
+        bar.inc(1);
+        Ok(h)
+    })?;
     bar.finish_and_clear();
-    let h = tiles::merge(&plan, &hierarchies)?;
-    drop(hierarchies);
     files.add_bytes(&args.out, &h.to_bytes()?)?;
     files.commit()?;
     let seconds = start.elapsed().as_secs_f64();

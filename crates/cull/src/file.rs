@@ -70,11 +70,29 @@ impl std::error::Error for FrameError {}
 /// payload (little-endian). Shared by every binary file of tincull (`.tch` here, `.pvs` in the `pvs` crate).
 pub fn frame(magic: &[u8; 8], version: u32, payload: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(HEADER_LEN + payload.len());
-    out.extend_from_slice(magic);
-    out.extend_from_slice(&version.to_le_bytes());
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    out.resize(HEADER_LEN, 0);
     out.extend_from_slice(payload);
+    fill_header(magic, version, out)
+}
+
+/// `value` in postcard, framed as [`frame`] frames a payload, encoded straight after room for the header: one buffer
+/// the size of the file, not a payload and its framed copy.
+pub fn encode_framed<T: serde::Serialize + ?Sized>(
+    magic: &[u8; 8],
+    version: u32,
+    value: &T,
+) -> Result<Vec<u8>, postcard::Error> {
+    let out = postcard::to_extend(value, vec![0u8; HEADER_LEN])?;
+    Ok(fill_header(magic, version, out))
+}
+
+/// Writes the header of a frame into the first [`HEADER_LEN`] bytes of `out`, whose payload follows them.
+fn fill_header(magic: &[u8; 8], version: u32, mut out: Vec<u8>) -> Vec<u8> {
+    let (head, payload) = out.split_at_mut(HEADER_LEN);
+    head[..8].copy_from_slice(magic);
+    head[8..12].copy_from_slice(&version.to_le_bytes());
+    head[12..20].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+    head[20..24].copy_from_slice(&crc32fast::hash(payload).to_le_bytes());
     out
 }
 
@@ -122,8 +140,7 @@ pub const OLDEST_READABLE_VERSION: u32 = 1;
 impl Hierarchy {
     /// Encodes the hierarchy as `.tch` bytes.
     pub fn to_bytes(&self) -> Result<Vec<u8>, HierarchyError> {
-        let payload = postcard::to_stdvec(self).map_err(|e| HierarchyError::Decode(e.to_string()))?;
-        Ok(frame(&MAGIC, FORMAT_VERSION, &payload))
+        encode_framed(&MAGIC, FORMAT_VERSION, self).map_err(|e| HierarchyError::Decode(e.to_string()))
     }
 
     /// Decodes `.tch` bytes, checking magic, version, length, checksum and every structural invariant.

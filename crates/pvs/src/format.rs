@@ -6,7 +6,7 @@
 //! postcard varints, so a PVS of a few hundred ranges takes a few hundred bytes. This crate encodes and decodes; the
 //! writer is the caller's (tincull's is the `outfile` crate).
 
-use cull::file::{FrameError, frame, unframe};
+use cull::file::{FrameError, unframe};
 use serde::{Deserialize, Serialize};
 
 use crate::{CellPvs, PvsError, PvsParams, ViewCell};
@@ -104,8 +104,7 @@ pub struct PvsFile {
 impl PvsFile {
     /// Encodes the file's bytes.
     pub fn to_bytes(&self) -> Result<Vec<u8>, PvsError> {
-        let payload = postcard::to_stdvec(self).map_err(|e| PvsError::BadFile(e.to_string()))?;
-        Ok(frame(&MAGIC, FORMAT_VERSION, &payload))
+        cull::file::encode_framed(&MAGIC, FORMAT_VERSION, self).map_err(|e| PvsError::BadFile(e.to_string()))
     }
 
     /// Decodes a file's bytes, checking magic, version, length, checksum and that every range lies within the

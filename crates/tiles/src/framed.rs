@@ -1,5 +1,5 @@
 //! The checksummed files a plan writes beside itself for its jobs (a mesh tile's part, a DEM tile's far field):
-//! a value in postcard, framed like a `.tch` ([`cull::file::frame`]: magic, version, length, CRC-32).
+//! a value in postcard, framed like a `.tch` ([`cull::file::encode_framed`]: magic, version, length, CRC-32).
 
 use std::path::Path;
 
@@ -15,9 +15,8 @@ pub(crate) fn encode<T: Serialize>(
     value: &T,
     what: &str,
 ) -> Result<Vec<u8>, TilesError> {
-    let payload =
-        postcard::to_stdvec(value).map_err(|e| TilesError::Parameter(format!("cannot encode {what}: {e}")))?;
-    Ok(cull::file::frame(magic, version, &payload))
+    cull::file::encode_framed(magic, version, value)
+        .map_err(|e| TilesError::Parameter(format!("cannot encode {what}: {e}")))
 }
 
 /// Reads a framed file written by [`encode`] with the same magic and version; errors name `path` and say what is

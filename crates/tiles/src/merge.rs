@@ -1,6 +1,7 @@
 //! Joining the tiles' partial hierarchies into one hierarchy over the whole terrain.
 //!
-//! - **Mesh.** Vertices are merged by exact position (shared side vertices are bit-identical, [`crate::job`]);
+//! - **Mesh.** Vertices are merged by exact position (shared side vertices are bit-identical, [`crate::job`]; only
+//!   a tile's boundary vertices are looked up, as only they can be shared);
 //!   the tiles' grouped triangles come first, tile after tile in Morton order of the tile grid, then every tile's
 //!   always-visible triangles. The joined mesh is checked to be an edge-manifold height field ([`tin::Tin`]).
 //! - **Nodes.** Every tile's nodes keep their children, levels and regions, re-expressed relative to the merged
@@ -8,6 +9,9 @@
 //!   tile becomes one node whose children are the tile's roots, and tiles are joined 2 × 2 up a quadtree of the tile
 //!   grid to one root: a tile is a node near the top. Tile and quadtree nodes store no region (never hidden by the
 //!   region test; the safe culler tests their bounds like any node), so they add no claim of occlusion.
+//!
+//! [`merge_with`] reads the tiles one at a time and keeps only their nodes, so the merge holds the merged hierarchy
+//! and one tile's mesh.
 
 use std::collections::HashMap;
 
@@ -90,56 +94,83 @@ pub fn merge(plan: &Plan, tiles: &[Hierarchy]) -> Result<Hierarchy, TilesError> 
             plan.tiles.len()
         )));
     }
+    merge_with(plan, |i| Ok(tiles[i].clone()))
+}
+
+/// A tile's nodes, kept while the other tiles are read: re-expressed once the merged origin is known.
+struct TileNodes {
+    tile: usize,
+    nodes: Vec<Node>,
+    roots: Vec<u32>,
+    origin: DVec3,
+    tri_base: u32,
+}
+
+/// Merges the tiles' hierarchies into one (see the module docs), reading them one at a time with `load(i)` (tile `i`
+/// of `plan`), in Morton order of the tile grid, each dropped before the next is read: memory is the merged
+/// hierarchy and one tile's mesh, not every tile's as well.
+pub fn merge_with(
+    plan: &Plan,
+    mut load: impl FnMut(usize) -> Result<Hierarchy, TilesError>,
+) -> Result<Hierarchy, TilesError> {
     let sectors = plan.options.params.sectors;
-    for (i, t) in tiles.iter().enumerate() {
+    let mut order: Vec<usize> = (0..plan.tiles.len()).collect();
+    order.sort_by_key(|&i| morton(plan.tiles[i].tile_row, plan.tiles[i].tile_col));
+
+    // The mesh: vertices merged by exact position, grouped triangles tile by tile, then all orphans.
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut orphans: Vec<[u32; 3]> = Vec::new();
+    let mut kept: Vec<TileNodes> = Vec::with_capacity(order.len());
+    let mut build: Option<BuildInfo> = None;
+    let mut seeds = 0;
+    for &i in &order {
+        let mut t = load(i)?;
         if t.sectors != sectors {
             return Err(TilesError::Parameter(format!(
                 "tile {i} has {} sectors, the plan {sectors}",
                 t.sectors
             )));
         }
-    }
-    let mut order: Vec<usize> = (0..tiles.len()).collect();
-    order.sort_by_key(|&i| morton(plan.tiles[i].tile_row, plan.tiles[i].tile_col));
-
-    // The mesh: vertices merged by exact position, grouped triangles tile by tile, then all orphans.
-    let mut positions: Vec<DVec3> = Vec::new();
-    let mut index: HashMap<[u64; 3], u32> = HashMap::new();
-    let mut remap: Vec<Vec<u32>> = vec![Vec::new(); tiles.len()];
-    for &i in &order {
-        remap[i] = tiles[i]
+        // Only a vertex on the tile's boundary can be another tile's too: the others are added as they are.
+        let shared = boundary_vertices(&t.mesh.triangles, t.mesh.positions.len());
+        let remap: Vec<u32> = t
             .mesh
             .positions
             .iter()
-            .map(|p| {
-                *index.entry(p.map(f64::to_bits)).or_insert_with(|| {
+            .zip(shared)
+            .map(|(p, shared)| {
+                let mut add = || {
                     positions.push(DVec3::from_array(*p));
                     (positions.len() - 1) as u32
-                })
+                };
+                if shared {
+                    *index.entry(p.map(f64::to_bits)).or_insert_with(add)
+                } else {
+                    add()
+                }
             })
             .collect();
+        let tri_base = triangles.len() as u32;
+        let [a, b] = t.always_visible;
+        let moved = |tri: &[u32; 3]| tri.map(|v| remap[v as usize]);
+        triangles.extend(t.mesh.triangles[..a as usize].iter().map(moved));
+        orphans.extend(t.mesh.triangles[a as usize..b as usize].iter().map(moved));
+        seeds += t.build.seeds;
+        build.get_or_insert_with(|| t.build.clone());
+        kept.push(TileNodes {
+            tile: i,
+            nodes: std::mem::take(&mut t.nodes),
+            roots: std::mem::take(&mut t.roots),
+            origin: DVec3::from_array(t.origin),
+            tri_base,
+        });
     }
     drop(index);
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut tri_base = vec![0u32; tiles.len()];
-    for &i in &order {
-        tri_base[i] = triangles.len() as u32;
-        let end = tiles[i].always_visible[0] as usize;
-        triangles.extend(
-            tiles[i].mesh.triangles[..end]
-                .iter()
-                .map(|t| t.map(|v| remap[i][v as usize])),
-        );
-    }
     let grouped = triangles.len() as u32;
-    for &i in &order {
-        let [a, b] = tiles[i].always_visible;
-        triangles.extend(
-            tiles[i].mesh.triangles[a as usize..b as usize]
-                .iter()
-                .map(|t| t.map(|v| remap[i][v as usize])),
-        );
-    }
+    triangles.append(&mut orphans);
+    drop(orphans);
     let tin = Tin::from_parts(positions, triangles).map_err(|e| {
         TilesError::Parameter(format!(
             "the tiles do not join into one terrain (plan and build them again): {e}"
@@ -151,24 +182,22 @@ pub fn merge(plan: &Plan, tiles: &[Hierarchy]) -> Result<Hierarchy, TilesError> 
     let mut nodes: Vec<Node> = Vec::new();
     let mut circles: Vec<WorldCircle> = Vec::new();
     let mut tile_node: HashMap<(usize, usize), u32> = HashMap::new();
-    for &i in &order {
-        let t = &tiles[i];
-        let from = DVec3::from_array(t.origin);
+    for t in kept {
         let base = nodes.len() as u32;
-        for n in &t.nodes {
-            let c = world_circle(n, from);
+        for n in t.nodes {
+            let c = world_circle(&n, t.origin);
             let (centre, radius) = stored(c, origin);
             circles.push(c);
             nodes.push(Node {
                 centre,
                 radius,
                 children: n.children.iter().map(|&k| k + base).collect(),
-                triangles: n.triangles.map(|k| k + tri_base[i]),
+                triangles: n.triangles.map(|k| k + t.tri_base),
                 level: n.level,
                 regions: n
                     .regions
                     .iter()
-                    .filter_map(|r| move_region(r, sectors, from, origin))
+                    .filter_map(|r| move_region(r, sectors, t.origin, origin))
                     .collect(),
             });
         }
@@ -178,7 +207,7 @@ pub fn merge(plan: &Plan, tiles: &[Hierarchy]) -> Result<Hierarchy, TilesError> 
         }
         roots.sort_by_key(|&r| nodes[r as usize].triangles[0]);
         let id = push_parent(&mut nodes, &mut circles, roots, origin);
-        tile_node.insert((plan.tiles[i].tile_row, plan.tiles[i].tile_col), id);
+        tile_node.insert((plan.tiles[t.tile].tile_row, plan.tiles[t.tile].tile_col), id);
     }
 
     // The quadtree of tiles.
@@ -213,7 +242,6 @@ pub fn merge(plan: &Plan, tiles: &[Hierarchy]) -> Result<Hierarchy, TilesError> 
     }
     let roots: Vec<u32> = level_nodes.values().copied().collect();
 
-    let first = &tiles[order[0]].build;
     let (positions, triangles) = tin.into_parts();
     let h = Hierarchy {
         sectors,
@@ -226,13 +254,36 @@ pub fn merge(plan: &Plan, tiles: &[Hierarchy]) -> Result<Hierarchy, TilesError> 
             triangles,
         },
         build: BuildInfo {
-            seeds: tiles.iter().map(|t| t.build.seeds).sum(),
-            ..first.clone()
+            seeds,
+            ..build.ok_or_else(|| TilesError::Parameter("a plan without tiles".into()))?
         },
     };
     h.check_invariants()
         .map_err(|e| TilesError::Parameter(format!("the merged hierarchy is malformed: {e}")))?;
     Ok(h)
+}
+
+/// Which of a mesh's `n` vertices lie on its boundary: on an edge of only one of its triangles. A vertex that another
+/// tile shares has a triangle around it outside this tile, so it is one of them (a vertex all of whose triangles are
+/// in the tile is inside it).
+fn boundary_vertices(triangles: &[[u32; 3]], n: usize) -> Vec<bool> {
+    let mut edges: Vec<u64> = triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (u64::from(a.min(b)) << 32) | u64::from(a.max(b)))
+        .collect();
+    edges.sort_unstable();
+    let mut on = vec![false; n];
+    for run in edges.chunk_by(|a, b| a == b) {
+        if let [e] = run {
+            for v in [e >> 32, e & u64::from(u32::MAX)] {
+                if let Some(flag) = on.get_mut(v as usize) {
+                    *flag = true;
+                }
+            }
+        }
+    }
+    on
 }
 
 /// Appends a region-less node over `children` (whose ranges are consecutive, in order) and returns its index.

@@ -261,6 +261,41 @@ fn tiled_builds_are_deterministic_and_tiles_are_nodes_near_the_top() {
     }
 }
 
+/// The streaming merge reads each tile once, in Morton order of the tile grid, and gives what the merge of tiles held
+/// in memory gives; a tile that cannot be read stops it with that tile's error.
+#[test]
+fn the_merge_reads_one_tile_at_a_time() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(33 * 33, 3);
+    let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
+    let tiles: Vec<Hierarchy> = (0..plan.tiles.len())
+        .map(|i| tiles::build_tile(&plan, &path, i, None).expect("tile").0)
+        .collect();
+    let mut read = Vec::new();
+    let streamed = tiles::merge::merge_with(&plan, |i| {
+        read.push((plan.tiles[i].tile_row, plan.tiles[i].tile_col));
+        Ok(tiles[i].clone())
+    })
+    .expect("merge");
+    assert_eq!(
+        streamed.to_bytes().expect("bytes"),
+        tiles::merge(&plan, &tiles).expect("merge").to_bytes().expect("bytes")
+    );
+    assert_eq!(read.len(), 16);
+    assert_eq!(&read[..5], &[(0, 0), (0, 1), (1, 0), (1, 1), (0, 2)], "Morton order");
+    let mut calls = 0;
+    let e = tiles::merge::merge_with(&plan, |i| {
+        calls += 1;
+        if calls == 3 {
+            return Err(tiles::TilesError::Parameter(format!("tile {i} is unreadable")));
+        }
+        Ok(tiles[i].clone())
+    })
+    .expect_err("an unreadable tile");
+    assert!(e.to_string().contains("is unreadable"), "{e}");
+    assert_eq!(calls, 3, "no tile is read after the one that failed");
+}
+
 #[test]
 fn voids_across_tile_sides_still_join() {
     let dir = tempfile::tempdir().expect("tempdir");

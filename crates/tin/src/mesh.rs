@@ -283,42 +283,64 @@ pub(crate) fn local_origin(positions: &[DVec3]) -> DVec3 {
     }
 }
 
-/// Computes per-edge neighbours, failing on non-manifold edges: every edge is keyed by its unordered vertex pair and
-/// the keys are sorted once, so the (at most two) uses of an edge end up side by side.
+/// Computes per-edge neighbours, failing on non-manifold edges: every half-edge is put in the bucket of its smaller
+/// vertex and each bucket is sorted, so the (at most two) uses of an edge end up side by side.
 fn compute_neighbours(triangles: &[[u32; 3]]) -> Result<Vec<[u32; 3]>> {
-    // (unordered edge key, 1 if the edge runs from the larger to the smaller index, triangle * 3 + corner)
-    let mut edges: Vec<(u64, u8, u32)> = Vec::with_capacity(triangles.len() * 3);
+    if triangles.len() >= (1 << 31) / 3 {
+        return Err(TinError::InvalidParameter(format!(
+            "{} triangles: more than a mesh can hold (at most {})",
+            triangles.len(),
+            (1u64 << 31) / 3 - 1
+        )));
+    }
+    // Half-edges bucketed by their smaller vertex (a counting sort, 8 bytes a half-edge), each as one u64: the larger
+    // vertex, 1 if the half-edge runs from the larger to the smaller, and triangle * 3 + corner. Sorting each bucket
+    // orders them as a sort of (edge, direction, half-edge) would.
+    let n = triangles.iter().flatten().max().map_or(0, |&v| v as usize + 1);
+    let mut start = vec![0usize; n + 1];
+    for tri in triangles {
+        for i in 0..3 {
+            start[tri[i].min(tri[(i + 1) % 3]) as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut half = vec![0u64; triangles.len() * 3];
     for (t, tri) in triangles.iter().enumerate() {
         for i in 0..3 {
             let (a, b) = (tri[i], tri[(i + 1) % 3]);
-            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-            edges.push((key, u8::from(a > b), (t * 3 + i) as u32));
+            let slot = &mut fill[a.min(b) as usize];
+            half[*slot] = (u64::from(a.max(b)) << 32) | (u64::from(a > b) << 31) | (t * 3 + i) as u64;
+            *slot += 1;
         }
     }
-    edges.sort_unstable();
+    drop(fill);
+    let other = |h: u64| (h >> 32) as u32;
+    let dir = |h: u64| (h >> 31) & 1;
+    let id = |h: u64| (h & 0x7fff_ffff) as usize;
     let mut neighbours = vec![[NO_NEIGHBOUR; 3]; triangles.len()];
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j].0 == edges[i].0 {
-            j += 1;
+    for lo in 0..n {
+        let bucket = &mut half[start[lo]..start[lo + 1]];
+        bucket.sort_unstable();
+        for run in bucket.chunk_by(|x, y| other(*x) == other(*y)) {
+            if run.len() > 2 || (run.len() == 2 && dir(run[0]) == dir(run[1])) {
+                let (a, b) = (lo as u32, other(run[0]));
+                let (a, b) = if dir(run[0]) == 1 { (b, a) } else { (a, b) };
+                return Err(TinError::NonManifoldEdge {
+                    a,
+                    b,
+                    first: id(run[0]) / 3,
+                    second: id(run[1]) / 3,
+                });
+            }
+            if let [s, o] = *run {
+                let (s, o) = (id(s), id(o));
+                neighbours[s / 3][s % 3] = (o / 3) as u32;
+                neighbours[o / 3][o % 3] = (s / 3) as u32;
+            }
         }
-        if j - i > 2 || (j - i == 2 && edges[i].1 == edges[i + 1].1) {
-            let (a, b) = ((edges[i].0 >> 32) as u32, edges[i].0 as u32);
-            let (a, b) = if edges[i].1 == 1 { (b, a) } else { (a, b) };
-            return Err(TinError::NonManifoldEdge {
-                a,
-                b,
-                first: (edges[i].2 / 3) as usize,
-                second: (edges[i + 1].2 / 3) as usize,
-            });
-        }
-        if j - i == 2 {
-            let (s, o) = (edges[i].2 as usize, edges[i + 1].2 as usize);
-            neighbours[s / 3][s % 3] = (o / 3) as u32;
-            neighbours[o / 3][o % 3] = (s / 3) as u32;
-        }
-        i = j;
     }
     Ok(neighbours)
 }
@@ -326,6 +348,66 @@ fn compute_neighbours(triangles: &[[u32; 3]]) -> Result<Vec<[u32; 3]>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// The neighbours by one global sort of (edge, direction, half-edge): what the bucketed version must give,
+    /// errors included.
+    fn neighbours_by_sort(triangles: &[[u32; 3]]) -> Result<Vec<[u32; 3]>> {
+        let mut edges: Vec<(u64, u8, u32)> = Vec::new();
+        for (t, tri) in triangles.iter().enumerate() {
+            for i in 0..3 {
+                let (a, b) = (tri[i], tri[(i + 1) % 3]);
+                edges.push((
+                    (u64::from(a.min(b)) << 32) | u64::from(a.max(b)),
+                    u8::from(a > b),
+                    (t * 3 + i) as u32,
+                ));
+            }
+        }
+        edges.sort_unstable();
+        let mut neighbours = vec![[NO_NEIGHBOUR; 3]; triangles.len()];
+        for run in edges.chunk_by(|x, y| x.0 == y.0) {
+            if run.len() > 2 || (run.len() == 2 && run[0].1 == run[1].1) {
+                let (a, b) = ((run[0].0 >> 32) as u32, run[0].0 as u32);
+                let (a, b) = if run[0].1 == 1 { (b, a) } else { (a, b) };
+                return Err(TinError::NonManifoldEdge {
+                    a,
+                    b,
+                    first: (run[0].2 / 3) as usize,
+                    second: (run[1].2 / 3) as usize,
+                });
+            }
+            if let [s, o] = run {
+                let (s, o) = (s.2 as usize, o.2 as usize);
+                neighbours[s / 3][s % 3] = (o / 3) as u32;
+                neighbours[o / 3][o % 3] = (s / 3) as u32;
+            }
+        }
+        Ok(neighbours)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+        /// Bucketing the half-edges by their smaller vertex gives the global sort's neighbours and errors, on valid
+        /// grids and on random triangle soups (mostly non-manifold).
+        #[test]
+        fn bucketed_neighbours_equal_the_global_sort(w in 2u32..7, h in 2u32..7, soup in prop::collection::vec((0u32..9, 0u32..9, 0u32..9), 0..14)) {
+            let mut grid = Vec::new();
+            for r in 0..h - 1 {
+                for c in 0..w - 1 {
+                    let v = r * w + c;
+                    grid.push([v, v + 1, v + w + 1]);
+                    grid.push([v, v + w + 1, v + w]);
+                }
+            }
+            let soup: Vec<[u32; 3]> = soup.into_iter().filter(|t| t.0 != t.1 && t.1 != t.2 && t.0 != t.2).map(|t| [t.0, t.1, t.2]).collect();
+            for tris in [grid, soup] {
+                let (a, b) = (compute_neighbours(&tris), neighbours_by_sort(&tris));
+                prop_assert_eq!(format!("{a:?}"), format!("{b:?}"));
+            }
+        }
+    }
 
     fn square() -> Tin {
         let p = vec![
