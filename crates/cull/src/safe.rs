@@ -322,57 +322,6 @@ fn key(d: f64) -> u64 {
     d.max(0.0).to_bits()
 }
 
-/// Every triangle's corners, in triangle order: what the bounds and the patches of a triangle range read, laid out
-/// so that a range is one sequential scan (the mesh's vertices, reached through the triangles, are not). Kept only
-/// while the culler is prepared.
-struct Corners {
-    xyz: Vec<[[f64; 3]; 3]>,
-}
-
-impl Corners {
-    fn new(h: &Hierarchy) -> Corners {
-        let pos = &h.mesh.positions;
-        Corners {
-            xyz: h.mesh.triangles.iter().map(|t| t.map(|v| pos[v as usize])).collect(),
-        }
-    }
-
-    /// The bounds of the triangles `range` (f64, from the mesh): circle around the x,y box's centre through the
-    /// farthest vertex, grown by a relative 1e-12 and 1e-9 m; the highest vertex.
-    fn bounds(&self, range: [u32; 2]) -> TreeNode {
-        let tris = &self.xyz[range[0] as usize..range[1] as usize];
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        let mut zmax = f64::NEG_INFINITY;
-        for p in tris.iter().flatten() {
-            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
-            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
-            zmax = zmax.max(p[2]);
-        }
-        let centre = if tris.is_empty() {
-            [0.0; 2]
-        } else {
-            [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
-        };
-        let mut r2: f64 = 0.0;
-        for p in tris.iter().flatten() {
-            let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
-            r2 = r2.max(dx * dx + dy * dy);
-        }
-        let scale = centre[0].abs() + centre[1].abs();
-        TreeNode {
-            centre,
-            radius: r2.sqrt() * (1.0 + 1e-12) + 1e-12 * scale + 1e-9,
-            zmax,
-            triangles: range,
-            kids: [0, 0],
-            verts: [0, 0],
-            tris: [0, 0],
-            edges: [0, 0],
-            crests: [0, 0],
-        }
-    }
-}
-
 impl SafeCuller {
     /// Prepares the safe culler for `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded file
     /// does).
@@ -413,16 +362,15 @@ impl SafeCuller {
             c.zabs = lo[2].abs().max(hi[2].abs());
         }
         // Hierarchy nodes first (same ids), then the halving trees.
-        let corners = Corners::new(h);
         let n = h.nodes.len();
         c.nodes.reserve(n);
         for node in &h.nodes {
-            c.nodes.push(corners.bounds(node.triangles));
+            c.nodes.push(c.bounds(h, node.triangles));
         }
         let mut kids: Vec<Vec<u32>> = h.nodes.iter().map(|n| n.children.clone()).collect();
         for (i, node) in h.nodes.iter().enumerate() {
             if node.children.is_empty() {
-                kids[i] = c.halve_below(h, &corners, i as u32);
+                kids[i] = c.halve_below(h, i as u32, &mut Vec::new());
             }
         }
         for (i, k) in kids.into_iter().enumerate() {
@@ -434,7 +382,7 @@ impl SafeCuller {
         roots.sort_by_key(|&r| h.nodes[r as usize].triangles[0]);
         let [a, b] = h.always_visible;
         if a < b {
-            roots.push(c.halving_tree(h, &corners, [a, b]));
+            roots.push(c.halving_tree(h, [a, b]));
         }
         c.roots = roots;
         if c.params.coarse_columns > 0 {
@@ -484,30 +432,27 @@ impl SafeCuller {
 
     /// The children of hierarchy leaf `i` in its halving tree (empty when the leaf is small enough to be a patch,
     /// which then becomes one).
-    fn halve_below(&mut self, h: &Hierarchy, corners: &Corners, i: u32) -> Vec<u32> {
+    fn halve_below(&mut self, h: &Hierarchy, i: u32, _: &mut Vec<u32>) -> Vec<u32> {
         let [s, e] = self.nodes[i as usize].triangles;
         if (e - s) as usize <= self.params.patch {
-            self.make_patch(h, corners, i);
+            self.make_patch(h, i);
             return Vec::new();
         }
         let mid = s + (e - s) / 2;
-        vec![
-            self.halving_tree(h, corners, [s, mid]),
-            self.halving_tree(h, corners, [mid, e]),
-        ]
+        vec![self.halving_tree(h, [s, mid]), self.halving_tree(h, [mid, e])]
     }
 
     /// A halving tree over `range`; returns its root.
-    fn halving_tree(&mut self, h: &Hierarchy, corners: &Corners, range: [u32; 2]) -> u32 {
+    fn halving_tree(&mut self, h: &Hierarchy, range: [u32; 2]) -> u32 {
         let id = self.nodes.len() as u32;
-        self.nodes.push(corners.bounds(range));
+        self.nodes.push(self.bounds(h, range));
         let [s, e] = range;
         if (e - s) as usize <= self.params.patch {
-            self.make_patch(h, corners, id);
+            self.make_patch(h, id);
         } else {
             let mid = s + (e - s) / 2;
-            let a = self.halving_tree(h, corners, [s, mid]);
-            let b = self.halving_tree(h, corners, [mid, e]);
+            let a = self.halving_tree(h, [s, mid]);
+            let b = self.halving_tree(h, [mid, e]);
             let start = self.children.len() as u32;
             self.children.extend([a, b]);
             self.nodes[id as usize].kids = [start, start + 2];
@@ -516,13 +461,12 @@ impl SafeCuller {
     }
 
     /// Stores the local vertices and triangles of node `id`, which becomes a patch.
-    fn make_patch(&mut self, h: &Hierarchy, corners: &Corners, id: u32) {
+    fn make_patch(&mut self, h: &Hierarchy, id: u32) {
         let [s, e] = self.nodes[id as usize].triangles;
         let v0 = self.verts.len() as u32;
         let t0 = self.tris.len() as u32;
         let mut local: Vec<(u32, u8)> = Vec::new();
-        let range = s as usize..e as usize;
-        for (t, xyz) in h.mesh.triangles[range.clone()].iter().zip(&corners.xyz[range]) {
+        for t in &h.mesh.triangles[s as usize..e as usize] {
             let mut tri = [0u8; 3];
             for (k, &v) in t.iter().enumerate() {
                 let at = match local.iter().find(|(g, _)| *g == v) {
@@ -530,14 +474,14 @@ impl SafeCuller {
                     None => {
                         let l = local.len() as u8;
                         local.push((v, l));
-                        self.verts.push(xyz[k]);
+                        self.verts.push(h.mesh.positions[v as usize]);
                         self.vids.push(v);
                         l
                     }
                 };
                 tri[k] = at;
             }
-            let [a, b, c] = *xyz;
+            let [a, b, c] = t.map(|v| h.mesh.positions[v as usize]);
             let (u, w) = (
                 [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
                 [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
@@ -567,6 +511,48 @@ impl SafeCuller {
         node.verts = [v0, self.verts.len() as u32];
         node.tris = [t0, self.tris.len() as u32];
         node.edges = [e0 as u32, self.edges.len() as u32];
+    }
+
+    /// The bounds of the triangles `range` (f64, from the mesh): circle around the x,y box's centre through the
+    /// farthest vertex, grown by a relative 1e-12 and 1e-9 m; the highest vertex.
+    fn bounds(&self, h: &Hierarchy, range: [u32; 2]) -> TreeNode {
+        let tris = &h.mesh.triangles[range[0] as usize..range[1] as usize];
+        let pos = &h.mesh.positions;
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let mut zmax = f64::NEG_INFINITY;
+        for t in tris {
+            for &v in t {
+                let p = pos[v as usize];
+                lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+                hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+                zmax = zmax.max(p[2]);
+            }
+        }
+        let centre = if tris.is_empty() {
+            [0.0; 2]
+        } else {
+            [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+        };
+        let mut r2: f64 = 0.0;
+        for t in tris {
+            for &v in t {
+                let p = pos[v as usize];
+                let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
+                r2 = r2.max(dx * dx + dy * dy);
+            }
+        }
+        let scale = centre[0].abs() + centre[1].abs();
+        TreeNode {
+            centre,
+            radius: r2.sqrt() * (1.0 + 1e-12) + 1e-12 * scale + 1e-9,
+            zmax,
+            triangles: range,
+            kids: [0, 0],
+            verts: [0, 0],
+            tris: [0, 0],
+            edges: [0, 0],
+            crests: [0, 0],
+        }
     }
 
     /// Writes every eligible occluder patch into the horizon (within the budget) and forgets them.
