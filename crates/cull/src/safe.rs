@@ -322,6 +322,86 @@ fn key(d: f64) -> u64 {
     d.max(0.0).to_bits()
 }
 
+/// The x,y box and the highest vertex of a set of triangles: min and max are exact, so the extent of a union is the
+/// union of the extents.
+#[derive(Clone, Copy, Debug)]
+struct Extent {
+    lo: [f64; 2],
+    hi: [f64; 2],
+    zmax: f64,
+}
+
+impl Extent {
+    /// The extent of no vertex.
+    const EMPTY: Extent = Extent {
+        lo: [f64::INFINITY; 2],
+        hi: [f64::NEG_INFINITY; 2],
+        zmax: f64::NEG_INFINITY,
+    };
+
+    /// The extent of the vertices of the triangles `range`.
+    fn of(h: &Hierarchy, range: [u32; 2]) -> Extent {
+        let mut e = Extent::EMPTY;
+        for t in &h.mesh.triangles[range[0] as usize..range[1] as usize] {
+            for &v in t {
+                let p = h.mesh.positions[v as usize];
+                e.lo = [e.lo[0].min(p[0]), e.lo[1].min(p[1])];
+                e.hi = [e.hi[0].max(p[0]), e.hi[1].max(p[1])];
+                e.zmax = e.zmax.max(p[2]);
+            }
+        }
+        e
+    }
+
+    /// The extent of both.
+    fn union(&self, other: &Extent) -> Extent {
+        Extent {
+            lo: [self.lo[0].min(other.lo[0]), self.lo[1].min(other.lo[1])],
+            hi: [self.hi[0].max(other.hi[0]), self.hi[1].max(other.hi[1])],
+            zmax: self.zmax.max(other.zmax),
+        }
+    }
+
+    /// The centre of the box of the triangles `range` (the origin when there are none).
+    fn centre(&self, range: [u32; 2]) -> [f64; 2] {
+        if range[0] == range[1] {
+            [0.0; 2]
+        } else {
+            [0.5 * (self.lo[0] + self.hi[0]), 0.5 * (self.lo[1] + self.hi[1])]
+        }
+    }
+}
+
+/// The largest squared x,y distance from `centre` of the vertices of the triangles `range`.
+fn farthest(h: &Hierarchy, range: [u32; 2], centre: [f64; 2]) -> f64 {
+    let mut r2: f64 = 0.0;
+    for t in &h.mesh.triangles[range[0] as usize..range[1] as usize] {
+        for &v in t {
+            let p = h.mesh.positions[v as usize];
+            let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
+            r2 = r2.max(dx * dx + dy * dy);
+        }
+    }
+    r2
+}
+
+/// A tree node over the triangles `range` (no children yet): the circle around `centre` of squared radius `r2`,
+/// grown by a relative 1e-12 and 1e-9 m (and more far from the origin), and the highest vertex of `extent`.
+fn node_of(range: [u32; 2], extent: &Extent, centre: [f64; 2], r2: f64) -> TreeNode {
+    let scale = centre[0].abs() + centre[1].abs();
+    TreeNode {
+        centre,
+        radius: r2.sqrt() * (1.0 + 1e-12) + 1e-12 * scale + 1e-9,
+        zmax: extent.zmax,
+        triangles: range,
+        kids: [0, 0],
+        verts: [0, 0],
+        tris: [0, 0],
+        edges: [0, 0],
+        crests: [0, 0],
+    }
+}
+
 impl SafeCuller {
     /// Prepares the safe culler for `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded file
     /// does).
@@ -361,11 +441,25 @@ impl SafeCuller {
             c.extent = (hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]);
             c.zabs = lo[2].abs().max(hi[2].abs());
         }
-        // Hierarchy nodes first (same ids), then the halving trees.
+        // Hierarchy nodes first (same ids), then the halving trees. A hierarchy node's extent is its children's
+        // together (they partition its range): computed bottom-up, by increasing level.
         let n = h.nodes.len();
-        c.nodes.reserve(n);
-        for node in &h.nodes {
-            c.nodes.push(c.bounds(h, node.triangles));
+        let mut extents = vec![Extent::EMPTY; n];
+        let mut by_level: Vec<usize> = (0..n).collect();
+        by_level.sort_by_key(|&i| h.nodes[i].level);
+        c.nodes = vec![node_of([0, 0], &Extent::EMPTY, [0.0; 2], 0.0); n];
+        for i in by_level {
+            let node = &h.nodes[i];
+            c.nodes[i] = if node.children.is_empty() {
+                extents[i] = Extent::of(h, node.triangles);
+                c.bounds(h, node.triangles, &extents[i])
+            } else {
+                extents[i] = node
+                    .children
+                    .iter()
+                    .fold(Extent::EMPTY, |e, &k| e.union(&extents[k as usize]));
+                c.bounds_from_descendants(h, i, &extents[i])
+            };
         }
         let mut kids: Vec<Vec<u32>> = h.nodes.iter().map(|n| n.children.clone()).collect();
         for (i, node) in h.nodes.iter().enumerate() {
@@ -444,20 +538,33 @@ impl SafeCuller {
 
     /// A halving tree over `range`; returns its root.
     fn halving_tree(&mut self, h: &Hierarchy, range: [u32; 2]) -> u32 {
+        self.halving_subtree(h, range).0
+    }
+
+    /// [`SafeCuller::halving_tree`], also returning the extent of `range` (its halves' together, bottom-up). A node's id
+    /// comes before its children's.
+    fn halving_subtree(&mut self, h: &Hierarchy, range: [u32; 2]) -> (u32, Extent) {
         let id = self.nodes.len() as u32;
-        self.nodes.push(self.bounds(h, range));
         let [s, e] = range;
         if (e - s) as usize <= self.params.patch {
+            let extent = Extent::of(h, range);
+            self.nodes.push(self.bounds(h, range, &extent));
             self.make_patch(h, id);
-        } else {
-            let mid = s + (e - s) / 2;
-            let a = self.halving_tree(h, [s, mid]);
-            let b = self.halving_tree(h, [mid, e]);
-            let start = self.children.len() as u32;
-            self.children.extend([a, b]);
-            self.nodes[id as usize].kids = [start, start + 2];
+            return (id, extent);
         }
-        id
+        // Its place first; its bounds once its halves are done.
+        self.nodes.push(node_of([s, s], &Extent::EMPTY, [0.0; 2], 0.0));
+        let mid = s + (e - s) / 2;
+        let (a, ea) = self.halving_subtree(h, [s, mid]);
+        let (b, eb) = self.halving_subtree(h, [mid, e]);
+        let extent = ea.union(&eb);
+        let start = self.children.len() as u32;
+        self.children.extend([a, b]);
+        self.nodes[id as usize] = TreeNode {
+            kids: [start, start + 2],
+            ..self.bounds(h, range, &extent)
+        };
+        (id, extent)
     }
 
     /// Stores the local vertices and triangles of node `id`, which becomes a patch.
@@ -513,46 +620,47 @@ impl SafeCuller {
         node.edges = [e0 as u32, self.edges.len() as u32];
     }
 
-    /// The bounds of the triangles `range` (f64, from the mesh): circle around the x,y box's centre through the
-    /// farthest vertex, grown by a relative 1e-12 and 1e-9 m; the highest vertex.
-    fn bounds(&self, h: &Hierarchy, range: [u32; 2]) -> TreeNode {
-        let tris = &h.mesh.triangles[range[0] as usize..range[1] as usize];
-        let pos = &h.mesh.positions;
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        let mut zmax = f64::NEG_INFINITY;
-        for t in tris {
-            for &v in t {
-                let p = pos[v as usize];
-                lo = [lo[0].min(p[0]), lo[1].min(p[1])];
-                hi = [hi[0].max(p[0]), hi[1].max(p[1])];
-                zmax = zmax.max(p[2]);
-            }
-        }
-        let centre = if tris.is_empty() {
-            [0.0; 2]
-        } else {
-            [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+    /// The bounds of the triangles `range`, whose box and highest vertex are `extent` (f64, from the mesh): circle
+    /// around the x,y box's centre through the farthest vertex, grown by a relative 1e-12 and 1e-9 m; the highest
+    /// vertex.
+    fn bounds(&self, h: &Hierarchy, range: [u32; 2], extent: &Extent) -> TreeNode {
+        let centre = extent.centre(range);
+        node_of(range, extent, centre, farthest(h, range, centre))
+    }
+
+    /// The bounds of hierarchy node `i` (as [`SafeCuller::bounds`] computes them) from its extent and the bounds
+    /// already computed of its descendants in the hierarchy: the farthest vertex is sought only in descendants whose
+    /// circle may hold a vertex at least as far as the farthest found so far.
+    ///
+    /// Exactness: a vertex `p` of a descendant `k` (circle `c_k`, `r_k`, which holds every vertex of `k`) has
+    /// `|p − c| ≤ |c_k − c| + r_k`; the computed `d ≥ |c_k − c| (1 − 4ε)`, and the computed square of `p`'s distance
+    /// (the same arithmetic as in [`farthest`]) is at most `|p − c|² (1 + 6ε)`. So when
+    /// `((d + r_k)(1 + 1e-9))²`, computed, is below the largest square found so far, every vertex of `k` computes
+    /// below it too, and the maximum (hence the radius) is the one a scan of every vertex gives, bit for bit.
+    fn bounds_from_descendants(&self, h: &Hierarchy, i: usize, extent: &Extent) -> TreeNode {
+        let range = h.nodes[i].triangles;
+        let centre = extent.centre(range);
+        let reach = |k: u32| {
+            let n = &self.nodes[k as usize];
+            let (dx, dy) = (n.centre[0] - centre[0], n.centre[1] - centre[1]);
+            ((dx * dx + dy * dy).sqrt() + n.radius) * (1.0 + 1e-9)
         };
+        // Farthest-reaching descendants first (non-negative f64 bits order as the values).
+        let mut queue: BinaryHeap<(u64, u32)> = h.nodes[i].children.iter().map(|&k| (reach(k).to_bits(), k)).collect();
         let mut r2: f64 = 0.0;
-        for t in tris {
-            for &v in t {
-                let p = pos[v as usize];
-                let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
-                r2 = r2.max(dx * dx + dy * dy);
+        while let Some((bound, k)) = queue.pop() {
+            let bound = f64::from_bits(bound);
+            if bound * bound < r2 {
+                break;
+            }
+            let node = &h.nodes[k as usize];
+            if node.children.is_empty() {
+                r2 = r2.max(farthest(h, node.triangles, centre));
+            } else {
+                queue.extend(node.children.iter().map(|&j| (reach(j).to_bits(), j)));
             }
         }
-        let scale = centre[0].abs() + centre[1].abs();
-        TreeNode {
-            centre,
-            radius: r2.sqrt() * (1.0 + 1e-12) + 1e-12 * scale + 1e-9,
-            zmax,
-            triangles: range,
-            kids: [0, 0],
-            verts: [0, 0],
-            tris: [0, 0],
-            edges: [0, 0],
-            crests: [0, 0],
-        }
+        node_of(range, extent, centre, r2)
     }
 
     /// Writes every eligible occluder patch into the horizon (within the budget) and forgets them.
