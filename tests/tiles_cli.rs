@@ -96,6 +96,14 @@ fn errors_name_what_is_wrong() {
         &["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch"))],
         "tile 0 has not been built",
     );
+    // A tile's file that is not a hierarchy: the merge names the tile and its file, and writes nothing.
+    let tiles_dir = dir.path().join("plan.tiles");
+    for i in 0..9 {
+        std::fs::write(tiles_dir.join(format!("tile-{i:05}.tch")), b"not a hierarchy").expect("write");
+    }
+    let merged = dir.path().join("m.tch");
+    fails_with(&["tiles", "merge", s(&plan), "-o", s(&merged)], "tile-00000.tch");
+    assert!(!merged.exists(), "a failed merge leaves no file");
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
     fails_with(&["tiles", "build", s(&plan)], "--tile");
     // Each DEM tile reads its own far-field file, written beside the plan; damaged or missing, it is named.
