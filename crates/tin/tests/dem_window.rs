@@ -489,6 +489,13 @@ fn truncated_files_are_errors_naming_them() {
     std::fs::write(&p, format!("{text}1 2 3 4 5 6 x")).expect("write");
     assert!(read_dem(&p, &opts).is_err());
     assert!(names_file(strips(&p).expect_err("a word"), &p).contains("\"x\" is not a number"));
+    // A PNG cut short: its strips are refused, naming the file.
+    let png = fixtures().iter().find(|f| f.name == "png").expect("the PNG fixture");
+    let bytes = std::fs::read(&png.path).expect("read");
+    let p = dir.path().join("cut.png");
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).expect("write");
+    let e = read_dem_strips(&p, &png.opts, 3, |_, _| Ok(())).expect_err("truncated");
+    names_file(e, &p);
     // A header without values.
     let p = dir.path().join("bare.asc");
     std::fs::write(

@@ -197,8 +197,8 @@ pub fn read_dem_window_heights(
 /// Reads a whole DEM strip by strip, north to south, calling `each(first_row, heights)` with the row-major samples of
 /// `strip_rows` (at least 1) consecutive rows (fewer in the last strip), all columns, exactly as [`read_dem`] reads
 /// them (voids NaN, [`DemOptions::z_scale`] applied, every height checked); returns the grid's shape. Memory: one
-/// strip for `.npy`, `.hgt` and GeoTIFF (each strip a window, [`read_dem_window_heights`]) and `.asc` (the text
-/// streamed once); a PNG (at most [`png::MAX_SAMPLES`] samples) is decoded whole once and handed out in strips.
+/// strip for `.npy`, `.hgt` and GeoTIFF (each strip a window, [`read_dem_window_heights`]), `.asc` (the text
+/// streamed once) and PNG (the rows decoded once, in order; an interlaced PNG is decoded whole).
 pub fn read_dem_strips(
     path: &Path,
     opts: &DemOptions,
@@ -207,20 +207,18 @@ pub fn read_dem_strips(
 ) -> Result<GridShape> {
     let strip_rows = strip_rows.max(1);
     match extension(path)?.as_str() {
-        "png" => {
-            let grid = read_dem(path, opts)?;
-            for (i, strip) in grid.z.chunks(strip_rows * grid.cols).enumerate() {
-                each(i * strip_rows, strip)?;
-            }
-            Ok(GridShape::of(&grid))
-        }
-        "asc" => {
+        ext @ ("png" | "asc") => {
             let shape = read_dem_header(path, opts)?;
-            asc::read_asc_strips(path, &shape, opts, strip_rows, &mut |first, z| {
+            let mut checked = |first: usize, z: &mut Vec<f64>| {
                 scale(z, opts);
                 check_heights(z, first, [0, shape.cols - 1], path)?;
                 each(first, z)
-            })?;
+            };
+            match ext {
+                #[cfg(feature = "png")]
+                "png" => png::read_png_strips(path, opts, strip_rows, &mut checked)?,
+                _ => asc::read_asc_strips(path, &shape, opts, strip_rows, &mut checked)?,
+            }
             Ok(shape)
         }
         _ => {

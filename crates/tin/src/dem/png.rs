@@ -6,7 +6,8 @@
 //! depths are rejected.
 //!
 //! A window ([`super::read_dem_window`]) is cut from the whole image: PNG is one compressed stream, so the whole
-//! image is decoded. [`read_png_header`] reads the header only.
+//! image is decoded. [`read_png_header`] reads the header only. Strips ([`super::read_dem_strips`]) decode the rows
+//! once, in order, holding one strip (an interlaced image, whose rows come in passes, is decoded whole first).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -100,14 +101,61 @@ pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
     let (cols, rows) = (frame.width as usize, frame.height as usize);
     let mut z = Vec::with_capacity(rows * cols);
     for r in 0..rows {
-        let line = &buf[r * frame.line_size..];
-        for c in 0..cols {
-            z.push(match depth {
-                png::BitDepth::Sixteen => f64::from(u16::from_be_bytes([line[2 * c], line[2 * c + 1]])),
-                _ => f64::from(line[c]),
-            });
-        }
+        push_row(&mut z, &buf[r * frame.line_size..], cols, depth);
     }
     let origin = DVec2::new(0.0, (rows as f64 - 1.0) * spacing.1);
     finish(path, rows, cols, spacing, origin, z, opts)
+}
+
+/// Appends the `cols` values of one decoded row of samples of `depth` bits.
+fn push_row(z: &mut Vec<f64>, line: &[u8], cols: usize, depth: png::BitDepth) {
+    for c in 0..cols {
+        z.push(match depth {
+            png::BitDepth::Sixteen => f64::from(u16::from_be_bytes([line[2 * c], line[2 * c + 1]])),
+            _ => f64::from(line[c]),
+        });
+    }
+}
+
+/// Decodes a PNG height map's rows once, in order, handing its values out in strips of `strip_rows` rows (not
+/// scaled): `each(first_row, values)`. An interlaced image is decoded whole first.
+pub(super) fn read_png_strips(
+    path: &Path,
+    opts: &DemOptions,
+    strip_rows: usize,
+    each: &mut dyn FnMut(usize, &mut Vec<f64>) -> Result<()>,
+) -> Result<()> {
+    let err = |m: String| TinError::format(path, m);
+    let strip_rows = strip_rows.max(1);
+    let file = std::io::BufReader::new(open(path)?);
+    let mut decoder = png::Decoder::new_with_limits(file, png::Limits { bytes: 1 << 31 });
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let info = reader.info();
+    check_info(info, path)?;
+    if info.interlaced {
+        let grid = read_png(path, &DemOptions { z_scale: 1.0, ..*opts })?;
+        for (i, strip) in grid.z.chunks(strip_rows * grid.cols).enumerate() {
+            each(i * strip_rows, &mut strip.to_vec())?;
+        }
+        return Ok(());
+    }
+    let (cols, rows, depth) = (info.width as usize, info.height as usize, info.bit_depth);
+    let mut z = Vec::with_capacity(strip_rows.min(rows) * cols);
+    let mut first = 0;
+    for r in 0..rows {
+        let row = reader
+            .next_row()
+            .map_err(|e| err(format!("truncated or corrupt PNG: {e}")))?
+            .ok_or_else(|| err(format!("truncated PNG: {r} of its {rows} rows")))?;
+        push_row(&mut z, row.data(), cols, depth);
+        if z.len() == strip_rows * cols || r + 1 == rows {
+            each(first, &mut z)?;
+            first += strip_rows;
+            z.clear();
+        }
+    }
+    Ok(())
 }
