@@ -840,12 +840,24 @@ impl Horizon {
     /// most `dz_max` above the camera (already raised by the height margin) is strictly below the horizon in every
     /// column it touches.
     pub(crate) fn disk_hidden(&self, m: [f64; 2], r: f64, dz_max: f64, with_potential: bool) -> bool {
+        self.disk_span(m, r, dz_max)
+            .is_some_and(|span| self.span_hidden(&span, with_potential))
+    }
+
+    /// The columns a disk touches and the bound of its `v` there, face by face, for [`Horizon::span_hidden`]
+    /// (arguments as for [`Horizon::disk_hidden`]); `None` when the disk cannot be judged hidden at all (it is not
+    /// farther than its radius, or it reaches behind the camera in a face it meets). It depends on the buffer's
+    /// column count only, so one span serves every test of the same disk.
+    pub(crate) fn disk_span(&self, m: [f64; 2], r: f64, dz_max: f64) -> Option<DiskSpan> {
         let dist = (m[0] * m[0] + m[1] * m[1]).sqrt();
         // The offset m carries a rounding error below ε |m|: grow the disk by more.
         let r = r + 1e-15 * dist;
         if !(dist > r * (1.0 + 1e-6)) {
-            return false;
+            return None;
         }
+        let mut span = DiskSpan {
+            faces: [(1, 0, 0.0); FACES],
+        };
         for k in 0..FACES {
             let (mf, ml) = face_coords(k, m[0], m[1]);
             // Does the disk meet the wedge f ≥ |l|?
@@ -855,7 +867,7 @@ impl Horizon {
             let f_lo = (mf - r).max((dist - r - 1e-15 * dist) * std::f64::consts::FRAC_1_SQRT_2) * (1.0 - REL);
             let f_hi = (mf + r).min(dist + r) * (1.0 + REL);
             if !(f_lo > 0.0) {
-                return false;
+                return None;
             }
             let v = if dz_max >= 0.0 { dz_max / f_lo } else { dz_max / f_hi };
             let v = v + REL * v.abs();
@@ -872,14 +884,28 @@ impl Horizon {
                 continue;
             }
             let last = self.w as isize - 1;
-            let j0 = floor(self.column_of(u_lo.max(-1.0))).clamp(0, last) as usize;
-            let j1 = floor(self.column_of(u_hi.min(1.0))).clamp(0, last) as usize;
-            if !self.below_all(k, j0, j1, v, with_potential) {
-                return false;
-            }
+            let j0 = floor(self.column_of(u_lo.max(-1.0))).clamp(0, last) as u32;
+            let j1 = floor(self.column_of(u_hi.min(1.0))).clamp(0, last) as u32;
+            span.faces[k] = (j0, j1, v);
         }
-        true
+        Some(span)
     }
+
+    /// Whether the disk of `span` is strictly below the horizon in every column it touches.
+    #[inline]
+    pub(crate) fn span_hidden(&self, span: &DiskSpan, with_potential: bool) -> bool {
+        (0..FACES).all(|k| {
+            let (j0, j1, v) = span.faces[k];
+            j0 > j1 || self.below_all(k, j0 as usize, j1 as usize, v, with_potential)
+        })
+    }
+}
+
+/// What a disk touches of the horizon ([`Horizon::disk_span`]): per face, the columns `j0..=j1` (none when
+/// `j0 > j1`) and the bound of its `v` there.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DiskSpan {
+    faces: [(u32, u32, f64); FACES],
 }
 
 /// `⌊x⌋` for column arithmetic (a NaN or out-of-range `x` saturates; callers clamp).

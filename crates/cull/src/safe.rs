@@ -880,10 +880,15 @@ impl SafeCuller {
             if !inside {
                 let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
                 let dz = node.zmax - eye[2] + mu;
-                let mut hidden = horizon.disk_hidden(m, node.radius, dz, false);
-                if !hidden && !scratch.eligible.is_empty() && horizon.disk_hidden(m, node.radius, dz, true) {
+                // The disk's columns and bound once, then tested against the horizon, and against its potential.
+                let span = horizon.disk_span(m, node.radius, dz);
+                let test = |horizon: &Horizon, with_potential| {
+                    span.is_some_and(|span| horizon.span_hidden(&span, with_potential))
+                };
+                let mut hidden = test(horizon, false);
+                if !hidden && !scratch.eligible.is_empty() && test(horizon, true) {
                     self.flush(horizon, &mut scratch.eligible, &scratch.projected, eye, &mut count);
-                    hidden = horizon.disk_hidden(m, node.radius, dz, false);
+                    hidden = test(horizon, false);
                 }
                 if hidden {
                     out.stats.culled_by_occlusion += 1;
