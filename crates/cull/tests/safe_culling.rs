@@ -405,4 +405,45 @@ proptest! {
         }
         assert_safe("random", &tin, &eyes);
     }
+
+    /// Degenerate terrains: an exact grid (every cell's four corners co-circular, so the Delaunay diagonals are
+    /// ties) with heights on a few terraces (plateaus, and one-cell steps between them), some samples missing; eyes
+    /// on vertices at their exact height (on a plateau, so sight lines graze it), just above, and off the terrain.
+    #[test]
+    fn terraced_grids_have_no_false_culls(
+        seed in any::<u64>(),
+        side in 5usize..13,
+        levels in 1u32..5,
+        holes in 0.0f64..0.3,
+    ) {
+        let mut next = splitmix(seed);
+        let step = 25.0;
+        // Contiguous terraces: a smooth random field cut into `levels + 1` flat steps 10 m apart.
+        let (a, b, phase) = (40.0 + 80.0 * next(), 40.0 + 80.0 * next(), TAU * next());
+        let mut pts = Vec::new();
+        for i in 0..side {
+            for j in 0..side {
+                let corner = (i == 0 || i == side - 1) && (j == 0 || j == side - 1);
+                if !corner && next() < holes {
+                    continue;
+                }
+                let (x, y) = (i as f64 * step, j as f64 * step);
+                let field = 0.5 + 0.5 * (x / a + phase).sin() * (y / b - phase).cos();
+                let z = 10.0 * (field * f64::from(levels) + 0.5).floor();
+                pts.push(DVec3::new(x, y, z));
+            }
+        }
+        let Ok((tin, _)) = triangulate(&pts, DedupePolicy::Reject) else { return Ok(()) };
+        let loc = truth::Locator::new(&tin);
+        let mut eyes = Vec::new();
+        for k in 0..6 {
+            let p = pts[(next() * pts.len() as f64) as usize % pts.len()];
+            let above = [0.0, 1e-9, 0.5, 10.0, 30.0, 2.0][k];
+            eyes.push(DVec3::new(p.x, p.y, p.z + above));
+        }
+        let xy = glam::DVec2::new(next() * side as f64 * step, next() * side as f64 * step);
+        eyes.push(DVec3::new(xy.x, xy.y, loc.ground_height(&tin, xy).unwrap_or(0.0) + 1.0));
+        eyes.push(DVec3::new(-40.0, xy.y, 10.0 * f64::from(levels)));
+        assert_safe("terraced grid", &tin, &eyes);
+    }
 }
