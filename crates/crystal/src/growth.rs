@@ -159,6 +159,24 @@ fn lowest_of(positions: &[DVec3], tri: [u32; 3]) -> u32 {
         .unwrap_or(tri[0])
 }
 
+/// Levels of data [`Grower::prefetch_step`] requests ahead of a step.
+const PREFETCH_STAGES: usize = 5;
+/// Steps between two prefetch stages of the same crystal.
+const PREFETCH_DISTANCE: usize = 4;
+
+/// Hints the processor to load the cache line of `x`; no effect on the program's result.
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 struct Grower<'a> {
     triangles: &'a [[u32; 3]],
     neighbours: &'a [[u32; 3]],
@@ -220,6 +238,50 @@ impl Grower<'_> {
         placed
     }
 
+    /// Hints the processor to load what crystal `g`'s next step reads ([`Grower::step`]), one level per `stage`:
+    /// 0 its next member's entry, 1 that member's neighbours, 2 their owners and corners, 3 the corners' positions and
+    /// memo entries, 4 the sector summaries of the corners the memo will not answer for. Each stage reads only what
+    /// the previous one requested (a few steps earlier). No effect on any result: the data read here is what the
+    /// step will read, since no other crystal's step changes `g`'s members, head or the mesh; owners may change in
+    /// between, which only makes a hint useless.
+    #[inline(always)]
+    fn prefetch_step(&self, g: u32, stage: usize) {
+        let gi = g as usize;
+        let Some(t) = self.crystals[gi].get(self.heads[gi]) else {
+            return;
+        };
+        if stage == 0 {
+            prefetch(t);
+            return;
+        }
+        let neighbours = &self.neighbours[*t as usize];
+        if stage == 1 {
+            prefetch(neighbours);
+            return;
+        }
+        for &n in neighbours {
+            if n == NO_NEIGHBOUR {
+                continue;
+            }
+            if stage == 2 {
+                prefetch(&self.owner[n as usize]);
+                prefetch(&self.triangles[n as usize]);
+                continue;
+            }
+            let low = self.lowest[gi];
+            for v in self.triangles[n as usize] {
+                if stage == 3 {
+                    prefetch(&self.memo.last[v as usize]);
+                    prefetch(&self.positions[v as usize]);
+                } else if v != low && self.memo.last[v as usize].0 != low {
+                    // The test that the memo will not answer.
+                    let (position, camera) = (self.positions[v as usize], self.positions[low as usize]);
+                    self.sight.regions.prefetch_vertex_test(v, position, camera);
+                }
+            }
+        }
+    }
+
     /// One growth step of crystal `g`; returns whether it may still grow.
     fn step(&mut self, g: u32, pass: u32) -> bool {
         let gi = g as usize;
@@ -260,6 +322,13 @@ impl Grower<'_> {
         while !active.is_empty() {
             let mut kept = 0;
             for i in 0..active.len() {
+                // Consecutive steps are far apart on the mesh (one per crystal), so each step's reads miss the
+                // cache; the steps of the next crystals are known, so their data is requested in stages ahead.
+                for stage in 0..PREFETCH_STAGES {
+                    if let Some(&ahead) = active.get(i + (PREFETCH_STAGES - stage) * PREFETCH_DISTANCE) {
+                        self.prefetch_step(ahead, stage);
+                    }
+                }
                 let g = active[i];
                 if self.step(g, pass) {
                     active[kept] = g;

@@ -11,6 +11,8 @@
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use crate::merge::Hierarchy;
 
 /// Lays out the triangles and sets every node's range. Returns the order (`order[k]` is the original index of the
@@ -24,15 +26,16 @@ pub(crate) fn lay_out(
     let total = groups.iter().map(Vec::len).sum::<usize>() + orphans.len();
     let mut order = Vec::with_capacity(total);
     let mut stack: Vec<(u32, usize)> = Vec::new();
+    // Triangles of each leaf in layout order (the leaves' ranges follow each other without gaps).
+    let mut leaf_lengths: Vec<usize> = Vec::with_capacity(groups.len() + 1);
     for &root in &hierarchy.roots {
         hierarchy.nodes[root as usize].range.start = order.len() as u32;
         stack.push((root, 0));
         while let Some(&mut (n, ref mut next)) = stack.last_mut() {
             let node = &hierarchy.nodes[n as usize];
             if node.is_leaf() {
-                let at = order.len();
                 order.extend_from_slice(&groups[n as usize]);
-                spatial_order(&mut order[at..], centroids);
+                leaf_lengths.push(groups[n as usize].len());
             }
             if let Some(&c) = node.children.get(*next) {
                 *next += 1;
@@ -46,7 +49,17 @@ pub(crate) fn lay_out(
     }
     let start = order.len() as u32;
     order.extend_from_slice(orphans);
-    spatial_order(&mut order[start as usize..], centroids);
+    leaf_lengths.push(orphans.len());
+    // The leaves' ranges and the always-visible tail tile the order; each is put in spatial order on its own, which
+    // depends only on its own triangles, so they can be ordered in parallel with the same result.
+    let mut parts: Vec<&mut [u32]> = Vec::with_capacity(leaf_lengths.len());
+    let mut rest = order.as_mut_slice();
+    for &len in &leaf_lengths {
+        let (part, tail) = rest.split_at_mut(len);
+        parts.push(part);
+        rest = tail;
+    }
+    parts.into_par_iter().for_each(|part| spatial_order(part, centroids));
     let end = order.len() as u32;
     (order, start..end)
 }

@@ -216,6 +216,31 @@ impl RegionTable {
         t > h.distance && camera.z - position.z < h.slope * t
     }
 
+    /// Hints the processor to load the sector horizon summary that [`RegionTable::vertex_hidden_from`] reads for
+    /// the same arguments, so that a caller that knows its next tests ahead can overlap their memory reads. No effect
+    /// on any result (and nothing is read for tables without vertex summaries).
+    #[inline]
+    pub fn prefetch_vertex_test(&self, vertex: u32, position: DVec3, camera: DVec3) {
+        let d = camera.truncate() - position.truncate();
+        if self.horizons.is_empty() || d == DVec2::ZERO {
+            return;
+        }
+        let sector = cull::sector_of_azimuth(self.sectors, cull::azimuth(d.x, d.y));
+        if let Some(h) = self
+            .horizons
+            .get(vertex as usize * self.sectors as usize + sector as usize)
+        {
+            #[cfg(target_arch = "x86_64")]
+            {
+                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+                // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>((h as *const SectorHorizon).cast()) };
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            let _ = h;
+        }
+    }
+
     /// Bytes of chain data held (vertices and tail slopes of non-empty regions), a measure of visibility storage.
     pub fn chain_bytes(&self) -> usize {
         self.regions.iter().flatten().map(|r| r.points().len() * 16 + 8).sum()
