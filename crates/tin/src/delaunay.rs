@@ -4,6 +4,7 @@
 //! equal heights are merged and counted; different heights are an error unless [`DedupePolicy::KeepHighest`].
 
 use glam::DVec3;
+use rayon::prelude::*;
 use spade::{DelaunayTriangulation, Point2, Triangulation};
 
 use crate::error::{Result, TinError};
@@ -55,12 +56,19 @@ pub fn triangulate(points: &[DVec3], policy: DedupePolicy) -> Result<(Tin, Delau
     // near the previous one, and deterministic. (spade's bulk loader re-inserts skipped points from a HashSet whose
     // order changes from process to process, which can change the triangulation of cocircular points.)
     let order = morton_order(points, &keep);
+    // The points in insertion order, gathered beforehand (in parallel) so that the insertion loop reads them in order.
+    let ordered: Vec<Point2<f64>> = order
+        .par_iter()
+        .map(|&k| {
+            let p = points[keep[k]];
+            Point2::new(p.x, p.y)
+        })
+        .collect();
     let mut dt = DelaunayTriangulation::<Point2<f64>>::with_capacity(keep.len(), keep.len() * 3, keep.len() * 2);
     // `vertex_of_slot[k]` is the position in `keep` of the k-th vertex spade created.
     let mut vertex_of_slot = Vec::with_capacity(keep.len());
-    for &k in &order {
-        let p = points[keep[k]];
-        let handle = dt.insert(Point2::new(p.x, p.y)).map_err(|e| TinError::Insertion {
+    for (&k, &p) in order.iter().zip(&ordered) {
+        let handle = dt.insert(p).map_err(|e| TinError::Insertion {
             index: keep[k],
             reason: e.to_string(),
         })?;
@@ -74,10 +82,13 @@ pub fn triangulate(points: &[DVec3], policy: DedupePolicy) -> Result<(Tin, Delau
         }
         vertex_of_slot.push(k as u32);
     }
+    drop((order, ordered));
     let triangles: Vec<[u32; 3]> = dt
         .inner_faces()
         .map(|f| f.vertices().map(|v| vertex_of_slot[v.fix().index()]))
         .collect();
+    // Memory is freed as soon as it is no longer needed, to keep the peak down.
+    drop(dt);
     if triangles.is_empty() {
         return Err(TinError::TooFewPoints("all points are collinear".into()));
     }
@@ -113,7 +124,8 @@ fn morton_order(points: &[DVec3], keep: &[usize]) -> Vec<usize> {
         spread(q.x as u32) | (spread(q.y as u32) << 1)
     };
     let mut order: Vec<usize> = (0..keep.len()).collect();
-    order.sort_by_cached_key(|&k| (key(keep[k]), k));
+    // The keys are distinct (ties broken by position), so the parallel sort's order is the only sorted one.
+    order.par_sort_by_cached_key(|&k| (key(keep[k]), k));
     order
 }
 
@@ -121,7 +133,8 @@ fn morton_order(points: &[DVec3], keep: &[usize]) -> Vec<usize> {
 fn dedupe(points: &[DVec3], policy: DedupePolicy) -> Result<(Vec<usize>, DelaunayReport)> {
     let key = |p: &DVec3| ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()); // + 0.0 folds -0.0 into 0.0
     let mut order: Vec<usize> = (0..points.len()).collect();
-    order.sort_unstable_by_key(|&i| (key(&points[i]), i));
+    // The keys are distinct (ties broken by index), so the parallel sort's order is the only sorted one.
+    order.par_sort_unstable_by_key(|&i| (key(&points[i]), i));
     let mut drop = vec![false; points.len()];
     let mut report = DelaunayReport::default();
     let mut start = 0;

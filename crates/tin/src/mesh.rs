@@ -1,6 +1,7 @@
 //! The [`Tin`] type: an f64 height-field triangle mesh with edge adjacency.
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 
 use crate::error::{Result, TinError};
 use crate::predicates::orient2d;
@@ -83,8 +84,8 @@ impl Tin {
             return Err(TinError::TooFewPoints("the mesh has no triangles".into()));
         }
         let n = positions.len();
-        let mut first_ccw = None;
-        for (t, tri) in triangles.iter().enumerate() {
+        // Whether triangle `t` is counter-clockwise, or the first thing wrong with it.
+        let orientation = |t: usize, tri: &[u32; 3]| -> Result<bool> {
             for &v in tri {
                 if v as usize >= n {
                     return Err(TinError::IndexOutOfRange {
@@ -103,14 +104,25 @@ impl Tin {
             if o == 0.0 || a == b || b == c || a == c {
                 return Err(TinError::DegenerateTriangle { triangle: t, a, b, c });
             }
-            let ccw = o > 0.0;
-            match first_ccw {
-                None => first_ccw = Some(ccw),
-                Some(f) if f != ccw => return Err(TinError::InconsistentOrientation { triangle: t }),
-                _ => {}
-            }
+            Ok(o > 0.0)
+        };
+        let first_ccw = orientation(0, &triangles[0])?;
+        // Every triangle is checked on its own (in parallel) and the error of the smallest index is reported, which
+        // is the one a scan in order would meet first.
+        let first_error =
+            triangles
+                .par_iter()
+                .enumerate()
+                .skip(1)
+                .find_map_first(|(t, tri)| match orientation(t, tri) {
+                    Ok(ccw) if ccw != first_ccw => Some(TinError::InconsistentOrientation { triangle: t }),
+                    Ok(_) => None,
+                    Err(e) => Some(e),
+                });
+        if let Some(e) = first_error {
+            return Err(e);
         }
-        if first_ccw == Some(false) {
+        if !first_ccw {
             for tri in &mut triangles {
                 tri.swap(1, 2);
             }
