@@ -46,7 +46,7 @@ use petgraph::graphmap::UnGraphMap;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use tin::{NO_NEIGHBOUR, Tin};
+use tin::{NO_NEIGHBOUR, Tin, prefetch};
 
 use crate::error::CrystalError;
 use crate::params::CrystalParams;
@@ -163,19 +163,6 @@ fn lowest_of(positions: &[DVec3], tri: [u32; 3]) -> u32 {
 const PREFETCH_STAGES: usize = 5;
 /// Steps between two prefetch stages of the same crystal.
 const PREFETCH_DISTANCE: usize = 4;
-
-/// Hints the processor to load the cache line of `x`; no effect on the program's result.
-#[inline(always)]
-fn prefetch<T>(x: &T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
-}
 
 struct Grower<'a> {
     triangles: &'a [[u32; 3]],

@@ -489,16 +489,11 @@ impl HullSet {
     /// effect on any result.
     #[inline(always)]
     pub fn prefetch(&self, hull: &HullRef) {
-        #[cfg(target_arch = "x86_64")]
         if !hull.big
             && let Some(p) = self.pool.get(hull.start as usize)
         {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>((p as *const Pt).cast()) };
+            tin::prefetch(p);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = hull;
     }
 
     #[inline]

@@ -49,6 +49,7 @@
 use std::cmp::Ordering;
 
 use glam::{DVec2, DVec3};
+use tin::prefetch;
 
 use crate::NO_HORIZON;
 use crate::candidate::{Candidate, CandidateId, keep_best};
@@ -363,19 +364,6 @@ const PREFETCH_AHEAD: usize = 16;
 /// How many levels of a later visit's paths (from the bottom) the main loop prefetches; the levels above are few
 /// nodes, which stay in cache.
 const PREFETCH_LEVELS: usize = 6;
-
-/// Hints the processor to load the cache line of `x`; no effect on the program's result.
-#[inline(always)]
-fn prefetch<T>(x: &T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
-}
 
 /// The smallest f32 not below `x` (infinite beyond the f32 range).
 #[inline]

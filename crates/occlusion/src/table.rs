@@ -230,14 +230,7 @@ impl RegionTable {
             .horizons
             .get(vertex as usize * self.sectors as usize + sector as usize)
         {
-            #[cfg(target_arch = "x86_64")]
-            {
-                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                // SAFETY: a prefetch has no architectural effect, and the address comes from a live reference.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>((h as *const SectorHorizon).cast()) };
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            let _ = h;
+            tin::prefetch(h);
         }
     }
 
