@@ -419,6 +419,56 @@ mod tests {
                 prop_assert_eq!(format!("{a:?}"), format!("{b:?}"));
             }
         }
+
+        /// Triangles are checked in parallel, yet the error is the one a scan in order meets first: on a grid of
+        /// some 20,000 triangles (several rayon splits) with a few planted faults (an index out of range, a
+        /// degenerate triangle, a flipped one) at random places.
+        #[test]
+        fn the_first_bad_triangle_is_reported(faults in prop::collection::vec((0usize..20_000, 0u8..3), 1..5), flip_first in any::<bool>()) {
+            let w = 101u32;
+            let positions: Vec<DVec3> =
+                (0..w * w).map(|i| DVec3::new(f64::from(i % w), f64::from(i / w), 0.0)).collect();
+            let mut tris = Vec::new();
+            for r in 0..w - 1 {
+                for c in 0..w - 1 {
+                    let v = r * w + c;
+                    tris.push([v, v + 1, v + w + 1]);
+                    tris.push([v, v + w + 1, v + w]);
+                }
+            }
+            if flip_first {
+                tris.swap(0, 1); // still counter-clockwise: only the order changes
+            }
+            for &(t, kind) in &faults {
+                let tri = &mut tris[t];
+                match kind {
+                    0 => tri[1] = w * w + 5,
+                    1 => tri[2] = tri[0],
+                    _ => tri.swap(1, 2),
+                }
+            }
+            // The reference: the checks of one triangle after another, as a scan in order makes them.
+            let expect = tris.iter().enumerate().find_map(|(t, tri)| {
+                if let Some(&v) = tri.iter().find(|&&v| v >= w * w) {
+                    return Some(format!("index {t} {v}"));
+                }
+                let [a, b, c] = tri.map(|v| positions[v as usize].truncate());
+                let o = orient2d(a, b, c);
+                if o == 0.0 || tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+                    return Some(format!("degenerate {t}"));
+                }
+                let [a0, b0, c0] = tris[0].map(|v| positions[v as usize].truncate());
+                ((o > 0.0) != (orient2d(a0, b0, c0) > 0.0)).then(|| format!("orientation {t}"))
+            });
+            let got = match Tin::from_parts(positions.clone(), tris.clone()) {
+                Err(TinError::IndexOutOfRange { triangle, vertex, .. }) => Some(format!("index {triangle} {vertex}")),
+                Err(TinError::DegenerateTriangle { triangle, .. }) => Some(format!("degenerate {triangle}")),
+                Err(TinError::InconsistentOrientation { triangle }) => Some(format!("orientation {triangle}")),
+                Err(e) => Some(format!("other: {e}")),
+                Ok(_) => None,
+            };
+            prop_assert_eq!(got, expect);
+        }
     }
 
     fn square() -> Tin {
