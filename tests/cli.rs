@@ -169,6 +169,21 @@ fn bad_input_gives_clear_errors() {
         ],
         "1024",
     );
+    // A grid whose samples are all void: the error names the file, whichever command reads it.
+    let void = write(
+        "void.asc",
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n\
+         -9999 -9999 -9999\n-9999 -9999 -9999\n-9999 -9999 -9999\n",
+    );
+    fails_with(
+        &["tin", s(&void), "-o", "x.obj", "--vertices", "10"],
+        "void.asc: cannot triangulate",
+    );
+    fails_with(
+        &["tin", s(&void), "-o", "x.obj", "--keep-grid"],
+        "void.asc: cannot triangulate",
+    );
+    fails_with(&["info", s(&void)], "void.asc: cannot triangulate");
     fails_with(&["cull", "/no/such.tch", "--eye", "0,0,0"], "such.tch");
     fails_with(
         &["cull", s(&mesh("jacksboro-2k.obj")), "--eye", "0,0,0"],

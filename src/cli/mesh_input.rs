@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use tin::{DedupePolicy, ObjImportOptions, ObjImportReport, Tin};
 
@@ -182,7 +182,8 @@ impl MeshArgs {
             max_vertices: Some(self.dem_vertices),
             max_error: None,
         };
-        let (tin, simplified) = tin::simplify(&grid, &simplify, Some(&progress))?;
+        let (tin, simplified) =
+            tin::simplify(&grid, &simplify, Some(&progress)).with_context(|| self.mesh.display().to_string())?;
         bar.finish_and_clear();
         out.warn(format!(
             "{} is a DEM grid ({} x {} samples, {} voids): simplified to {} vertices (max error {:.3} m); \

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
 use tin::{DemOptions, SimplifyOptions};
@@ -93,7 +93,7 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let target = args.vertices.unwrap_or(grid.rows * grid.cols - grid.voids());
     let bar = out.progress(target as u64, "simplifying");
     let progress = |v: usize| bar.set_position(v as u64);
-    let (tin, report) = tin::simplify(&grid, &opts, Some(&progress))?;
+    let (tin, report) = tin::simplify(&grid, &opts, Some(&progress)).with_context(|| args.dem.display().to_string())?;
     bar.finish_and_clear();
     files.add(&args.out, |w| tin::write_obj_to(&tin, w))?;
     files.commit()?;
@@ -131,7 +131,8 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
 /// `tincull tin --keep-grid`: every valid sample, Delaunay-triangulated.
 fn keep_grid(args: &TinArgs, grid: &tin::Grid, mut files: Outputs, start: Instant, out: Output) -> Result<()> {
     let spinner = out.spinner("triangulating");
-    let (tin, _) = tin::triangulate(&grid.points(), tin::DedupePolicy::Reject)?;
+    let (tin, _) =
+        tin::triangulate(&grid.points(), tin::DedupePolicy::Reject).with_context(|| args.dem.display().to_string())?;
     spinner.finish_and_clear();
     files.add(&args.out, |w| tin::write_obj_to(&tin, w))?;
     files.commit()?;

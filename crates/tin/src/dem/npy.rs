@@ -171,7 +171,7 @@ fn placement(path: &Path, rows: usize, cols: usize, opts: &DemOptions) -> Result
                 )
             } else {
                 format!(
-                    "no grid spacing: give one, or put a JSON sidecar {} with spacing_x_m and spacing_y_m next to it",
+                    "no grid spacing: put a JSON sidecar {} with spacing_x_m and spacing_y_m (metres) next to it, or give `tincull tin` `--spacing dx,dy`",
                     sidecar_path.display()
                 )
             },
