@@ -42,7 +42,7 @@ pub struct TinArgs {
 /// How to read a DEM grid: the options of every command that reads one (`tin`, `tiles plan`).
 #[derive(Clone, Copy, Debug, Args)]
 pub struct DemArgs {
-    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar; required for .png).
+    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar or a GeoTIFF's georeference; required for .png and a plain TIFF).
     #[arg(long, value_parser = parse_spacing)]
     pub spacing: Option<(f64, f64)>,
     /// Multiply heights by this (for .png: metres per grey level).

@@ -356,7 +356,7 @@ fn clear_errors() {
         ..Spec::default()
     };
     let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &no_keys)));
-    assert!(msg.contains("GeoKeyDirectory"), "{msg}");
+    assert!(msg.contains("GeoKeyDirectory") && msg.contains("--spacing"), "{msg}");
     let feet: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9002];
     let spec = Spec {
         keys: Some(&feet),
@@ -410,4 +410,31 @@ fn clear_errors() {
     for cut in [8, good.len() / 2, good.len() - 1] {
         assert!(parse(&good[..cut]).is_err(), "cut at {cut}");
     }
+}
+
+/// A plain TIFF (no georeference) reads like a PNG height map once a spacing is given: metres, the south-western
+/// sample at (0, 0), row 0 north.
+#[test]
+fn a_plain_tiff_reads_with_a_given_spacing() {
+    let data: Vec<f32> = (0..12).map(|i| i as f32 * 1.5).collect();
+    let no_keys = Spec {
+        keys: None,
+        scale: None,
+        tie: None,
+        ..Spec::default()
+    };
+    let bytes = write_tif!(colortype::Gray32Float, 4, 3, &data, &no_keys);
+    let opts = DemOptions {
+        spacing: Some((10.0, 20.0)),
+        ..DemOptions::default()
+    };
+    let (g, info) = parse_geotiff(&bytes, Path::new("plain.tif"), &opts).expect("reads with a spacing");
+    assert_eq!((g.rows, g.cols, g.dx, g.dy), (3, 4, 10.0, 20.0));
+    assert_eq!(
+        g.origin,
+        DVec2::new(0.0, 40.0),
+        "north-west sample centre; south-west at (0, 0)"
+    );
+    assert_eq!(g.z, data.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
+    assert!(info.crs.contains("plain TIFF"), "{}", info.crs);
 }

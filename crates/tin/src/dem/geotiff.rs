@@ -23,7 +23,9 @@
 //!   column (column 0 at x = 0), y is `latitude · 111,320` (the southern row at `south · 111,320`). A spacing within
 //!   10⁻⁹ (relative) of 1/n degree for a whole n is taken as exactly 1/n degree, because writers store 3″ as
 //!   0.000833…; so a GeoTIFF written from an `.hgt` tile reads to exactly the tile's grid.
-//! - No GeoKeyDirectory, a geocentric or user-defined model, radians or grads, a rotated or sheared transformation,
+//! - No GeoKeyDirectory (a plain TIFF): read like a 16-bit PNG height map ([`super::png`]) when
+//!   [`DemOptions::spacing`] is given (metres, the south-western sample at (0, 0)), an error otherwise.
+//! - A geocentric or user-defined model, radians or grads, a rotated or sheared transformation,
 //!   several tie points, or a south-up raster are errors naming the file and the tag.
 //!
 //! [`DemOptions::spacing`] overrides the spacing (the origin stays where the georeference puts it).
@@ -302,7 +304,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         Ok(None) => None,
         Err(e) => return Err(tiff_err("tag GDAL_NODATA (42113)", e)),
     };
-    let georef = read_georef(&mut dec, path)?;
+    let georef = read_georef(&mut dec, path, opts.spacing, rows)?;
 
     let band = match (spp, opts.band) {
         (1, None | Some(1)) => 1,
@@ -488,17 +490,37 @@ struct Georef {
     tie_world: (f64, f64),
 }
 
-/// Reads the GeoKeys, the pixel scale and tie point (or the transformation).
-fn read_georef<R: Read + Seek>(dec: &mut Decoder<R>, path: &Path) -> Result<Georef> {
+/// Reads the GeoKeys, the pixel scale and tie point (or the transformation). A plain TIFF (no GeoKeyDirectory)
+/// is read like a PNG height map when a spacing is given: metres, the south-western sample at (0, 0).
+fn read_georef<R: Read + Seek>(
+    dec: &mut Decoder<R>,
+    path: &Path,
+    spacing: Option<(f64, f64)>,
+    rows: usize,
+) -> Result<Georef> {
     let err = |m: String| TinError::format(path, m);
     let dir = match dec.find_tag(Tag::GeoKeyDirectoryTag) {
         Ok(Some(v)) => v
             .into_u16_vec()
             .map_err(|e| err(format!("tag GeoKeyDirectory (34735): {e}")))?,
         Ok(None) => {
-            return Err(err(
-                "no GeoKeyDirectory tag (34735): a plain TIFF has no georeference; write it as a GeoTIFF".into(),
-            ));
+            let Some((dx, dy)) = spacing else {
+                return Err(err(
+                    "no GeoKeyDirectory tag (34735): a plain TIFF has no georeference; give the \
+                     sample spacing (`--spacing dx,dy` in metres: `tincull tin`, `tiles plan`) or write it as a GeoTIFF"
+                        .into(),
+                ));
+            };
+            return Ok(Georef {
+                kind: CrsKind::Projected,
+                epsg: None,
+                description: "none (a plain TIFF: the given spacing, the south-western sample at (0, 0))".into(),
+                raster_type: RasterType::PixelIsPoint,
+                angular_unit_deg: 1.0,
+                scale: (dx, dy),
+                tie_raster: (0.0, 0.0),
+                tie_world: (0.0, rows.saturating_sub(1) as f64 * dy),
+            });
         }
         Err(e) => return Err(err(format!("tag GeoKeyDirectory (34735): {e}"))),
     };
