@@ -347,6 +347,42 @@ fn build_is_deterministic_across_threads_and_seeds() {
     assert!(build("c.tch", "4", "2") != one, "another seed should change the groups");
 }
 
+/// Byte-identical outputs at any thread count, on the 10k mesh (large enough for the parallel sorts, checks and
+/// orders of `tin` and `crystal` to split their work) and through the DEM paths (simplification, the whole grid),
+/// at 1, 3 and 5 threads on a 2-core machine (more threads than cores split the work differently again).
+#[test]
+fn outputs_are_identical_at_any_thread_count() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let dem = s(&shared_dem("N43W123.hgt")).to_string();
+    let run_with = |threads: &str, args: &[&str], out: &str| {
+        let p = dir.path().join(format!("{threads}-{out}"));
+        let mut all: Vec<&str> = args.to_vec();
+        all.extend(["-o", s(&p), "-q"]);
+        let o = bin()
+            .args(&all)
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{all:?}: {}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(p).expect("written")
+    };
+    let j10k = s(&mesh("jacksboro-10k.obj")).to_string();
+    let cases: [(&[&str], &str); 3] = [
+        (&["build", &j10k, "--rng-seed", "7"], "b.tch"),
+        (&["tin", &dem, "--vertices", "30000"], "t.obj"),
+        (&["tin", &dem, "--keep-grid"], "g.obj"),
+    ];
+    for (args, out) in cases {
+        let one = run_with("1", args, out);
+        for threads in ["3", "5"] {
+            assert!(
+                run_with(threads, args, out) == one,
+                "{args:?}: 1 vs {threads} threads differ"
+            );
+        }
+    }
+}
+
 #[test]
 fn parameters_come_from_toml_and_the_command_line_wins() {
     let dir = tempfile::tempdir().expect("tempdir");
