@@ -1,4 +1,4 @@
-//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars (files: [`super::files`]).
+//! Shared output plumbing of the CLI: JSON on stdout, human text, progress bars (files: `super::files`).
 
 use std::io::Write;
 use std::time::Duration;

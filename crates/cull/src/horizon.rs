@@ -45,9 +45,9 @@
 //!
 //! A TIN edge lowered by `μ` is an occluder too (the terrain along an edge is exactly the segment between its end
 //! vertices): a degenerate triangle `A C` whose image is the segment of its projected ends, with `top` that segment
-//! (linear, so concave) and no middle vertex ([`Horizon::write_segment`]). Everything below holds for it unchanged.
+//! (linear, so concave) and no middle vertex (`Horizon::write_segment`). Everything below holds for it unchanged.
 //!
-//! A *chain* of lowered TIN edges is an occluder too, taken as a whole ([`Horizon::write_flat`]): a set `C` of edges
+//! A *chain* of lowered TIN edges is an occluder too, taken as a whole (`Horizon::write_flat`): a set `C` of edges
 //! that is connected (as a graph over their end vertices) and whose vertices all have `f > 0` in face `k`. Every point of
 //! `C` then has `f > 0` (the half-space is convex), `u` is continuous on `C`, and `C` is connected, so the `u` of its
 //! points fill the interval `[u_min, u_max]` spanned by its vertices; and every point of an edge has, by (P1), a `v` at
@@ -77,7 +77,7 @@
 //! `[min u, max u]` of the vertices and its `v` is at most their largest `v`. Hence the triangle is hidden in face `k`
 //! if that largest `v` is below `H_j` in every column `j` meeting `[min u, max u]`; this is tried first (no division),
 //! and when the vertices lie in one column it is all that `top` could tell, so the triangle is then left visible. For
-//! a set of triangles at once (a patch, [`Horizon::vertices_hidden`]) take the range and the maximum over all their
+//! a set of triangles at once (a patch, `Horizon::vertices_hidden`) take the range and the maximum over all their
 //! vertices: if the union of the vertices' wedges is one face or two adjacent ones and every vertex has `f > 0` in
 //! each of them, every triangle of the set meets the conditions above with its own (smaller) range and maximum, so
 //! the set is hidden when the bound over all vertices is below the horizon in every column of each face. A vertex

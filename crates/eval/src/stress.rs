@@ -17,7 +17,7 @@
 //!
 //! Choices:
 //!
-//! - Viewpoints: the six classes of [`truth::viewpoints`] with `viewpoints` eyes each, seed 1; the same eyes
+//! - Viewpoints: the six classes of [`truth::viewpoints()`] with `viewpoints` eyes each, seed 1; the same eyes
 //!   (translated) for the offset cases, so they compare drawn sets viewpoint by viewpoint with the baseline
 //!   (`drawn_diff`: the number of (viewpoint, triangle) pairs whose drawn flag differs, triangles identified by
 //!   their original index).
