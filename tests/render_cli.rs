@@ -54,6 +54,17 @@ fn render_map_orbit_and_eye_compare() {
     }
     let j: serde_json::Value = serde_json::from_str(ok(&out).trim()).unwrap();
     assert_eq!(j["draws"], 1);
+    // On a headless machine (no Wayland session) a render prints nothing that reads like an error: Mesa's
+    // device-select layer would make libwayland complain about XDG_RUNTIME_DIR (see `main.rs`).
+    let headless = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["render", p(&tch), "--out", p(&map), "--size", "200x150", "-q"])
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .expect("run tincull");
+    ok(&headless);
+    let err = String::from_utf8_lossy(&headless.stderr);
+    assert!(!err.contains("error"), "a successful headless render printed:\n{err}");
     let img = viewer::read_png(&map).unwrap();
     assert_eq!((img.width, img.height), (200, 150));
     let grey = img.count(viewer::palette::to_rgba8([0.0; 3]));
