@@ -213,6 +213,10 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     let mut out = out;
     let params = args.params.resolve(args.config.as_deref())?;
     let mut files = Outputs::new();
+    files.input(&args.mesh.mesh)?;
+    if let Some(config) = &args.config {
+        files.input(config)?;
+    }
     files.check_or_stdout(&args.out, &mut out)?;
     if let Some(path) = &args.export_json {
         files.check(path)?;

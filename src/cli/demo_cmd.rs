@@ -55,6 +55,7 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
         .unwrap_or_else(|| "terrain".into());
     let path = |suffix: &str| args.out_dir.join(format!("{stem}{suffix}"));
     let mut files = Outputs::new();
+    files.input(&mesh)?;
     files.check(&path(".tch"))?;
     files.check(&path(".json"))?;
     files.check_grouped_obj(&path("-groups.obj"))?;

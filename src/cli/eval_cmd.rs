@@ -83,6 +83,10 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     let safe = args.safe.params()?;
     let eyes = args.eyes.as_deref().map(read_eyes).transpose()?;
     let mut files = Outputs::new();
+    files.input(&args.hierarchy)?;
+    if let Some(eyes) = &args.eyes {
+        files.input(eyes)?;
+    }
     check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref())?;
     let h = Hierarchy::load(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;

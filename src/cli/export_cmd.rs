@@ -37,6 +37,7 @@ pub struct ExportArgs {
 pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     let mut out = out;
     let mut files = Outputs::new();
+    files.input(&args.hierarchy)?;
     if let Some(path) = &args.export_json {
         files.check_or_stdout(path, &mut out)?;
     }

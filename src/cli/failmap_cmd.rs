@@ -60,6 +60,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         "nothing to write: give -o MAP.png and/or --csv MAP.csv"
     );
     let mut files = Outputs::new();
+    files.input(&args.hierarchy)?;
     for path in args.out.iter().chain(&args.csv) {
         files.check(path)?;
     }

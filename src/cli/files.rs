@@ -27,6 +27,11 @@ impl Outputs {
         Outputs::default()
     }
 
+    /// Declares a file the command reads: no output may be that file (checked whichever is declared first).
+    pub fn input(&mut self, path: &Path) -> Result<()> {
+        Ok(self.batch.input(path)?)
+    }
+
     /// Checks a file output (before the work).
     pub fn check(&mut self, path: &Path) -> Result<()> {
         Ok(self.batch.check(path)?)

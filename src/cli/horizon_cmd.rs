@@ -71,6 +71,7 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         anyhow::bail!("--undersampling radius must be positive and finite, got {r}");
     }
     let mut files = Outputs::new();
+    files.input(&args.mesh.mesh)?;
     if let Some(path) = &args.export_json {
         files.check(path)?;
     }

@@ -125,6 +125,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         ..cull::SafeParams::default()
     };
     let mut files = Outputs::new();
+    files.input(&args.hierarchy)?;
     if let Some(path) = &args.out {
         files.check(path)?;
     }

@@ -187,6 +187,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     };
     viewer::validate(&terrain, &options)?;
     let mut files = Outputs::new();
+    files.input(&args.input)?;
     files.check(&args.out)?;
     if args.compare {
         files.check(&diff_path(&args.out))?;

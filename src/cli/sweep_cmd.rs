@@ -136,8 +136,11 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     );
     anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
 
-    // Refuse an output that cannot be written before any work (it is rewritten after each combination).
-    outfile::check_file(&args.out)?;
+    // Refuse an output that cannot be written, or that is the mesh, before any work (it is rewritten after each
+    // combination).
+    let mut check = outfile::Batch::new();
+    check.input(&args.mesh.mesh)?;
+    check.check(&args.out)?;
     let mut table = match std::fs::read_to_string(&args.out) {
         Ok(text) => SweepTable::parse(&text).with_context(|| format!("{}", args.out.display()))?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => SweepTable::default(),

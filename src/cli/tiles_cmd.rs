@@ -125,6 +125,10 @@ pub fn run(args: &TilesArgs) -> Result<()> {
 
 fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
+    files.input(&args.dem)?;
+    if let Some(config) = &args.config {
+        files.input(config)?;
+    }
     files.check(&args.out)?;
     let params = args.params.resolve(args.config.as_deref())?;
     let options = PlanOptions {
@@ -343,6 +347,10 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     let mut out = out;
     let plan = Plan::load(&args.plan)?;
     let mut files = Outputs::new();
+    files.input(&args.plan)?;
+    for t in &plan.tiles {
+        files.input(&Plan::resolve(&args.plan, &t.output))?;
+    }
     files.check_or_stdout(&args.out, &mut out)?;
     let start = Instant::now();
     // Every tile must be built before any is read.

@@ -77,6 +77,7 @@ fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
 /// Runs `tincull tin`.
 pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
+    files.input(&args.dem)?;
     files.check(&args.out)?;
     let start = Instant::now();
     let dem_opts = args.read.options();

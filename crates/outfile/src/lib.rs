@@ -24,6 +24,10 @@
 //!    files this batch had newly created are removed again; files it replaced cannot be restored (their old content
 //!    is gone), so a batch's targets should be checked first, which makes that case a race with another process.
 //!    Two targets of one batch that resolve to the same file are refused.
+//! 6. **Inputs are never outputs.** The files a command reads, declared with [`Batch::input`], cannot be its
+//!    outputs: a target that is the same file as an input (the same path once links are followed, or, on Unix, the
+//!    same device and inode, which also catches hard links) is refused before anything is written, whichever of the
+//!    two was declared first.
 #![warn(missing_docs)]
 
 use std::fmt;
@@ -57,6 +61,8 @@ pub enum ErrorKind {
     StdoutNotAllowed,
     /// Two outputs of one command are the same file.
     SameFile(PathBuf),
+    /// The output is the same file as one of the command's inputs (the input as given).
+    IsInput(PathBuf),
     /// An I/O error (creating, writing, syncing or renaming).
     Io(io::Error),
 }
@@ -81,6 +87,11 @@ impl fmt::Display for Error {
                     other.display()
                 )
             }
+            ErrorKind::IsInput(input) => write!(
+                f,
+                "{p}: the same file as the input {}; writing it would destroy the input, give another output",
+                input.display()
+            ),
             ErrorKind::Io(e) => write!(f, "{p}: {e}"),
         }
     }
@@ -320,6 +331,8 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
 pub struct Batch {
     targets: Vec<Target>,
     staged: Vec<Staged>,
+    /// Files the command reads: `(path as given, its identity)`.
+    inputs: Vec<(PathBuf, FileId)>,
 }
 
 impl Batch {
@@ -328,8 +341,29 @@ impl Batch {
         Batch::default()
     }
 
+    /// Declares `path` an input of the command (rule 6): no output of this batch may be the same file. An input
+    /// that does not exist is nothing to protect (reading it will fail); `-` (standard input) is ignored. Refused
+    /// when an output checked before is that file.
+    pub fn input(&mut self, path: &Path) -> Result<()> {
+        if path == Path::new("-") {
+            return Ok(());
+        }
+        let Some(id) = FileId::of_existing(path) else {
+            return Ok(());
+        };
+        for t in self.targets.iter().chain(self.staged.iter().map(|s| &s.target)) {
+            if let Target::File { given, resolved, .. } = t
+                && FileId::of_target(resolved) == id
+            {
+                return Err(err(given, ErrorKind::IsInput(path.to_path_buf())));
+            }
+        }
+        self.inputs.push((path.to_path_buf(), id));
+        Ok(())
+    }
+
     /// Checks `path` as an output of this batch: writable, a file (standard output cannot take part in a batch),
-    /// and not the same file as an output checked before.
+    /// not the same file as an output checked before, nor as an input ([`Batch::input`]).
     pub fn check(&mut self, path: &Path) -> Result<()> {
         let target = check_file(path)?;
         let Target::File { resolved, .. } = &target else {
@@ -342,6 +376,10 @@ impl Batch {
             {
                 return Err(err(path, ErrorKind::SameFile(given.clone())));
             }
+        }
+        let id = FileId::of_target(resolved);
+        if let Some((input, _)) = self.inputs.iter().find(|(_, i)| *i == id) {
+            return Err(err(path, ErrorKind::IsInput(input.clone())));
         }
         self.targets.push(target);
         Ok(())
@@ -378,6 +416,37 @@ impl Batch {
             created.extend(new);
         }
         Ok(())
+    }
+}
+
+/// What makes two paths the same file: on Unix the device and inode of an existing file (so hard links match too),
+/// else (and for a file that does not exist yet) the canonical path.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum FileId {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    Path(PathBuf),
+}
+
+impl FileId {
+    /// The identity of an existing file, following links; `None` when it cannot be read.
+    #[cfg(unix)]
+    fn of_existing(path: &Path) -> Option<FileId> {
+        use std::os::unix::fs::MetadataExt;
+        let meta = fs::metadata(path).ok()?;
+        Some(FileId::Inode(meta.dev(), meta.ino()))
+    }
+
+    /// The identity of an existing file, following links; `None` when it cannot be read.
+    #[cfg(not(unix))]
+    fn of_existing(path: &Path) -> Option<FileId> {
+        fs::metadata(path).ok()?;
+        fs::canonicalize(path).ok().map(FileId::Path)
+    }
+
+    /// The identity of an output target (resolved; it may not exist yet).
+    fn of_target(resolved: &Path) -> FileId {
+        FileId::of_existing(resolved).unwrap_or_else(|| FileId::Path(canonical(resolved)))
     }
 }
 

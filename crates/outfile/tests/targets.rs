@@ -4,6 +4,7 @@
 //! for one file refused).
 
 use std::fs;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -247,4 +248,37 @@ fn two_names_for_one_file_are_refused() {
     batch.check(&a).expect("a");
     let e = batch.check(&b).expect_err("the same file");
     assert!(matches!(e.kind, ErrorKind::SameFile(_)), "{e}");
+}
+
+#[test]
+fn an_input_is_never_an_output() {
+    let dir = tmp();
+    let input = dir.path().join("terrain.obj");
+    fs::write(&input, b"v 0 0 0\n").expect("input");
+    let link = dir.path().join("link.obj");
+    std::os::unix::fs::symlink(&input, &link).expect("symlink");
+    let hard = dir.path().join("hard.obj");
+    fs::hard_link(&input, &hard).expect("hard link");
+    // Declared first, then the same file by its own name, through a link, through a hard link, by another spelling.
+    for output in [input.clone(), link.clone(), hard.clone(), dir.path().join(".").join("terrain.obj")] {
+        let mut batch = Batch::new();
+        batch.input(&input).expect("input");
+        let e = batch.check(&output).expect_err("the input");
+        assert!(matches!(e.kind, ErrorKind::IsInput(_)), "{}: {e}", output.display());
+        assert!(e.to_string().contains("terrain.obj"), "{e}");
+    }
+    // Declared after the output.
+    let mut batch = Batch::new();
+    batch.check(&link).expect("not an input yet");
+    let e = batch.input(&input).expect_err("already an output");
+    assert!(matches!(e.kind, ErrorKind::IsInput(_)), "{e}");
+    // Other files, a missing input and standard input are fine.
+    let mut batch = Batch::new();
+    batch.input(&input).expect("input");
+    batch.input(&dir.path().join("missing.obj")).expect("a missing input protects nothing");
+    batch.input(Path::new("-")).expect("standard input");
+    batch.check(&dir.path().join("out.tch")).expect("another file");
+    batch.add(&dir.path().join("out.tch"), |w| w.write_all(b"x")).expect("add");
+    batch.commit().expect("commit");
+    assert_eq!(fs::read(&input).expect("read"), b"v 0 0 0\n");
 }
