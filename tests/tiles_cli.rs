@@ -42,6 +42,41 @@ fn planned(dir: &std::path::Path) -> std::path::PathBuf {
     plan
 }
 
+/// The tiles' output files named by a plan, resolved.
+fn tile_outputs(plan: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let text = std::fs::read_to_string(plan).expect("plan");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("plan JSON");
+    let dir = plan.parent().expect("folder");
+    v["tiles"]
+        .as_array()
+        .expect("tiles")
+        .iter()
+        .map(|t| dir.join(t["output"].as_str().expect("output")))
+        .collect()
+}
+
+#[test]
+fn tiles_of_an_earlier_plan_are_never_merged() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = planned(dir.path());
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let before = tile_outputs(&plan);
+    // Planning again to the same file, the same grid with other options: the built tiles are not this plan's.
+    ok(&["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(&plan), "--tile", "20", "--halo", "2", "-q"]);
+    let after = tile_outputs(&plan);
+    assert_eq!(after.len(), before.len());
+    assert!(before.iter().zip(&after).all(|(a, b)| a != b), "other names");
+    fails_with(
+        &["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch"))],
+        "tile 0 has not been built",
+    );
+    // And the same plan again names the same files: what was built stays usable.
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    ok(&["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(&plan), "--tile", "20", "--halo", "2", "-q"]);
+    assert_eq!(tile_outputs(&plan), after);
+    ok(&["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch")), "-q"]);
+}
+
 #[test]
 fn all_tiles_or_one_by_one_merge_to_the_same_file() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -97,12 +132,14 @@ fn errors_name_what_is_wrong() {
         "tile 0 has not been built",
     );
     // A tile's file that is not a hierarchy: the merge names the tile and its file, and writes nothing.
-    let tiles_dir = dir.path().join("plan.tiles");
-    for i in 0..9 {
-        std::fs::write(tiles_dir.join(format!("tile-{i:05}.tch")), b"not a hierarchy").expect("write");
+    let outputs = tile_outputs(&plan);
+    for path in &outputs {
+        std::fs::write(path, b"not a hierarchy").expect("write");
     }
     let merged = dir.path().join("m.tch");
-    fails_with(&["tiles", "merge", s(&plan), "-o", s(&merged)], "tile-00000.tch");
+    let first = outputs[0].file_name().expect("name").to_string_lossy().into_owned();
+    assert!(first.starts_with("tile-00000-") && first.ends_with(".tch"), "{first}");
+    fails_with(&["tiles", "merge", s(&plan), "-o", s(&merged)], &first);
     assert!(!merged.exists(), "a failed merge leaves no file");
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
     fails_with(&["tiles", "build", s(&plan)], "--tile");

@@ -151,7 +151,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }
     let dem = args.read.options();
     let bar = out.progress(0, "reading DEM rows");
-    let (plan, field) = tiles::make_plan(&source, dem, options, &tiles_dir, |done, rows| {
+    let (mut plan, field) = tiles::make_plan(&source, dem, options, &tiles_dir, |done, rows| {
         bar.set_length(rows as u64);
         bar.set_position(done as u64);
     })?;
@@ -160,13 +160,16 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let dir = Plan::resolve(&args.out, &plan.tiles_dir);
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut far_points = 0;
+    let mut digests = Vec::with_capacity(plan.tiles.len());
     for spec in &plan.tiles {
         if let Some(far) = &spec.far {
             let (bytes, count) = plan.far_file(&field, spec)?;
             files.add_bytes(&Plan::resolve(&args.out, far), &bytes)?;
+            digests.push(tiles::plan::file_digest(&bytes));
             far_points = far_points.max(count);
         }
     }
+    plan.seal(&digests)?;
     files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
     files.commit()?;
     let (rows, cols) = plan
@@ -215,7 +218,7 @@ fn plan_mesh(
         band: None,
     };
     let (tin, _) = mesh.load(out)?;
-    let (plan, parts) = tiles::make_mesh_plan(&tin, source, options, tiles_dir)?;
+    let (mut plan, parts) = tiles::make_mesh_plan(&tin, source, options, tiles_dir)?;
     let dir = Plan::resolve(&args.out, tiles_dir);
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let paths: Vec<PathBuf> = plan
@@ -226,9 +229,13 @@ fn plan_mesh(
     for p in &paths {
         files.check(p)?;
     }
+    let mut digests = Vec::with_capacity(parts.len());
     for (p, part) in paths.iter().zip(&parts) {
-        files.add_bytes(p, &part.to_bytes()?)?;
+        let bytes = part.to_bytes()?;
+        files.add_bytes(p, &bytes)?;
+        digests.push(tiles::plan::file_digest(&bytes));
     }
+    plan.seal(&digests)?;
     files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
     files.commit()?;
     let (rows, cols) = plan

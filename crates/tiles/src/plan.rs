@@ -121,6 +121,14 @@ impl PlanOptions {
     }
 }
 
+/// The digest of one far-field or part file, for [`Plan::seal`].
+pub fn file_digest(bytes: &[u8]) -> u32 {
+    let mut hasher = crc32fast::Hasher::new();
+    hasher.update(&(bytes.len() as u64).to_le_bytes());
+    hasher.update(bytes);
+    hasher.finalize()
+}
+
 /// A tiled build's plan (see the module docs).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
@@ -285,6 +293,28 @@ impl Plan {
     /// The plan as pretty JSON.
     pub fn to_json(&self) -> Result<String, TilesError> {
         serde_json::to_string_pretty(self).map_err(|e| TilesError::Parameter(format!("cannot write the plan: {e}")))
+    }
+
+    /// Names every tile's output after a digest (CRC-32) of the plan and of the far-field or part files written
+    /// beside it (`files`: each one's [`file_digest`], in tile order): `tile-00007-1a2b3c4d.tch`. A tile built from an
+    /// earlier plan written to the same place (another terrain, other options) then has another name, so
+    /// [`crate::merge`] never takes it for a tile of this plan: it says the tile has not been built. Deterministic:
+    /// the same plan and files give the same names. (A DEM changed in place under the same name, with the same grid
+    /// and far field, is not seen.)
+    pub fn seal(&mut self, files: &[u32]) -> Result<(), TilesError> {
+        for t in &mut self.tiles {
+            t.output = self.tiles_dir.join(format!("tile-{:05}.tch", t.index));
+        }
+        let mut hasher = crc32fast::Hasher::new();
+        hasher.update(self.to_json()?.as_bytes());
+        for f in files {
+            hasher.update(&f.to_le_bytes());
+        }
+        let digest = hasher.finalize();
+        for t in &mut self.tiles {
+            t.output = self.tiles_dir.join(format!("tile-{:05}-{digest:08x}.tch", t.index));
+        }
+        Ok(())
     }
 
     /// A path of the plan (the source, a tile's output) resolved against the plan file's folder.
