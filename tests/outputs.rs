@@ -174,7 +174,10 @@ fn an_output_never_overwrites_an_input() {
     let link = dir.path().join("link.obj");
     std::os::unix::fs::symlink(&obj, &link).expect("symlink");
     // The mesh as the build's own output, as an export beside it, and through a link: refused before the build.
-    fails_with(&["build", p(&obj), "-o", p(&obj)], &["m.obj", "the same file as the input"]);
+    fails_with(
+        &["build", p(&obj), "-o", p(&obj)],
+        &["m.obj", "the same file as the input"],
+    );
     fails_with(
         &["build", p(&obj), "-o", p(&tch), "--export-obj", p(&link)],
         &["link.obj", "the same file as the input", "m.obj"],
@@ -184,7 +187,10 @@ fn an_output_never_overwrites_an_input() {
     ok(&["build", "-q", p(&obj), "-o", p(&tch)]);
     let built = fs::read(&tch).expect("read");
     // A hierarchy as its own export, evaluation or PVS; a DEM as its own TIN.
-    fails_with(&["export", p(&tch), "--export-json", p(&tch)], &["the same file as the input"]);
+    fails_with(
+        &["export", p(&tch), "--export-json", p(&tch)],
+        &["the same file as the input"],
+    );
     fails_with(
         &["eval", p(&tch), "--viewpoints", "1", "--csv", p(&tch)],
         &["the same file as the input"],
@@ -194,8 +200,15 @@ fn an_output_never_overwrites_an_input() {
         &["the same file as the input"],
     );
     let asc = dir.path().join("g.asc");
-    fs::write(&asc, "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n").expect("asc");
-    fails_with(&["tin", p(&asc), "--keep-grid", "-o", p(&asc)], &["g.asc", "the same file as the input"]);
+    fs::write(
+        &asc,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("asc");
+    fails_with(
+        &["tin", p(&asc), "--keep-grid", "-o", p(&asc)],
+        &["g.asc", "the same file as the input"],
+    );
     fails_with(&["sweep", p(&obj), "-o", p(&obj)], &["the same file as the input"]);
     assert_eq!(fs::read(&tch).expect("read"), built);
     assert_eq!(fs::read(&obj).expect("read"), original);

@@ -105,7 +105,9 @@
 //!   for `u` within `[−1, 1]` and the edge; it is moved by `REL` times that sum;
 //! - column indices: `u` values carry a relative error below `3ε`; full and partial covers are shrunk and occludee
 //!   spans (of a triangle, or of a set of vertices for the vertex bound) widened by `REL (1 + |u|)` before they are
-//!   turned into columns; column boundaries `a_j` are exact dyadic numbers;
+//!   turned into columns; column boundaries `a_j` are exact dyadic numbers; a span's ends are turned into column
+//!   indices by a floor or ceiling that saturates (a vertex almost beside the camera, `f` near 0, has `|u|` up to
+//!   about 1e308) and then clamped to the face, so a span always covers every column its `u` interval meets;
 //! - the vertex bound compares the vertices' raised values `hi` themselves (each above the exact `v` of the raised
 //!   vertex, see above) with `H_j`: no further arithmetic;
 //! - disks: `f_lo` is decreased and `f_hi` increased by `REL` relative; the tangent values `u±` are computed from a
@@ -908,18 +910,19 @@ pub(crate) struct DiskSpan {
     faces: [(u32, u32, f64); FACES],
 }
 
-/// `⌊x⌋` for column arithmetic (a NaN or out-of-range `x` saturates; callers clamp).
+/// `⌊x⌋` for column arithmetic: an `x` beyond the range of `isize` saturates to its end (a vertex almost beside the
+/// camera has `|u|` up to about 1e308), a NaN gives 0; callers clamp.
 #[inline(always)]
 fn floor(x: f64) -> isize {
     let t = x as isize;
-    if (t as f64) > x { t - 1 } else { t }
+    if (t as f64) > x { t.saturating_sub(1) } else { t }
 }
 
 /// `⌈x⌉`, likewise.
 #[inline(always)]
 fn ceil(x: f64) -> isize {
     let t = x as isize;
-    if (t as f64) < x { t + 1 } else { t }
+    if (t as f64) < x { t.saturating_add(1) } else { t }
 }
 
 /// The wedges (as face bits) that may contain the projected vertex: every face where `|u| ≤ 1` up to the rounding
@@ -1027,6 +1030,31 @@ mod tests {
         // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
         assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu, false));
         assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0, false));
+    }
+
+    /// Regression: a vertex almost exactly beside the camera (forward distance `f` of 1e-300 m in face 0, so its
+    /// `u` is about −1e302) once made `⌊column⌋` overflow to the last column, so the span of columns checked in
+    /// face 0 was empty and the patch was called hidden there without any test: the visible vertices in face 0 were
+    /// culled. Every face's span must reach from the first column.
+    #[test]
+    fn a_vertex_almost_beside_the_camera_keeps_its_columns() {
+        let mu = 1e-6;
+        let mut h = Horizon::new(64);
+        // A high wall across face 3 (−y), nothing at all in face 0 (+x).
+        let wall = [[-60.0, -10.0, 50.0], [60.0, -10.0, 50.0], [0.0, -11.0, 50.0]];
+        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        h.write_triangle([&p[0], &p[1], &p[2]]);
+        // A patch in the quadrant x > 0, y < 0: one vertex in plain view in face 0, one hidden behind the wall in
+        // face 3, and one south of the camera at x = 1e-300 (in face 0 with f > 0, but at u ≈ −1e302).
+        let patch = [[30.0, -5.0, 0.0], [5.0, -30.0, 0.0], [1e-300, -20.0, 0.0]];
+        let q: Vec<Projected> = patch.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        assert!(q[2].face[0].u < -1e300, "{:?}", q[2].face[0]);
+        assert!(!h.vertices_hidden(&q, false), "the vertex in face 0 is in plain view");
+        assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
+        assert_eq!(floor(-1e302), isize::MIN);
+        assert_eq!(ceil(1e302), isize::MAX);
+        assert_eq!((floor(-2.5), ceil(-2.5), floor(2.5), ceil(2.5)), (-3, -2, 2, 3));
+        assert_eq!((floor(f64::NAN), ceil(f64::NAN)), (0, 0));
     }
 
     #[test]

@@ -248,6 +248,41 @@ fn grazing_eyes_and_eyes_on_crests_and_diagonals() {
     assert_safe("grazing", &tin, &eyes);
 }
 
+/// Regression: eyes a hair beside a vertex in x or y (1e-300 m, or one ulp), so that vertex lies almost exactly
+/// beside the camera in a face's forward direction (`|u|` up to 1e302). Column indices of such spans once overflowed
+/// (`horizon::floor`), which emptied the span checked in that face: a crash, or a patch called hidden there untested.
+#[test]
+fn eyes_a_hair_beside_a_vertex() {
+    let tin = grid_tin(21, 200.0, DVec3::ZERO, |x, y| {
+        10.0 * ((x / 40.0).sin() + (y / 55.0).cos())
+    });
+    let ulp = |x: f64| f64::from_bits(x.to_bits() + 1);
+    let mut extra = Vec::new();
+    for &(x, y) in &[
+        (0.0, 35.0),
+        (0.0, 100.0),
+        (35.0, 0.0),
+        (170.0, 0.0),
+        (100.0, 100.0),
+        (60.0, 140.0),
+    ] {
+        let z = 25.0;
+        for eye in [
+            DVec3::new(-1e-300, y, z),
+            DVec3::new(1e-300, y, z),
+            DVec3::new(x, -1e-300, z),
+            DVec3::new(x, 1e-300, z),
+            DVec3::new(ulp(x), y + 3.0, z),
+            DVec3::new(x + 3.0, ulp(y), z),
+            DVec3::new(-ulp(0.0), y + 3.0, 2.0),
+        ] {
+            extra.push(eye);
+        }
+    }
+    let eyes = eyes_over(&tin, &extra);
+    assert_safe("a hair beside a vertex", &tin, &eyes);
+}
+
 #[test]
 fn slivers() {
     // Rows 20 m apart, each doubled 5 cm away with the points staggered: the triangles between a row and its double

@@ -260,7 +260,12 @@ fn an_input_is_never_an_output() {
     let hard = dir.path().join("hard.obj");
     fs::hard_link(&input, &hard).expect("hard link");
     // Declared first, then the same file by its own name, through a link, through a hard link, by another spelling.
-    for output in [input.clone(), link.clone(), hard.clone(), dir.path().join(".").join("terrain.obj")] {
+    for output in [
+        input.clone(),
+        link.clone(),
+        hard.clone(),
+        dir.path().join(".").join("terrain.obj"),
+    ] {
         let mut batch = Batch::new();
         batch.input(&input).expect("input");
         let e = batch.check(&output).expect_err("the input");
@@ -275,10 +280,14 @@ fn an_input_is_never_an_output() {
     // Other files, a missing input and standard input are fine.
     let mut batch = Batch::new();
     batch.input(&input).expect("input");
-    batch.input(&dir.path().join("missing.obj")).expect("a missing input protects nothing");
+    batch
+        .input(&dir.path().join("missing.obj"))
+        .expect("a missing input protects nothing");
     batch.input(Path::new("-")).expect("standard input");
     batch.check(&dir.path().join("out.tch")).expect("another file");
-    batch.add(&dir.path().join("out.tch"), |w| w.write_all(b"x")).expect("add");
+    batch
+        .add(&dir.path().join("out.tch"), |w| w.write_all(b"x"))
+        .expect("add");
     batch.commit().expect("commit");
     assert_eq!(fs::read(&input).expect("read"), b"v 0 0 0\n");
 }
