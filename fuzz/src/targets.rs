@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use cull::{Camera, Culler, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, Hierarchy};
 use tin::dem::hgt::TileName;
 use tin::{DedupePolicy, DemOptions, ObjImportOptions};
 
@@ -100,12 +100,13 @@ pub fn reseal(data: &[u8]) -> Option<Vec<u8>> {
     Some(out)
 }
 
-/// Culls `h` from degenerate and ordinary cameras, checking the draw list's ranges.
+/// Culls `h` by every method from degenerate and ordinary cameras (and from a hair beside its first vertices, where a
+/// vertex lies almost exactly beside the camera), checking the draw list's ranges.
 fn cull_some(h: &Hierarchy) {
-    let culler = Culler::new(h);
     let mut cameras = vec![
         Camera::all_around(h.origin),
         Camera::all_around([h.origin[0] + 1e7, h.origin[1] - 1e7, h.origin[2] + 5.0]),
+        Camera::all_around([0.0, 0.0, 500.0]),
         Camera::all_around([f64::NAN, 0.0, 0.0]),
         Camera::all_around([f64::INFINITY, f64::NEG_INFINITY, 1.0]),
         Camera {
@@ -132,8 +133,21 @@ fn cull_some(h: &Hierarchy) {
             p[2] - 50.0,
         ]));
     }
+    let hair = |x: f64| f64::from_bits(x.to_bits() ^ 1);
+    for v in h.mesh.positions.iter().take(3) {
+        let p = [0, 1, 2].map(|k| h.origin[k] + f64::from(v[k]));
+        cameras.push(Camera::all_around([hair(p[0]), p[1] + 7.0, p[2] + 1.0]));
+        cameras.push(Camera::all_around([p[0] + 7.0, hair(p[1]), p[2] + 1.0]));
+    }
     let total = h.num_triangles();
-    for c in &cameras {
+    for method in CullMethod::ALL {
+        cull_all(&AnyCuller::new(h, method), &cameras, total);
+    }
+}
+
+/// Culls from every camera, checking that each draw list stays within the `total` triangles.
+fn cull_all(culler: &AnyCuller, cameras: &[Camera], total: usize) {
+    for c in cameras {
         let list = culler.cull(c);
         let mask = list.mask(total);
         assert_eq!(mask.len(), total, "a draw mask has one flag per triangle");
