@@ -187,8 +187,22 @@ fn bad_input_gives_clear_errors() {
     fails_with(&["cull", "/no/such.tch", "--eye", "0,0,0"], "such.tch");
     fails_with(
         &["cull", s(&mesh("jacksboro-2k.obj")), "--eye", "0,0,0"],
-        "not a tincull hierarchy file",
+        "jacksboro-2k.obj: not a tincull hierarchy file",
     );
+    // Every command that reads a hierarchy names the file of a damaged one.
+    let damaged = tempfile::tempdir().expect("tempdir");
+    let bad = damaged.path().join("bad.tch");
+    let csv = damaged.path().join("map.csv");
+    std::fs::write(&bad, b"TINCULL\x1a\x02\0\0\0").expect("write");
+    for args in [
+        vec!["cull", s(&bad), "--eye", "0,0,0"],
+        vec!["eval", s(&bad)],
+        vec!["export", s(&bad), "--export-json", "-"],
+        vec!["pvs", s(&bad), "--check", "1"],
+        vec!["failmap", s(&bad), "--cell", "10", "--csv", s(&csv)],
+    ] {
+        fails_with(&args, "bad.tch: truncated");
+    }
     fails_with(&["cull", "x.tch", "--eye", "1,2"], "x,y,z");
 }
 

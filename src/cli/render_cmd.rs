@@ -108,7 +108,7 @@ pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Ter
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("tch"));
     if is_tch {
-        let h = cull::Hierarchy::load(path).with_context(|| format!("cannot load {}", path.display()))?;
+        let h = cull::Hierarchy::load(path)?;
         Ok(Terrain::from_hierarchy(h)?)
     } else {
         let (tin, _) = import.mesh(path).load(out)?;

@@ -377,7 +377,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     let h = tiles::merge::merge_with(&plan, |i| {
         let path = Plan::resolve(&args.plan, &plan.tiles[i].output);
         let h = cull::Hierarchy::load(&path)
-            .map_err(|e| TilesError::Parameter(format!("tile {i} ({}): {e}", path.display())))?;
+            .map_err(|e| TilesError::Parameter(format!("tile {i}: {:#}", anyhow::Error::from(e))))?;
         bar.inc(1);
         Ok(h)
     })?;

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use viewer::app::{ScreenshotRequest, Source, Startup, ViewerOptions};
 
@@ -65,7 +65,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         .is_some_and(|e| e.eq_ignore_ascii_case("tch"));
     let mut params = args.params.resolve(None)?;
     let source = if is_tch {
-        let h = cull::Hierarchy::load(&args.input).with_context(|| format!("cannot load {}", args.input.display()))?;
+        let h = cull::Hierarchy::load(&args.input)?;
         let b = &h.build;
         let p = &args.params;
         params.sectors = p.sectors.unwrap_or(h.sectors);

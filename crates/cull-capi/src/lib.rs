@@ -152,7 +152,7 @@ fn method(m: u32) -> Result<CullMethod, Failure> {
 }
 
 fn load_error(what: &str, e: HierarchyError) -> Failure {
-    let code = match e {
+    let code = match e.kind() {
         HierarchyError::Io { .. } => TC_ERR_IO,
         _ => TC_ERR_FORMAT,
     };
@@ -201,7 +201,7 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
             .to_str()
             .map_err(|_| Failure(TC_ERR_INVALID, "tc_load_path: the path is not UTF-8".into()))?;
         let m = method(method_id)?;
-        let h = Hierarchy::load(Path::new(path)).map_err(|e| load_error(path, e))?;
+        let h = Hierarchy::load(Path::new(path)).map_err(|e| load_error("tc_load_path", e))?;
         m.check(&h)
             .map_err(|e| Failure(TC_ERR_INVALID, format!("{path}: {e}")))?;
         // SAFETY: `out` checked non-null.

@@ -39,6 +39,24 @@ pub enum HierarchyError {
     Decode(String),
     /// The content is structurally invalid (indices out of range, ranges not nested, ...).
     Invalid(String),
+    /// What is wrong with the file at `path` ([`crate::Hierarchy::load`] names the file of every error but
+    /// [`HierarchyError::Io`], which names it itself).
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with its content.
+        error: Box<HierarchyError>,
+    },
+}
+
+impl HierarchyError {
+    /// The error itself, without the file that [`HierarchyError::InFile`] names.
+    pub fn kind(&self) -> &HierarchyError {
+        match self {
+            HierarchyError::InFile { error, .. } => error.kind(),
+            e => e,
+        }
+    }
 }
 
 impl std::fmt::Display for HierarchyError {
@@ -62,6 +80,7 @@ impl std::fmt::Display for HierarchyError {
             ),
             HierarchyError::Decode(e) => write!(f, "cannot decode hierarchy data: {e}"),
             HierarchyError::Invalid(e) => write!(f, "invalid hierarchy: {e}"),
+            HierarchyError::InFile { path, error } => write!(f, "{}: {error}", path.display()),
         }
     }
 }
@@ -70,6 +89,7 @@ impl std::error::Error for HierarchyError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             HierarchyError::Io { source, .. } => Some(source),
+            HierarchyError::InFile { error, .. } => error.source(),
             _ => None,
         }
     }

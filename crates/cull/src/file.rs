@@ -170,12 +170,15 @@ impl Hierarchy {
         Ok(h)
     }
 
-    /// Reads a `.tch` file.
+    /// Reads a `.tch` file; every error names it ([`HierarchyError::InFile`], or [`HierarchyError::Io`]).
     pub fn load(path: &Path) -> Result<Hierarchy, HierarchyError> {
         let bytes = std::fs::read(path).map_err(|source| HierarchyError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        Hierarchy::from_bytes(&bytes)
+        Hierarchy::from_bytes(&bytes).map_err(|error| HierarchyError::InFile {
+            path: path.to_path_buf(),
+            error: Box::new(error),
+        })
     }
 }
