@@ -183,3 +183,63 @@ fn sweep_rejects_bad_lists() {
         assert!(err.contains(opt), "{opt} {val}: {err}");
     }
 }
+
+#[test]
+fn sweep_never_resumes_another_setup() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("s.csv");
+    let v = sweep(&csv, &["--sectors", "4", "--subsectors", "1", "--no-per-triangle"]);
+    assert_eq!(v["ran"], 1);
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    // Another viewpoint seed, other classes, another mesh or other build options: refused, the file untouched.
+    let other_mesh = mesh("synth-5k.obj");
+    for extra in [
+        vec!["--view-seed", "7"],
+        vec!["--classes", "sky"],
+        vec!["--min-group", "40"],
+        vec!["--mesh-instead"],
+    ] {
+        let mut args = vec![
+            "sweep".to_string(),
+            if extra[0] == "--mesh-instead" {
+                other_mesh.to_string_lossy().into_owned()
+            } else {
+                mesh("jacksboro-2k.obj").to_string_lossy().into_owned()
+            },
+        ];
+        for a in [
+            "--sectors",
+            "4",
+            "--subsectors",
+            "1",
+            "--no-per-triangle",
+            "--viewpoints",
+            "1",
+            "-q",
+            "-o",
+        ] {
+            args.push(a.into());
+        }
+        args.push(csv.to_string_lossy().into_owned());
+        if extra[0] != "--mesh-instead" {
+            args.extend(extra.iter().map(|s| s.to_string()));
+        }
+        if !args.contains(&"--classes".to_string()) {
+            args.extend(["--classes".to_string(), "low,ridge".to_string()]);
+        }
+        let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+            .args(&args)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{extra:?} resumed another setup");
+        assert!(
+            err.contains("s.csv") && err.contains("another sweep setup"),
+            "{extra:?}: {err}"
+        );
+        assert_eq!(std::fs::read_to_string(&csv).expect("csv"), text);
+    }
+    // The same setup resumes.
+    let v = sweep(&csv, &["--sectors", "4", "--subsectors", "1", "--no-per-triangle"]);
+    assert_eq!((v["ran"].as_u64(), v["skipped"].as_u64()), (Some(0), Some(1)), "{v}");
+}

@@ -46,11 +46,9 @@ impl Output {
         }
     }
 
-    /// Prints a warning on stderr (not with `--quiet`).
+    /// Prints a warning on stderr, also with `--quiet` and `--json` (which keep stdout for the JSON).
     pub fn warn(&self, text: impl AsRef<str>) {
-        if !self.quiet {
-            eprintln!("warning: {}", text.as_ref());
-        }
+        eprintln!("warning: {}", text.as_ref());
     }
 
     /// Prints `value` as one JSON object on stdout when `--json` is set.

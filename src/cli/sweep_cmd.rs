@@ -1,6 +1,7 @@
 //! `tincull sweep`: build and evaluate every combination of sectors, subsectors, seeds and random seeds; one CSV
 //! line per combination, method and class (see [`eval::sweep`]). Resumable: combinations already in the file are
-//! skipped, and the file is rewritten atomically after each combination.
+//! skipped, and the file is rewritten atomically after each combination; a file written for another setup (mesh,
+//! build options, evaluation) is refused ([`eval::sweep::setup_digest`]).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -15,7 +16,7 @@ use super::files::write_one;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 use eval::evaluate::{EvalOptions, GroundTruthSet};
-use eval::sweep::{SweepSpec, SweepTable, parse_list, run_combo};
+use eval::sweep::{SweepSpec, SweepTable, parse_list, run_combo, setup_digest};
 
 /// Arguments of `tincull sweep`.
 #[derive(Debug, Args)]
@@ -72,7 +73,8 @@ pub struct SweepArgs {
     /// Skip the per-triangle method (its culler tests every triangle: by far the slowest part of scoring).
     #[arg(long)]
     pub no_per_triangle: bool,
-    /// The CSV file of results; combinations already in it are skipped.
+    /// The CSV file of results; combinations already in it are skipped (it must have been written with the same mesh,
+    /// build options and evaluation options).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Output flags.
@@ -148,6 +150,9 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     };
 
     let (tin, _) = args.mesh.load(out)?;
+    table
+        .adopt(&setup_digest(&tin, &spec.base, &eval))
+        .with_context(|| args.out.display().to_string())?;
     let (combos, notes) = spec.combos(tin.num_triangles());
     for n in &notes {
         out.warn(n);

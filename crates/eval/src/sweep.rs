@@ -26,14 +26,42 @@ use anyhow::{Context, Result, bail};
 use horizon::SectorConfig;
 use tin::Tin;
 
-use crate::evaluate::{Evaluation, GroundTruthSet, Leaves, score, standard_methods};
+use crate::evaluate::{EvalOptions, Evaluation, GroundTruthSet, Leaves, score, standard_methods};
 use pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
 
 /// The header line of a sweep CSV (without the newline).
 pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
 regions_seconds,grouping_seconds,visibility_bytes,groups,orphans,orphan_passes,nodes,levels,top_level,method,class,\
 views,false_culls_mean,false_culls_max,viewpoints_with_false_culls,false_cull_area_mean,occlusion_captured_mean,\
-occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns,visible_fraction,drawn_fraction,leaf_limit";
+occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns,visible_fraction,drawn_fraction,leaf_limit,setup";
+
+/// The digest of everything a sweep's lines depend on besides their key (the mesh, the build options every
+/// combination shares, the evaluation's classes, viewpoint seed, field of view, safe-culler parameters and whether the
+/// per-triangle method runs), written in the last column (`setup`) of every line: a file holds the sweep of one setup,
+/// and a run with another one is refused instead of taking the file's lines for its own.
+pub fn setup_digest(tin: &Tin, base: &BuildParams, eval: &EvalOptions) -> String {
+    let mut hasher = crc32fast::Hasher::new();
+    for p in tin.positions() {
+        for c in p.to_array() {
+            hasher.update(&c.to_bits().to_le_bytes());
+        }
+    }
+    for t in tin.triangles() {
+        for v in t {
+            hasher.update(&v.to_le_bytes());
+        }
+    }
+    let options = format!(
+        "{base:?}|{:?}|{}|{}|{}|{:?}",
+        eval.classes,
+        eval.rng_seed,
+        eval.fov_deg.to_bits(),
+        eval.per_triangle,
+        eval.safe
+    );
+    hasher.update(options.as_bytes());
+    format!("{:08x}", hasher.finalize())
+}
 
 /// What identifies a combination in a sweep file; ordered as the file's lines are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -199,7 +227,10 @@ pub fn csv_lines(key: &SweepKey, report: &BuildReport, e: &Evaluation) -> Vec<St
 /// The lines of a sweep file, grouped by combination.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SweepTable {
+    /// Each combination's lines, without their last column (`setup`).
     rows: BTreeMap<SweepKey, Vec<String>>,
+    /// The setup of every line ([`setup_digest`]); `None` for an empty table.
+    setup: Option<String>,
 }
 
 impl SweepTable {
@@ -226,6 +257,12 @@ impl SweepTable {
             if fields.len() != columns {
                 bail!("line {}: {} fields, expected {columns}", i + 1, fields.len());
             }
+            let setup = fields[columns - 1];
+            match &table.setup {
+                Some(s) if s != setup => bail!("line {}: setup {setup:?}, where the lines before have {s:?}", i + 1),
+                Some(_) => {}
+                None => table.setup = Some(setup.to_string()),
+            }
             let field = |j: usize| -> Result<u64> {
                 fields[j]
                     .parse::<u64>()
@@ -241,9 +278,25 @@ impl SweepTable {
                 rng_seed: field(3)?,
                 viewpoints: field(4)? as usize,
             };
-            table.rows.entry(key).or_default().push(line.to_string());
+            let data = &line[..line.len() - setup.len() - 1];
+            table.rows.entry(key).or_default().push(data.to_string());
         }
         Ok(table)
+    }
+
+    /// Takes `setup` as this table's: refused when its lines were written for another one.
+    pub fn adopt(&mut self, setup: &str) -> Result<()> {
+        match &self.setup {
+            Some(s) if s != setup => bail!(
+                "its lines are of another sweep setup ({s}; this run's is {setup}): the mesh, the build options, \
+                 --classes, --view-seed, --fov or --no-per-triangle differ. Name another file, or run with the \
+                 same setup to resume"
+            ),
+            _ => {
+                self.setup = Some(setup.to_string());
+                Ok(())
+            }
+        }
     }
 
     /// Whether the combination `key` is in the table.
@@ -270,8 +323,11 @@ impl SweepTable {
     pub fn to_csv(&self) -> String {
         let mut s = String::from(HEADER);
         s.push('\n');
+        let setup = self.setup.as_deref().unwrap_or("");
         for line in self.rows.values().flatten() {
             s += line;
+            s.push(',');
+            s += setup;
             s.push('\n');
         }
         s
@@ -371,14 +427,30 @@ mod tests {
             rng_seed: 1,
             viewpoints: 2,
         };
-        let line = format!("8,2,10,1,2{}", ",x".repeat(HEADER.split(',').count() - 5));
+        // A combination's lines hold every column but the last, the setup, which the table writes.
+        let line = format!("8,2,10,1,2{}", ",x".repeat(HEADER.split(',').count() - 6));
         let mut t = SweepTable::default();
         t.insert(key, vec![line.clone()]);
+        t.adopt("0badcafe").unwrap();
         let text = t.to_csv();
-        let back = SweepTable::parse(&text).unwrap();
+        assert!(text.ends_with(",x,0badcafe\n"), "{text}");
+        let mut back = SweepTable::parse(&text).unwrap();
         assert_eq!(back, t);
         assert!(back.contains(&key));
         assert_eq!(back.to_csv(), text);
+        // Another setup is refused, and so is a file whose lines mix two.
+        assert!(
+            back.adopt("12345678")
+                .unwrap_err()
+                .to_string()
+                .contains("another sweep setup")
+        );
+        back.adopt("0badcafe").unwrap();
+        let mixed = format!(
+            "{text}{}\n",
+            text.lines().nth(1).unwrap().replace("0badcafe", "12345678")
+        );
+        assert!(SweepTable::parse(&mixed).unwrap_err().to_string().contains("line 3"));
         assert!(SweepTable::parse("a,b\n").unwrap_err().to_string().contains("line 1"));
         let short = format!("{HEADER}\n1,2,3\n");
         assert!(SweepTable::parse(&short).unwrap_err().to_string().contains("line 2"));
@@ -461,7 +533,7 @@ mod tests {
             swept
                 .lines
                 .iter()
-                .all(|l| l.split(',').count() == HEADER.split(',').count())
+                .all(|l| l.split(',').count() == HEADER.split(',').count() - 1)
         );
         // evaluate() still runs end to end on the exported hierarchy.
         let e = evaluate(&b.hierarchy, &htin, &opts, &|_, _| {}).unwrap();
