@@ -529,3 +529,29 @@ fn export_gltf_writes_glb_and_gltf_with_bin() {
     assert!(tmp.path().join("j2k.bin").is_file());
     assert_eq!(doc["scenes"][0]["extras"]["tincull"]["version"], 1);
 }
+
+#[test]
+fn messages_name_the_flag_at_fault() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("s.obj");
+    fails_with(
+        &["synth", "-o", s(&out), "--vertices", "2147483648"],
+        "not enough memory",
+    );
+    fails_with(
+        &["synth", "-o", s(&out), "--extent", "1e-300"],
+        "too small for 10000 vertices",
+    );
+    assert!(!out.exists());
+    let asc = dir.path().join("g.asc");
+    std::fs::write(
+        &asc,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("asc");
+    fails_with(&["tin", s(&asc), "--vertices", "1", "-o", s(&out)], "--vertices");
+    let file = dir.path().join("afile");
+    std::fs::write(&file, "x").expect("file");
+    fails_with(&["demo", "--out-dir", s(&file)], "is not a directory");
+    fails_with(&["pvs", "x.tch"], "--grid");
+}

@@ -41,6 +41,9 @@ pub struct DemoArgs {
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
+    if args.out_dir.exists() && !args.out_dir.is_dir() {
+        anyhow::bail!("--out-dir {}: exists and is not a directory", args.out_dir.display());
+    }
     let (tin, _) = args.import.mesh(&mesh).load(out)?;
     let params = BuildParams::default();
     out.say(format!("tincull demo on {}", mesh.display()));

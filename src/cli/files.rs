@@ -44,7 +44,7 @@ impl Outputs {
             return self.check(path);
         }
         if out.json {
-            bail!("-o - and --json both write to standard output; give a file to one of them");
+            bail!("`-` (standard output) and --json both write to standard output; give a file to one of them");
         }
         if self.stdout_checked {
             bail!("only one output can go to standard output (-)");

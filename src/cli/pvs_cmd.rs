@@ -18,15 +18,15 @@ use eval::evaluate::hierarchy_tin;
 
 /// Arguments of `tincull pvs`.
 #[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("mode").required(true).args(["cell", "grid", "check"])))]
 pub struct PvsArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
     /// One viewcell: `x0,y0,x1,y1` in world coordinates (m).
-    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_rect, allow_hyphen_values = true,
-          required_unless_present_any = ["grid", "check"], conflicts_with_all = ["grid", "check"])]
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_rect, allow_hyphen_values = true)]
     pub cell: Option<[f64; 4]>,
     /// Every cell of a grid of SIZE × SIZE metres over the footprint's bounding box (progress bar).
-    #[arg(long, value_name = "SIZE", conflicts_with = "check")]
+    #[arg(long, value_name = "SIZE")]
     pub grid: Option<f64>,
     /// Check N random cells of `--cell-size` against the exact checker from 64 sample points each (corners, edges,
     /// interior, both heights): misses (target 0), PVS size against the union of the sampled visible sets and of the

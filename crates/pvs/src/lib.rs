@@ -114,7 +114,7 @@ impl ViewCell {
         };
         if !(a.is_finite() && b.is_finite() && a <= b) {
             return Err(PvsError::BadCell(format!(
-                "the {what} {a},{b} must be finite with {a} <= {b}"
+                "the {what} {a},{b} must be two finite values, the lower first"
             )));
         }
         Ok(())

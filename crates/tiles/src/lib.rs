@@ -39,7 +39,7 @@ pub enum TilesError {
     #[error("{0}")]
     Parameter(String),
     /// A plan file cannot be read.
-    #[error("cannot read {}: {source}", path.display())]
+    #[error("cannot read {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,

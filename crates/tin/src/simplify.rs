@@ -81,7 +81,7 @@ impl SimplifyOptions {
             && n < 3
         {
             return Err(TinError::InvalidParameter(format!(
-                "max_vertices must be at least 3, got {n}"
+                "the vertex budget (--vertices) must be at least 3, got {n}"
             )));
         }
         if let Some(n) = self.max_vertices

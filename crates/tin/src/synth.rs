@@ -55,7 +55,8 @@ impl SynthOptions {
         }
     }
 
-    /// Checks the vertex count (4 to 2^31), extent (positive, finite) and relief (non-negative, finite).
+    /// Checks the vertex count (4 to 2^31), extent (positive, finite, below 1e12 m, and at least 1 mm per point
+    /// spacing, `extent / √vertices`) and relief (non-negative, finite).
     pub fn validate(&self) -> Result<()> {
         if !(4..=1 << 31).contains(&self.vertices) {
             return Err(TinError::InvalidParameter(format!(
@@ -67,6 +68,14 @@ impl SynthOptions {
             return Err(TinError::InvalidParameter(format!(
                 "synthetic terrain extent must be positive and below 1e12 m, got {}",
                 self.extent
+            )));
+        }
+        let spacing = self.extent / (self.vertices as f64).sqrt();
+        if !(spacing >= 1e-3) {
+            return Err(TinError::InvalidParameter(format!(
+                "synthetic terrain extent {:.3e} m is too small for {} vertices: points would be {spacing:.3e} m apart \
+                 (at least 1 mm)",
+                self.extent, self.vertices
             )));
         }
         if !(self.relief.is_finite() && self.relief >= 0.0) {
@@ -94,7 +103,13 @@ pub fn synth_grid(opts: &SynthOptions) -> Result<Grid> {
     let terrain = Terrain::new(&mut rng, opts);
     let n = round_sqrt(opts.vertices).max(2);
     let step = opts.extent / (n - 1) as f64;
-    let mut z = Vec::with_capacity(n * n);
+    let mut z = Vec::new();
+    z.try_reserve_exact(n * n).map_err(|_| {
+        TinError::InvalidParameter(format!(
+            "not enough memory for a synthetic grid of {n} x {n} samples ({:.1} GB)",
+            (n * n * 8) as f64 / 1e9
+        ))
+    })?;
     for r in 0..n {
         let y = opts.extent - r as f64 * step;
         for c in 0..n {
@@ -113,7 +128,13 @@ pub fn synth_tin(opts: &SynthOptions) -> Result<Tin> {
     let n = opts.vertices;
     let rows = round_sqrt(n).max(2);
     let hy = opts.extent / (rows - 1) as f64;
-    let mut points = Vec::with_capacity(n);
+    let mut points = Vec::new();
+    points.try_reserve_exact(n).map_err(|_| {
+        TinError::InvalidParameter(format!(
+            "not enough memory for a synthetic terrain of {n} vertices (its points alone take {:.1} GB)",
+            (n * std::mem::size_of::<DVec3>()) as f64 / 1e9
+        ))
+    })?;
     for j in 0..rows {
         let count = n / rows + usize::from(j < n % rows);
         let hx = opts.extent / (count - 1) as f64;

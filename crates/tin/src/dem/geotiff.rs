@@ -308,6 +308,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
 
     let band = match (spp, opts.band) {
         (1, None | Some(1)) => 1,
+        (_, Some(0)) => return Err(err("band 0 requested: bands are numbered from 1".into())),
         (1, Some(b)) => {
             return Err(err(format!(
                 "band {b} requested, but the image has 1 band (SamplesPerPixel)"
