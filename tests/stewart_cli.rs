@@ -119,6 +119,33 @@ fn quadtree_build_eval_and_cull() {
         &["cull", s(&quad), "--method", "thesis", "--eye", eye],
         "method `stewart`",
     );
+    // So do `failmap` and `render` (checked before any work or GPU).
+    let map = dir.path().join("map.csv");
+    fails_with(
+        &[
+            "failmap",
+            s(&quad),
+            "--method",
+            "thesis",
+            "--cell",
+            "100",
+            "--csv",
+            s(&map),
+        ],
+        "method `stewart`",
+    );
+    fails_with(
+        &[
+            "render",
+            s(&quad),
+            "--method",
+            "thesis",
+            "-o",
+            s(&dir.path().join("r.png")),
+        ],
+        "method `stewart`",
+    );
+    assert!(!map.exists());
 
     ok(&[
         "build",

@@ -19,7 +19,8 @@ pub struct CullArgs {
     /// Eye position `x,y,z` in world coordinates (m).
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true, required_unless_present = "eyes")]
     pub eye: Option<[f64; 3]>,
-    /// A file of viewpoints, one `x,y,z` per line; prints one result per line.
+    /// A file of viewpoints, one `x,y,z` per line; prints one result per line (with `--json`, one JSON object per
+    /// line: JSON Lines).
     #[arg(long, conflicts_with = "eye")]
     pub eyes: Option<PathBuf>,
     /// View direction in degrees, counter-clockwise from east (+x).

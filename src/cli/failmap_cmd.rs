@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, ensure};
+use anyhow::{Context, Result, ensure};
 use clap::Args;
 use cull::Hierarchy;
 use eval::evaluate::hierarchy_tin;
@@ -65,6 +65,9 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         files.check(path)?;
     }
     let h = Hierarchy::load(&args.hierarchy)?;
+    args.method
+        .check(&h)
+        .with_context(|| format!("{}: --method {}", args.hierarchy.display(), args.method))?;
     let tin = hierarchy_tin(&h)?;
     ensure!(
         tin.num_triangles() > 0,

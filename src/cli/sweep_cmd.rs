@@ -33,8 +33,8 @@ pub struct SweepArgs {
     /// Crystal seeds of the first pass: numbers or ranges [default: one per 200 triangles].
     #[arg(long)]
     pub seeds: Option<String>,
-    /// Seeds of the crystal's random generator: numbers or ranges (`1..5`, `1,2,3`).
-    #[arg(long, default_value = "1")]
+    /// Seeds of the crystal's random generator: numbers or ranges (`1..5`, `1,2,3`); `--rng-seed` is the same.
+    #[arg(long, visible_alias = "rng-seed", default_value = "1")]
     pub rng_seeds: String,
     /// Viewpoints per class.
     #[arg(long, default_value_t = 10)]

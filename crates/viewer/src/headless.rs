@@ -158,6 +158,10 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
             return bad(format!("--level {level}: the hierarchy's levels are 0 to {top}"));
         }
     }
+    if let Some(h) = &terrain.hierarchy {
+        // The region methods refuse the other grouping, as `cull` does.
+        o.method.check(h).map_err(|e| ViewerError::Invalid(e.to_string()))?;
+    }
     if o.level.is_some() && terrain.hierarchy.is_none() {
         return bad("--level needs a hierarchy (.tch), not a plain mesh".into());
     }
