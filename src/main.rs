@@ -6,6 +6,7 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     quiet_headless_vulkan();
+    remove_temporaries_on_interrupt();
     let cli = tincull::cli::Cli::parse();
     match tincull::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
@@ -14,6 +15,38 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Ctrl-C, `SIGTERM` or `SIGHUP` while an output is written: its temporary files are removed (outputs are all or
+/// nothing, and nothing else is left behind either), then the process exits with status 130.
+/// Not where the shell made the process ignore Ctrl-C (a background job of a script): it keeps ignoring it.
+fn remove_temporaries_on_interrupt() {
+    if interrupts_ignored() {
+        return;
+    }
+    // Without a handler (it cannot be installed), an interrupt still leaves every output untouched; only the hidden
+    // temporary files would stay.
+    let _ = ctrlc::set_handler(|| {
+        outfile::remove_temporaries();
+        std::process::exit(130);
+    });
+}
+
+/// Whether `SIGINT` is ignored (inherited from the shell).
+#[cfg(unix)]
+fn interrupts_ignored() -> bool {
+    // SAFETY: with a null new action, sigaction only writes the current one into `old`, a plain C struct for which
+    // all zeroes is a valid value.
+    unsafe {
+        let mut old: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(libc::SIGINT, std::ptr::null(), &mut old) == 0 && old.sa_sigaction == libc::SIG_IGN
+    }
+}
+
+/// Whether `SIGINT` is ignored: never known elsewhere.
+#[cfg(not(unix))]
+fn interrupts_ignored() -> bool {
+    false
 }
 
 /// Mesa's Vulkan device-select layer asks a Wayland compositor which GPU is the default. Without a session

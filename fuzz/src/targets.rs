@@ -135,7 +135,7 @@ fn cull_some(h: &Hierarchy) {
     }
     let hair = |x: f64| f64::from_bits(x.to_bits() ^ 1);
     for v in h.mesh.positions.iter().take(3) {
-        let p = [0, 1, 2].map(|k| h.origin[k] + f64::from(v[k]));
+        let p = [0, 1, 2].map(|k| h.origin[k] + v[k]);
         cameras.push(Camera::all_around([hair(p[0]), p[1] + 7.0, p[2] + 1.0]));
         cameras.push(Camera::all_around([p[0] + 7.0, hair(p[1]), p[2] + 1.0]));
     }

@@ -24,7 +24,10 @@
 //!    files this batch had newly created are removed again; files it replaced cannot be restored (their old content
 //!    is gone), so a batch's targets should be checked first, which makes that case a race with another process.
 //!    Two targets of one batch that resolve to the same file are refused.
-//! 6. **Inputs are never outputs.** The files a command reads, declared with [`Batch::input`], cannot be its
+//! 6. **Interrupted, nothing left behind.** Every temporary file is registered while it exists;
+//!    [`remove_temporaries`] removes them all, for a command's interrupt handler (Ctrl-C, `SIGTERM`) to call before it
+//!    exits (a process killed outright, `SIGKILL`, cannot clean up: its `.tincull-*.tmp` files stay).
+//! 7. **Inputs are never outputs.** The files a command reads, declared with [`Batch::input`], cannot be its
 //!    outputs: a target that is the same file as an input (the same path once links are followed, or, on Unix, the
 //!    same device and inode, which also catches hard links) is refused before anything is written, whichever of the
 //!    two was declared first.
@@ -34,8 +37,50 @@ use std::fmt;
 use std::fs;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 
 use tempfile::NamedTempFile;
+
+/// The temporary files that exist now (written, or waiting to be renamed): see [`remove_temporaries`].
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn live() -> MutexGuard<'static, Vec<PathBuf>> {
+    LIVE.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes every temporary file this process is writing or has not renamed yet (rule 6), and keeps the registry
+/// locked until the process ends, so that no new one is started: for an interrupt handler, which then exits.
+pub fn remove_temporaries() {
+    let paths = live();
+    for p in paths.iter() {
+        let _ = fs::remove_file(p);
+    }
+    std::mem::forget(paths);
+}
+
+/// A registered temporary file: listed while this lives.
+struct Registered(PathBuf);
+
+impl Registered {
+    /// Creates a temporary file with `create` and registers it, holding the registry meanwhile: an interrupt
+    /// handler ([`remove_temporaries`]) sees either no file or the registered one.
+    fn create(create: impl FnOnce() -> io::Result<NamedTempFile>) -> io::Result<(NamedTempFile, Registered)> {
+        let mut paths = live();
+        let temp = create()?;
+        paths.push(temp.path().to_path_buf());
+        let path = temp.path().to_path_buf();
+        Ok((temp, Registered(path)))
+    }
+}
+
+impl Drop for Registered {
+    fn drop(&mut self) {
+        let mut paths = live();
+        if let Some(i) = paths.iter().position(|p| *p == self.0) {
+            paths.swap_remove(i);
+        }
+    }
+}
 
 /// What went wrong with an output, naming the path the user gave.
 #[derive(Debug)]
@@ -252,6 +297,8 @@ pub fn check_file(path: &Path) -> Result<Target> {
 struct Staged {
     target: Target,
     temp: Option<NamedTempFile>,
+    /// Listed for [`remove_temporaries`] until renamed or dropped (declared after `temp`: dropped after it).
+    _registered: Option<Registered>,
 }
 
 /// Writes the content of `target` to a temporary file beside it (or to standard output), with the permissions of
@@ -264,7 +311,11 @@ fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
             write(&mut w)
                 .and_then(|_| w.flush())
                 .map_err(|e| err(Path::new("-"), ErrorKind::Io(e)))?;
-            Ok(Staged { target, temp: None })
+            Ok(Staged {
+                target,
+                temp: None,
+                _registered: None,
+            })
         }
         Target::File { given, resolved, .. } => {
             let io = |e| err(given, ErrorKind::Io(e));
@@ -277,7 +328,7 @@ fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
                 // A new file gets the usual 0666 less the umask (the mode given to open() is masked).
                 builder.permissions(fs::Permissions::from_mode(0o666));
             }
-            let temp = builder.tempfile_in(dir).map_err(io)?;
+            let (temp, registered) = Registered::create(|| builder.tempfile_in(dir)).map_err(io)?;
             // Keep the permissions of the file being replaced, exactly (set after creation: no umask).
             if let Ok(m) = fs::metadata(resolved)
                 && m.is_file()
@@ -291,6 +342,7 @@ fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
             Ok(Staged {
                 target,
                 temp: Some(temp),
+                _registered: Some(registered),
             })
         }
     }
@@ -300,7 +352,9 @@ impl Staged {
     /// Renames the temporary file over the target (after re-checking that the target is still a regular file or
     /// absent).
     fn commit(self) -> Result<()> {
-        let (Target::File { given, resolved, .. }, Some(temp)) = (self.target, self.temp) else {
+        let (Target::File { given, resolved, .. }, Some(temp), _registered) =
+            (self.target, self.temp, self._registered)
+        else {
             return Ok(());
         };
         if let Ok(m) = fs::metadata(&resolved)

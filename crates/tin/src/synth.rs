@@ -71,7 +71,7 @@ impl SynthOptions {
             )));
         }
         let spacing = self.extent / (self.vertices as f64).sqrt();
-        if !(spacing >= 1e-3) {
+        if spacing < 1e-3 {
             return Err(TinError::InvalidParameter(format!(
                 "synthetic terrain extent {:.3e} m is too small for {} vertices: points would be {spacing:.3e} m apart \
                  (at least 1 mm)",

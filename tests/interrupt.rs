@@ -1,0 +1,84 @@
+//! Ctrl-C (`SIGINT`) while a command works: it exits with status 130 and leaves neither its outputs nor temporary
+//! files; where the shell made it ignore `SIGINT` (a background job of a script), it keeps ignoring it.
+
+use std::os::unix::process::CommandExt;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+mod common;
+
+use common::{mesh, ok, s};
+
+/// Runs `tincull args` with `SIGINT` at its default disposition (or ignored), interrupts it after `delay`, and
+/// returns its exit status code.
+fn interrupted(args: &[&str], delay: Duration, ignore: bool) -> Option<i32> {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_tincull"));
+    cmd.args(args).stdout(Stdio::null()).stderr(Stdio::null());
+    // SAFETY: only async-signal-safe calls between fork and exec (signal(2)).
+    unsafe {
+        cmd.pre_exec(move || {
+            libc::signal(libc::SIGINT, if ignore { libc::SIG_IGN } else { libc::SIG_DFL });
+            Ok(())
+        });
+    }
+    let mut child = cmd.spawn().expect("the binary runs");
+    std::thread::sleep(delay);
+    // SAFETY: kill(2) on the child's pid.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    child.wait().expect("wait").code()
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn an_interrupted_command_leaves_nothing_behind() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", s(&mesh("jacksboro-10k.obj")), "-o", s(&tch)]);
+    let csv = dir.path().join("e.csv");
+    let json = dir.path().join("e.json");
+    // `eval` works for seconds before it writes: interrupted at several moments, nothing is left.
+    for ms in [150, 400, 900] {
+        let code = interrupted(
+            &[
+                "eval",
+                s(&tch),
+                "--viewpoints",
+                "50",
+                "--csv",
+                s(&csv),
+                "--export-json",
+                s(&json),
+            ],
+            Duration::from_millis(ms),
+            false,
+        );
+        assert_eq!(code, Some(130), "interrupted after {ms} ms");
+        assert_eq!(names(dir.path()), ["h.tch"], "after {ms} ms");
+    }
+    // Ignored by the shell, the interrupt changes nothing: the command finishes.
+    let code = interrupted(
+        &[
+            "eval",
+            s(&tch),
+            "--viewpoints",
+            "1",
+            "--classes",
+            "ground",
+            "--csv",
+            s(&csv),
+        ],
+        Duration::from_millis(100),
+        true,
+    );
+    assert_eq!(code, Some(0));
+    assert_eq!(names(dir.path()), ["e.csv", "h.tch"]);
+}
