@@ -10,6 +10,16 @@ fn main() -> ExitCode {
     let cli = tincull::cli::Cli::parse();
     match tincull::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of standard output went away (`tincull export h.tch --export-json - | head`): nothing to say,
+        // and the status a shell gives a process ended by SIGPIPE.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            ExitCode::from(141)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

@@ -213,3 +213,26 @@ fn an_output_never_overwrites_an_input() {
     assert_eq!(fs::read(&tch).expect("read"), built);
     assert_eq!(fs::read(&obj).expect("read"), original);
 }
+
+#[test]
+fn a_reader_that_goes_away_ends_the_command_quietly() {
+    use std::io::Read;
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", p(&mesh("jacksboro-10k.obj")), "-o", p(&tch)]);
+    // Like `tincull export h.tch --export-json - | head -c 100`.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["export", p(&tch), "--export-json", "-"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let mut stdout = child.stdout.take().expect("stdout");
+    let mut head = [0u8; 100];
+    stdout.read_exact(&mut head).expect("the JSON starts");
+    drop(stdout);
+    let out = child.wait_with_output().expect("wait");
+    assert_eq!(out.status.code(), Some(141), "the status of a process ended by SIGPIPE");
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "", "nothing to say");
+}
