@@ -56,6 +56,11 @@ fn failmap_takes_out() {
     assert!(png.exists());
     let out = run(&["failmap", s(&tch), "--cell", "4000", "--output", s(&png)]);
     assert!(!out.status.success(), "--output is gone: -o/--out everywhere");
+    // `--json` as everywhere: the summary as one object (and enough on its own).
+    let v = json(&["failmap", s(&tch), "--cell", "4000", "--json"]);
+    assert_eq!(v["method"], "safe");
+    assert_eq!(v["cells_with_false_culls"], 0);
+    assert!(v["cells_on_terrain"].as_u64().expect("cells") > 0, "{v}");
 }
 
 #[test]

@@ -9,8 +9,8 @@ use cull::Hierarchy;
 use eval::evaluate::hierarchy_tin;
 use eval::failmap;
 
-use super::Output;
 use super::files::Outputs;
+use super::{Output, OutputArgs};
 
 /// Arguments of `tincull failmap`.
 #[derive(Debug, Args)]
@@ -33,18 +33,14 @@ pub struct FailmapArgs {
     /// The CSV to write: x, y, eye_z, false_culls, false_cull_area, occlusion_captured, triangles_drawn.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
-    /// No progress bar and no summary.
-    #[arg(long, short)]
-    pub quiet: bool,
+    /// Output flags.
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// Runs `tincull failmap`.
 pub fn run(args: &FailmapArgs) -> Result<()> {
-    let out = Output {
-        json: false,
-        quiet: args.quiet,
-        quiet_text: false,
-    };
+    let out: Output = args.output.into();
     ensure!(
         args.cell.is_finite() && args.cell > 0.0,
         "--cell must be a positive length, got {}",
@@ -56,8 +52,8 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         args.eye_height
     );
     ensure!(
-        args.out.is_some() || args.csv.is_some(),
-        "nothing to write: give -o MAP.png and/or --csv MAP.csv"
+        args.out.is_some() || args.csv.is_some() || args.output.json,
+        "nothing to write: give -o MAP.png, --csv MAP.csv or --json"
     );
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
@@ -100,12 +96,21 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     let scored: Vec<&failmap::Cell> = map.scored().collect();
     let with_fc = scored.iter().filter(|c| c.metrics.false_culls > 0).count();
     let occ: Vec<f64> = scored.iter().filter_map(|c| c.metrics.occlusion_captured).collect();
+    let captured = occ.iter().sum::<f64>() / occ.len().max(1) as f64;
     out.say(format!(
-        "{} x {} cells, {} on the terrain: {with_fc} with false culls (worst {worst}), occlusion captured {:.3} on average",
+        "{} x {} cells, {} on the terrain: {with_fc} with false culls (worst {worst}), occlusion captured {captured:.3} \
+         on average",
         map.cols,
         map.rows,
         scored.len(),
-        occ.iter().sum::<f64>() / occ.len().max(1) as f64
     ));
-    Ok(())
+    out.json(&serde_json::json!({
+        "method": args.method.name(),
+        "cols": map.cols,
+        "rows": map.rows,
+        "cells_on_terrain": scored.len(),
+        "cells_with_false_culls": with_fc,
+        "worst_false_culls": worst,
+        "occlusion_captured_mean": (!occ.is_empty()).then_some(captured),
+    }))
 }
