@@ -298,7 +298,7 @@ impl Plan {
     /// Names every tile's output after a digest (CRC-32) of the plan and of the far-field or part files written
     /// beside it (`files`: each one's [`file_digest`], in tile order): `tile-00007-1a2b3c4d.tch`. A tile built from an
     /// earlier plan written to the same place (another terrain, other options) then has another name, so
-    /// [`crate::merge`] never takes it for a tile of this plan: it says the tile has not been built. Deterministic:
+    /// [`crate::merge()`] never takes it for a tile of this plan: it says the tile has not been built. Deterministic:
     /// the same plan and files give the same names. (A DEM changed in place under the same name, with the same grid
     /// and far field, is not seen.)
     pub fn seal(&mut self, files: &[u32]) -> Result<(), TilesError> {
