@@ -2,7 +2,6 @@
 //! keeps the registry locked for good, as the process is about to exit.
 
 use std::fs;
-use std::io::Write;
 
 #[test]
 fn remove_temporaries_removes_every_staged_file() {

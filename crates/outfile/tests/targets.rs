@@ -4,7 +4,6 @@
 //! for one file refused).
 
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
