@@ -395,7 +395,7 @@ impl Batch {
         Batch::default()
     }
 
-    /// Declares `path` an input of the command (rule 6): no output of this batch may be the same file. An input
+    /// Declares `path` an input of the command (rule 7): no output of this batch may be the same file. An input
     /// that does not exist is nothing to protect (reading it will fail); `-` (standard input) is ignored. Refused
     /// when an output checked before is that file.
     pub fn input(&mut self, path: &Path) -> Result<()> {
