@@ -236,3 +236,29 @@ fn a_reader_that_goes_away_ends_the_command_quietly() {
     assert_eq!(out.status.code(), Some(141), "the status of a process ended by SIGPIPE");
     assert_eq!(String::from_utf8_lossy(&out.stderr), "", "nothing to say");
 }
+
+#[test]
+fn text_to_a_reader_that_goes_away_ends_quietly_too() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", p(&mesh(SMALL)), "-o", p(&tch)]);
+    let eyes = dir.path().join("eyes.txt");
+    let lines: String = (0..20_000).map(|i| format!("{},{},500\n", i % 900, i / 900)).collect();
+    fs::write(&eyes, lines).expect("eyes");
+    // Like `tincull cull h.tch --eyes eyes.txt | head -1`: one line of text per eye.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["cull", p(&tch), "--eyes", p(&eyes)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut first)
+        .expect("a first line");
+    let out = child.wait_with_output().expect("wait");
+    assert_eq!(out.status.code(), Some(141), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "", "nothing to say");
+}

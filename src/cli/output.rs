@@ -39,10 +39,20 @@ pub struct Output {
 }
 
 impl Output {
-    /// Prints a line of human-readable text on stdout (not with `--json` or `--quiet`).
+    /// Prints a line of human-readable text on stdout (not with `--json` or `--quiet`). When stdout cannot take it,
+    /// the command ends there (its temporary files removed): quietly with status 141 when the reader went away
+    /// (`tincull cull h.tch --eyes e.txt | head`), as a process ended by SIGPIPE, else with the error and status 1.
     pub fn say(&self, text: impl AsRef<str>) {
         if !self.quiet && !self.json && !self.quiet_text {
-            println!("{}", text.as_ref());
+            let mut out = std::io::stdout().lock();
+            if let Err(e) = writeln!(out, "{}", text.as_ref()).and_then(|_| out.flush()) {
+                outfile::remove_temporaries();
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    std::process::exit(141);
+                }
+                eprintln!("error: cannot write to standard output: {e}");
+                std::process::exit(1);
+            }
         }
     }
 
