@@ -199,7 +199,7 @@ fn bad_input_gives_clear_errors() {
         vec!["eval", s(&bad)],
         vec!["export", s(&bad), "--export-json", "-"],
         vec!["pvs", s(&bad), "--check", "1"],
-        vec!["failmap", s(&bad), "--cell", "10", "--csv", s(&csv)],
+        vec!["failmap", s(&bad), "--cell-size", "10", "--csv", s(&csv)],
     ] {
         fails_with(&args, "bad.tch: truncated");
     }

@@ -52,15 +52,52 @@ fn failmap_takes_out() {
     let dir = tempfile::tempdir().expect("tempdir");
     let tch = hierarchy(dir.path());
     let png = dir.path().join("m.png");
-    ok(&["failmap", s(&tch), "--cell", "4000", "--out", s(&png), "-q"]);
+    ok(&["failmap", s(&tch), "--cell-size", "4000", "--out", s(&png), "-q"]);
     assert!(png.exists());
-    let out = run(&["failmap", s(&tch), "--cell", "4000", "--output", s(&png)]);
+    let out = run(&["failmap", s(&tch), "--cell-size", "4000", "--output", s(&png)]);
     assert!(!out.status.success(), "--output is gone: -o/--out everywhere");
     // `--json` as everywhere: the summary as one object (and enough on its own).
-    let v = json(&["failmap", s(&tch), "--cell", "4000", "--json"]);
+    let v = json(&["failmap", s(&tch), "--cell-size", "4000", "--json"]);
     assert_eq!(v["method"], "safe");
     assert_eq!(v["cells_with_false_culls"], 0);
     assert!(v["cells_on_terrain"].as_u64().expect("cells") > 0, "{v}");
+}
+
+/// `--cell-size` is the side of square cells wherever cells have a size (`build --grouping quadtree`, `failmap`,
+/// `pvs --check`); `--cell`, its older name in `build` and `failmap`, still means the same there (and `cell` beside
+/// `cell_size` in a `--config` file). `pvs --cell` is a viewcell's corners, nothing else.
+#[test]
+fn cell_size_has_one_name() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    let new = json(&["failmap", s(&tch), "--cell-size", "4000", "--json"]);
+    let old = json(&["failmap", s(&tch), "--cell", "4000", "--json"]);
+    assert_eq!(new, old);
+    let m = mesh("jacksboro-2k.obj");
+    let build = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["build", s(&m), "--grouping", "quadtree", "-q", "-o", s(&out)];
+        args.extend_from_slice(extra);
+        ok(&args);
+        std::fs::read(&out).expect("the built file")
+    };
+    let reference = build("a.tch", &["--cell-size", "2500"]);
+    assert_eq!(build("b.tch", &["--cell", "2500"]), reference);
+    for (i, key) in ["cell_size", "cell"].iter().enumerate() {
+        let config = dir.path().join(format!("p{i}.toml"));
+        std::fs::write(&config, format!("{key} = 2500.0\n")).expect("write the config");
+        assert_eq!(
+            build(&format!("c{i}.tch"), &["--config", s(&config)]),
+            reference,
+            "{key}"
+        );
+    }
+    let depth = build("d.tch", &["--depth", "1"]);
+    assert_ne!(depth, reference, "the cell size is used");
+    fails_with(
+        &["build", s(&m), "-o", s(&dir.path().join("e.tch")), "--cell-size", "100"],
+        "--grouping quadtree",
+    );
 }
 
 #[test]

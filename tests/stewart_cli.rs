@@ -127,7 +127,7 @@ fn quadtree_build_eval_and_cull() {
             s(&quad),
             "--method",
             "thesis",
-            "--cell",
+            "--cell-size",
             "100",
             "--csv",
             s(&map),

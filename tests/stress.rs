@@ -236,7 +236,7 @@ fn failmap_end_to_end() {
             tch.to_str().expect("utf-8"),
             "--eye-height",
             "2",
-            "--cell",
+            "--cell-size",
             "4000",
             "-q",
             "-o",

@@ -50,11 +50,13 @@ pub struct ParamArgs {
     #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
     pub grouping: Option<String>,
     /// Quadtree: finest depth (root = 0) [default: cells of about 128 triangles].
-    #[arg(long, value_name = "D", conflicts_with = "cell")]
+    #[arg(long, value_name = "D", conflicts_with = "cell_size")]
     pub depth: Option<u32>,
-    /// Quadtree: finest cell side in metres, instead of --depth.
-    #[arg(long, value_name = "M")]
-    pub cell: Option<f64>,
+    /// Quadtree: finest cell side in metres, instead of --depth (`--cell` is an older name; `cell_size` or `cell` in
+    /// a `--config` file).
+    #[arg(long, value_name = "M", alias = "cell")]
+    #[serde(alias = "cell")]
+    pub cell_size: Option<f64>,
     /// Quadtree: byte budget of the visibility data; the finest levels are dropped until it fits (Stewart's memory
     /// levels).
     #[arg(long, value_name = "N")]
@@ -94,13 +96,13 @@ impl ParamArgs {
         }
         let quadtree = QuadtreeParams {
             depth: self.depth.or(from_file.depth),
-            cell: self.cell.or(from_file.cell),
+            cell: self.cell_size.or(from_file.cell_size),
             max_bytes: self.max_bytes.or(from_file.max_bytes),
         };
         match self.grouping.as_deref().or(from_file.grouping.as_deref()) {
             None | Some("crystal") => {
                 if quadtree != QuadtreeParams::default() {
-                    anyhow::bail!("--depth, --cell and --max-bytes need --grouping quadtree");
+                    anyhow::bail!("--depth, --cell-size and --max-bytes need --grouping quadtree");
                 }
             }
             Some("quadtree") => {

@@ -24,9 +24,9 @@ pub struct FailmapArgs {
     /// Eye height above the ground at each cell centre (m).
     #[arg(long, default_value_t = 2.0)]
     pub eye_height: f64,
-    /// Cell side (m).
-    #[arg(long)]
-    pub cell: f64,
+    /// Side of the map's square cells (m; `--cell` is an older name).
+    #[arg(long, value_name = "M", alias = "cell")]
+    pub cell_size: f64,
     /// The PNG image to write.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -42,9 +42,9 @@ pub struct FailmapArgs {
 pub fn run(args: &FailmapArgs) -> Result<()> {
     let out: Output = args.output.into();
     ensure!(
-        args.cell.is_finite() && args.cell > 0.0,
-        "--cell must be a positive length, got {}",
-        args.cell
+        args.cell_size.is_finite() && args.cell_size > 0.0,
+        "--cell-size must be a positive length, got {}",
+        args.cell_size
     );
     ensure!(
         args.eye_height.is_finite(),
@@ -70,10 +70,10 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         "{}: the mesh has no triangles",
         args.hierarchy.display()
     );
-    let (cols, rows) = failmap::grid_size(&tin, args.cell)?;
+    let (cols, rows) = failmap::grid_size(&tin, args.cell_size)?;
     let bar = out.progress((cols * rows) as u64, "cells");
     let advance = Output::monotone(&bar);
-    let map = failmap::compute(&h, args.method, &tin, args.eye_height, args.cell, &advance)?;
+    let map = failmap::compute(&h, args.method, &tin, args.eye_height, args.cell_size, &advance)?;
     bar.finish_and_clear();
     let worst = map.worst();
     if let Some(path) = &args.out {

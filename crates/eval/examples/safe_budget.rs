@@ -9,7 +9,8 @@
 //! A `CONFIG` is `default` or comma-separated `key=value` over [`SafeParams::default`]: `columns`, `patch`,
 //! `occluders` (occluder budget), `work` (work budget; `0` for unlimited) and `coarse`
 //! (coarse columns; `0` refines every visible node). Viewpoints: `VIEWPOINTS` per class, `--view-seed 1` (as `tincull eval`), 360° view.
-//! Set `TRUTH=0` to skip the ground truth (timings and drawn fractions only).
+//! Set `TRUTH=0` to skip the ground truth (timings and drawn fractions only), `REPS=N` to time each cull `N` times
+//! (default 7; more for a profiler).
 //!
 //! Prints CSV on stdout, one line per (config, class): the median over the viewpoints of the cull time (ns; each the
 //! median of 7 culls with warm working memory, under whatever load the machine has), the means of the drawn fraction,
@@ -69,6 +70,7 @@ fn main() -> Result<()> {
         .map(|s| Ok((s.clone(), parse_config(s)?)))
         .collect::<Result<_>>()?;
     let with_truth = std::env::var("TRUTH").map_or(true, |v| v != "0");
+    let reps: usize = std::env::var("REPS").map_or(Ok(7), |v| v.parse()).context("REPS")?;
     let start = Instant::now();
     let truth = GroundTruth::new(&htin);
     let triangles = htin.num_triangles();
@@ -97,7 +99,7 @@ fn main() -> Result<()> {
             let mut digest = DefaultHasher::new();
             for (_, camera, visible) in eyes.iter().filter(|e| e.0 == class) {
                 culler.cull_into(camera, &mut list);
-                let mut t = [0u64; 7];
+                let mut t = vec![0u64; reps.max(1)];
                 for x in &mut t {
                     let s = Instant::now();
                     culler.cull_into(camera, &mut list);
