@@ -243,3 +243,37 @@ fn sweep_never_resumes_another_setup() {
     let v = sweep(&csv, &["--sectors", "4", "--subsectors", "1", "--no-per-triangle"]);
     assert_eq!((v["ran"].as_u64(), v["skipped"].as_u64()), (Some(0), Some(1)), "{v}");
 }
+
+/// `--config` gives the build parameters that are not swept, as `build --config` does: a sweep with `min_group = 40`
+/// in the file is the same setup as one with `--min-group 40` (it resumes it), and a swept key in the file is refused
+/// with an error naming the file and the key.
+#[test]
+fn sweep_reads_its_fixed_parameters_from_a_config() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("s.csv");
+    let fixed = ["--sectors", "4", "--subsectors", "1", "--no-per-triangle"];
+    let v = sweep(&csv, &[&fixed[..], &["--min-group", "40"]].concat());
+    assert_eq!(v["ran"], 1);
+    let config = dir.path().join("p.toml");
+    std::fs::write(&config, "min_group = 40\n").expect("write");
+    let v = sweep(
+        &csv,
+        &[&fixed[..], &["--config", config.to_str().expect("utf-8")]].concat(),
+    );
+    assert_eq!((v["ran"].as_u64(), v["skipped"].as_u64()), (Some(0), Some(1)), "{v}");
+    for key in ["sectors = 8", "rng_seed = 3"] {
+        std::fs::write(&config, format!("{key}\n")).expect("write");
+        let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+            .args(["sweep", mesh("jacksboro-2k.obj").to_str().expect("path"), "-q", "-o"])
+            .arg(dir.path().join("x.csv"))
+            .arg("--config")
+            .arg(&config)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{key}");
+        let name = key.split(' ').next().expect("key");
+        assert!(err.contains("p.toml") && err.contains(name), "{key}: {err}");
+        assert!(!dir.path().join("x.csv").exists());
+    }
+}

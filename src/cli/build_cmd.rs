@@ -64,13 +64,16 @@ pub struct ParamArgs {
 }
 
 impl ParamArgs {
+    /// The parameters of a `--config` TOML file (keys as the long options, with underscores).
+    pub fn read(path: &Path) -> Result<ParamArgs> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        toml::from_str(&text).with_context(|| format!("{}: invalid parameters", path.display()))
+    }
+
     /// Command-line values over those of `file` over the defaults.
     pub fn resolve(&self, file: Option<&Path>) -> Result<BuildParams> {
-        let from_file: ParamArgs = match file {
-            Some(path) => {
-                let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-                toml::from_str(&text).with_context(|| format!("{}: invalid parameters", path.display()))?
-            }
+        let from_file = match file {
+            Some(path) => ParamArgs::read(path)?,
             None => ParamArgs::default(),
         };
         let d = BuildParams::default();

@@ -65,11 +65,18 @@ pub struct SweepArgs {
     #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
     pub grouping: Option<String>,
     /// Quadtree: finest depth [default: cells of about 128 triangles].
-    #[arg(long, value_name = "D")]
+    #[arg(long, value_name = "D", conflicts_with = "cell_size")]
     pub depth: Option<u32>,
+    /// Quadtree: finest cell side in metres, instead of --depth.
+    #[arg(long, value_name = "M")]
+    pub cell_size: Option<f64>,
     /// Quadtree: byte budget of the visibility data (memory levels).
     #[arg(long, value_name = "N")]
     pub max_bytes: Option<u64>,
+    /// Read the build parameters that are not swept from this TOML file, as `build --config` does (the command line
+    /// wins); the swept ones (`sectors`, `subsectors`, `seeds`, `rng_seed`) are refused there: give them as lists.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
     /// Skip the per-triangle method (its culler tests every triangle: by far the slowest part of scoring).
     #[arg(long)]
     pub no_per_triangle: bool,
@@ -91,6 +98,22 @@ fn u32_list(text: &str, what: &str) -> Result<Vec<u32>> {
 
 /// Runs `tincull sweep`.
 pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
+    if let Some(path) = &args.config {
+        let file = ParamArgs::read(path)?;
+        let swept = [
+            ("sectors", file.sectors.is_some()),
+            ("subsectors", file.subsectors.is_some()),
+            ("seeds", file.seeds.is_some()),
+            ("rng_seed", file.rng_seed.is_some()),
+        ];
+        if let Some((key, _)) = swept.iter().find(|(_, given)| *given) {
+            anyhow::bail!(
+                "{}: `{key}` is swept: give it as a list on the command line (--{}), not in --config",
+                path.display(),
+                key.replace('_', "-")
+            );
+        }
+    }
     let base = ParamArgs {
         orphan_passes: args.orphan_passes,
         min_group: args.min_group,
@@ -98,10 +121,11 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         undersampling: args.undersampling,
         grouping: args.grouping.clone(),
         depth: args.depth,
+        cell_size: args.cell_size,
         max_bytes: args.max_bytes,
         ..ParamArgs::default()
     }
-    .resolve(None)?;
+    .resolve(args.config.as_deref())?;
     anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
     let spec = SweepSpec {
         sectors: u32_list(&args.sectors, "--sectors")?,
@@ -138,10 +162,13 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     );
     anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
 
-    // Refuse an output that cannot be written, or that is the mesh, before any work (it is rewritten after each
+    // Refuse an output that cannot be written, or that is the mesh or the config, before any work (it is rewritten after each
     // combination).
     let mut check = outfile::Batch::new();
     check.input(&args.mesh.mesh)?;
+    if let Some(config) = &args.config {
+        check.input(config)?;
+    }
     check.check(&args.out)?;
     let mut table = match std::fs::read_to_string(&args.out) {
         Ok(text) => SweepTable::parse(&text).with_context(|| format!("{}", args.out.display()))?,
