@@ -223,3 +223,39 @@ fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
     std::fs::remove_file(dir.path().join("mesh.tiles/part-00003.bin")).expect("remove");
     fails_with(&["tiles", "build", s(&plan), "--tile", "3"], "part-00003.bin");
 }
+
+/// `tiles plan MESH` resolves vertices that share x,y as every command that reads a mesh: refused by default with an
+/// error naming them, the highest kept with `--dedupe keep-highest`.
+#[test]
+fn a_mesh_plan_takes_dedupe() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let text = std::fs::read_to_string(mesh("jacksboro-2k.obj")).expect("mesh");
+    let first = text.lines().find(|l| l.starts_with("v ")).expect("a vertex");
+    let f: Vec<f64> = first[2..]
+        .split_whitespace()
+        .map(|x| x.parse().expect("number"))
+        .collect();
+    let obj = dir.path().join("dup.obj");
+    std::fs::write(&obj, format!("{text}v {} {} {}\n", f[0], f[1], f[2] - 5.0)).expect("write");
+    let plan = dir.path().join("dup.json");
+    let base = [
+        "tiles",
+        "plan",
+        s(&obj),
+        "-o",
+        s(&plan),
+        "--tile",
+        "10000",
+        "--halo",
+        "1000",
+        "-q",
+    ];
+    fails_with(&base, "--dedupe");
+    assert!(!plan.exists(), "no plan after an error");
+    let v = json(&[&base[..], &["--dedupe", "keep-highest", "--json"]].concat());
+    assert!(v["tiles"].as_u64().expect("tiles") > 1, "{v}");
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let m = json(&["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch")), "--json"]);
+    let info = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
+    assert_eq!(m["vertices"], info["vertices"], "the lower duplicate is dropped");
+}

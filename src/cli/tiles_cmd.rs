@@ -44,6 +44,9 @@ pub struct PlanArgs {
     /// For a mesh: use the file's own triangles (checked to form a height field) instead of re-triangulating.
     #[arg(long)]
     pub keep_faces: bool,
+    /// For a mesh: what to do with vertices that share x,y but differ in z (as every command that reads a mesh).
+    #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
+    pub dedupe: DedupeArg,
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -213,7 +216,7 @@ fn plan_mesh(
     let mesh = MeshArgs {
         mesh: args.dem.clone(),
         keep_faces: args.keep_faces,
-        dedupe: DedupeArg::Reject,
+        dedupe: args.dedupe,
         dem_vertices: DEFAULT_DEM_VERTICES,
         band: None,
     };
