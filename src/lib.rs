@@ -19,6 +19,8 @@
 //!
 //! The method follows P. M. Edmondson, *Hierarchical Occlusion Culling for Arbitrarily-Meshed Height Fields* (2004).
 
+#![warn(missing_docs)]
+
 pub use crystal;
 pub use cull;
 pub use eval;

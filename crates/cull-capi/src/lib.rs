@@ -9,6 +9,8 @@
 //! A `TcCuller` keeps its working memory between culls, so one culler must not be used by two threads at once;
 //! separate cullers are independent. See the crate README for the ABI and versioning rules.
 
+#![warn(missing_docs)]
+
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};

@@ -4,6 +4,8 @@
 //! local origin for f32 conversion. It is built by Delaunay triangulation ([`triangulate`]) of points that come
 //! from OBJ files or DEM grids, or from the simplification of a grid.
 
+#![warn(missing_docs)]
+
 pub mod delaunay;
 pub mod dem;
 pub mod error;
