@@ -107,6 +107,7 @@ fn cull_some(h: &Hierarchy) {
         Camera::all_around(h.origin),
         Camera::all_around([h.origin[0] + 1e7, h.origin[1] - 1e7, h.origin[2] + 5.0]),
         Camera::all_around([0.0, 0.0, 500.0]),
+        Camera::all_around([0.0, 0.0, 5000.0]),
         Camera::all_around([f64::NAN, 0.0, 0.0]),
         Camera::all_around([f64::INFINITY, f64::NEG_INFINITY, 1.0]),
         Camera {

@@ -107,7 +107,9 @@
 //!   spans (of a triangle, or of a set of vertices for the vertex bound) widened by `REL (1 + |u|)` before they are
 //!   turned into columns; column boundaries `a_j` are exact dyadic numbers; a span's ends are turned into column
 //!   indices by a floor or ceiling that saturates (a vertex almost beside the camera, `f` near 0, has `|u|` up to
-//!   about 1e308) and then clamped to the face, so a span always covers every column its `u` interval meets;
+//!   about 1e308) and then clamped to the face, so a span always covers every column its `u` interval meets; the
+//!   partial column left of a cover's first full column is found by a saturating subtraction too (it is then outside
+//!   the face, never wrapped into it), so no index arithmetic can overflow;
 //! - the vertex bound compares the vertices' raised values `hi` themselves (each above the exact `v` of the raised
 //!   vertex, see above) with `H_j`: no further arithmetic;
 //! - disks: `f_lo` is decreased and `f_hi` increased by `REL` relative; the tangent values `u±` are computed from a
@@ -611,7 +613,9 @@ impl Horizon {
             }
         }
         // Partial columns at both ends (only when the triangle does not fit inside one column).
-        let left_col = first - 1; // contains lo_u (unless lo_u is on a boundary, then it is just a weaker cover)
+        // `first` may have saturated to `isize::MIN` (a vertex almost beside the camera): the left partial column is then
+        // outside the face, and must not wrap around to `isize::MAX`.
+        let left_col = first.saturating_sub(1); // contains lo_u (unless lo_u is on a boundary, then a weaker cover)
         let right_col = end; // contains hi_u
         if left_col < right_col {
             // The covers run exactly from and to the end vertices (`ua`, `uc`); whether two covers meet is decided
@@ -1055,6 +1059,31 @@ mod tests {
         assert_eq!(ceil(1e302), isize::MAX);
         assert_eq!((floor(-2.5), ceil(-2.5), floor(2.5), ceil(2.5)), (-3, -2, 2, 3));
         assert_eq!((floor(f64::NAN), ceil(f64::NAN)), (0, 0));
+    }
+
+    /// Regression (found by a library user's fuzzing of `.tch` files): a segment reaching from a vertex almost beside
+    /// the camera (`u` about −2e301, so `⌈column⌉` saturates to `isize::MIN`) took one column off that minimum to
+    /// find its left partial column: an overflow, which panicked in debug builds and in release wrapped to
+    /// `isize::MAX`, so neither of its partial covers was written. The cover at its right end, which pairs with the
+    /// next segment's at their shared vertex, must be written.
+    #[test]
+    fn a_segment_from_beside_the_camera_keeps_its_partial_cover() {
+        let mu = 1e-6;
+        let mut h = Horizon::new(64);
+        // Face 0 (+x): u = y / x. The first vertex's lowered v is exactly 0 (height μ), so the segment's rounding
+        // margin stays small however far its u reaches.
+        let p: Vec<Projected> = [[1e-300, -20.0, mu], [10.0, 3.0, 5.0], [10.0, 9.0, 5.0]]
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| project(d, mu, i as u32))
+            .collect();
+        assert!(p[0].face[0].u < -1e301 && p[0].face[0].lo == 0.0, "{:?}", p[0].face[0]);
+        h.write_segment([&p[0], &p[1]]);
+        h.write_segment([&p[1], &p[2]]);
+        // u = 0.3 lies inside column ⌊(0.3 + 1) · 32⌋ = 41, covered by the two segments' partial covers, which meet
+        // at their shared vertex 1 (v ≈ 0.5).
+        let v = h.values()[41];
+        assert!(v > 0.49 && v < 0.5, "column 41 is {v}");
     }
 
     #[test]

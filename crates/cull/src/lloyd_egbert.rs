@@ -554,7 +554,7 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
             let lo = p[0][axis].min(p[1][axis]).min(p[2][axis]);
             let hi = p[0][axis].max(p[1][axis]).max(p[2][axis]);
             let first = (((lo - grid.min[axis]) / grid.cell).floor().max(0.0) as usize).saturating_sub(1);
-            let last = (((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize + 1).min(n);
+            let last = ((((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize).saturating_add(1)).min(n);
             for i in first..=last {
                 let x = grid.line(axis, i);
                 if !(lo <= x && x <= hi) {
