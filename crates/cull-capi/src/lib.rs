@@ -158,7 +158,15 @@ fn load_error(what: &str, e: HierarchyError) -> Failure {
         HierarchyError::Io { .. } => TC_ERR_IO,
         _ => TC_ERR_FORMAT,
     };
-    Failure(code, format!("{what}: {e}"))
+    // The message carries the whole chain: `Io` names only the file and leaves its cause to `source()`, which a C
+    // caller cannot reach ("tc_load_path: x.tch: No such file or directory (os error 2)").
+    let mut message = format!("{what}: {e}");
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        message.push_str(&format!(": {c}"));
+        cause = c.source();
+    }
+    Failure(code, message)
 }
 
 /// Boxes a culler over `h` into `*out`.

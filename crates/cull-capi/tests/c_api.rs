@@ -191,6 +191,15 @@ fn errors_are_codes_with_messages() {
             TC_ERR_IO
         );
         assert!(last_error().contains("/nonexistent/x.tch"), "{}", last_error());
+        // The cause too, which a C caller cannot reach otherwise.
+        let os = std::fs::read("/nonexistent/x.tch")
+            .expect_err("no such file")
+            .to_string();
+        assert!(
+            last_error().ends_with(&format!("/nonexistent/x.tch: {os}")),
+            "{}",
+            last_error()
+        );
         assert!(c.is_null());
         let junk = b"TCH? not really";
         assert_eq!(
@@ -302,4 +311,15 @@ fn cull_time_through_the_c_api() {
         // SAFETY: from tc_load_buffer, freed once.
         unsafe { tc_free(c) };
     }
+}
+
+/// The README states the ABI version that the library and the header implement.
+#[test]
+fn the_readme_states_the_abi_version() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).expect("README");
+    let (major, minor) = (tc_abi_version() >> 16, tc_abi_version() & 0xffff);
+    assert!(
+        readme.contains(&format!("Current version: {major}.{minor} ")),
+        "the README's \"Current version\" is not {major}.{minor}"
+    );
 }
