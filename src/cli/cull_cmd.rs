@@ -87,15 +87,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     };
     let mut list = DrawList::default();
     for eye in eyes {
-        let camera = Camera {
-            position: eye,
-            yaw: args.yaw.to_radians(),
-            hfov: if args.fov >= 360.0 {
-                std::f64::consts::TAU
-            } else {
-                args.fov.to_radians()
-            },
-        };
+        let camera = Camera::from_degrees(eye, args.yaw, args.fov)?;
         let ns = timed_cull(&culler, &camera, &mut list);
         let s = list.stats;
         if out.json {

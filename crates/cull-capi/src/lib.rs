@@ -276,27 +276,8 @@ pub unsafe extern "C" fn tc_cull(
         }
         // SAFETY: non-null; the caller passes 3 doubles.
         let eye = unsafe { [*eye, *eye.add(1), *eye.add(2)] };
-        if !eye.iter().all(|c| c.is_finite()) {
-            return fail(TC_ERR_INVALID, format!("tc_cull: the eye {eye:?} is not finite"));
-        }
-        if !yaw_deg.is_finite() {
-            return fail(TC_ERR_INVALID, format!("tc_cull: yaw {yaw_deg} is not finite"));
-        }
-        if !(fov_deg > 0.0 && fov_deg <= 360.0) {
-            return fail(
-                TC_ERR_INVALID,
-                format!("tc_cull: field of view {fov_deg} is outside (0, 360]"),
-            );
-        }
-        let camera = Camera {
-            position: eye,
-            yaw: yaw_deg.to_radians(),
-            hfov: if fov_deg >= 360.0 {
-                std::f64::consts::TAU
-            } else {
-                fov_deg.to_radians()
-            },
-        };
+        let camera = Camera::from_degrees(eye, yaw_deg, fov_deg)
+            .map_err(|e| Failure(TC_ERR_INVALID, format!("tc_cull: {e}")))?;
         // SAFETY: non-null, from tc_load_*, not shared across threads (the contract).
         let c = unsafe { &mut *culler };
         c.culler.cull_into(&camera, &mut c.list);

@@ -39,15 +39,44 @@ use crate::hierarchy::StoredRegion;
 use crate::sector::{azimuth, for_each_sector_in};
 
 /// A camera: position in world coordinates and an optional horizontal view restriction.
+///
+/// The fields are radians; [`Camera::from_degrees`] takes degrees as the command line and the C API do, and refuses
+/// what makes no sense. A camera built field by field is never refused: a non-finite eye draws everything (every
+/// culler), and a field of view that is not in `(0, 2π)` restricts nothing ([`Camera::frustum`]), so a wrong value
+/// can only draw more, never hide terrain.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Eye position, world coordinates (m).
     pub position: [f64; 3],
     /// View direction as an azimuth in radians, counter-clockwise from +x; ignored at a 360° field of view.
     pub yaw: f64,
-    /// Horizontal field of view in radians; `2π` (the default) means no frustum restriction.
+    /// Horizontal field of view in radians, in `(0, 2π)` to restrict the view; `2π` ([`Camera::all_around`]) or any
+    /// value outside `(0, 2π)` (NaN included) means no restriction.
     pub hfov: f64,
 }
+
+/// Why [`Camera::from_degrees`] refused a view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CameraError {
+    /// A coordinate of the eye is NaN or infinite.
+    Eye([f64; 3]),
+    /// The yaw is NaN or infinite.
+    Yaw(f64),
+    /// The field of view is not in `(0, 360]` degrees.
+    FieldOfView(f64),
+}
+
+impl std::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CameraError::Eye(e) => write!(f, "the eye {e:?} is not finite"),
+            CameraError::Yaw(y) => write!(f, "yaw {y} is not finite"),
+            CameraError::FieldOfView(v) => write!(f, "field of view {v} is outside (0, 360] degrees"),
+        }
+    }
+}
+
+impl std::error::Error for CameraError {}
 
 impl Camera {
     /// A camera at `position` looking all around (360°), the thesis' measurement mode.
@@ -57,6 +86,32 @@ impl Camera {
             yaw: 0.0,
             hfov: TAU,
         }
+    }
+
+    /// A camera at `position` looking along the azimuth `yaw_deg` (degrees counter-clockwise from +x) with a
+    /// horizontal field of view of `hfov_deg` degrees (360: all around), as `tincull cull --yaw --fov` and the C API's
+    /// `tc_cull` take them. Refuses a non-finite eye or yaw, and a field of view outside `(0, 360]`.
+    pub fn from_degrees(position: [f64; 3], yaw_deg: f64, hfov_deg: f64) -> Result<Camera, CameraError> {
+        if !position.iter().all(|c| c.is_finite()) {
+            return Err(CameraError::Eye(position));
+        }
+        if !yaw_deg.is_finite() {
+            return Err(CameraError::Yaw(yaw_deg));
+        }
+        if !(hfov_deg > 0.0 && hfov_deg <= 360.0) {
+            return Err(CameraError::FieldOfView(hfov_deg));
+        }
+        Ok(Camera {
+            position,
+            yaw: yaw_deg.to_radians(),
+            hfov: if hfov_deg >= 360.0 { TAU } else { hfov_deg.to_radians() },
+        })
+    }
+
+    /// The view restriction every culler applies: `(yaw, half the field of view)` when `hfov` is in `(0, 2π)` and
+    /// `yaw` is finite, else none (all around).
+    pub fn frustum(&self) -> Option<(f64, f64)> {
+        (self.hfov > 0.0 && self.hfov < TAU && self.yaw.is_finite()).then_some((self.yaw, self.hfov * 0.5))
     }
 }
 
@@ -108,11 +163,13 @@ impl DrawList {
         }
     }
 
-    /// Marks every triangle of the drawn ranges in a per-triangle mask.
+    /// Marks every triangle of the drawn ranges in a per-triangle mask of `triangles` entries (the hierarchy's
+    /// triangle count); the part of a range beyond it is left out.
     pub fn mask(&self, triangles: usize) -> Vec<bool> {
         let mut m = vec![false; triangles];
         for &[s, e] in &self.ranges {
-            m[s as usize..e as usize].fill(true);
+            let (s, e) = ((s as usize).min(triangles), (e as usize).min(triangles));
+            m[s..e.max(s)].fill(true);
         }
         m
     }
@@ -233,12 +290,18 @@ impl Culler {
     pub fn cull_into(&self, camera: &Camera, out: &mut DrawList) {
         out.ranges.clear();
         out.stats = CullStats::default();
+        if !camera.position.iter().all(|c| c.is_finite()) {
+            // As every culler: no verdict from a camera that is nowhere.
+            out.push([0, self.triangles]);
+            out.stats.nodes_skipped = self.nodes.len() as u32;
+            return;
+        }
         let eye = [
             camera.position[0] - self.origin[0],
             camera.position[1] - self.origin[1],
             camera.position[2] - self.origin[2],
         ];
-        let frustum = (camera.hfov < TAU).then_some((camera.yaw, camera.hfov * 0.5));
+        let frustum = camera.frustum();
         // The recursion of the module documentation, unrolled over the depth-first order: a culled node skips its
         // subtree.
         let mut i = 0;

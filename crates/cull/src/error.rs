@@ -21,9 +21,9 @@ pub enum HierarchyError {
         /// The newest version this build reads (it reads every version from 1).
         supported: u32,
     },
-    /// The file ends before its declared length.
+    /// The file ends before the end of its header, or of the data whose length the header declares.
     Truncated {
-        /// Bytes declared in the header.
+        /// Bytes needed: the header's, or the declared length of the data after it.
         expected: u64,
         /// Bytes present.
         found: u64,
@@ -39,6 +39,9 @@ pub enum HierarchyError {
     Decode(String),
     /// The content is structurally invalid (indices out of range, ranges not nested, ...).
     Invalid(String),
+    /// A valid hierarchy that the asked culling method does not apply to (a region method of the other grouping:
+    /// [`crate::CullMethod::check`]).
+    MethodMismatch(String),
     /// What is wrong with the file at `path` ([`crate::Hierarchy::load`] names the file of every error but
     /// [`HierarchyError::Io`], which names it itself).
     InFile {
@@ -70,16 +73,16 @@ impl std::fmt::Display for HierarchyError {
                 f,
                 "unsupported hierarchy format version {found} (this build reads versions 1 to {supported})"
             ),
-            HierarchyError::Truncated { expected, found } => write!(
-                f,
-                "truncated hierarchy file: {expected} bytes of data declared, {found} present"
-            ),
+            HierarchyError::Truncated { expected, found } => {
+                write!(f, "truncated hierarchy file: {found} bytes where {expected} are needed")
+            }
             HierarchyError::Checksum { stored, found } => write!(
                 f,
                 "corrupted hierarchy file: checksum {found:08x} does not match the stored {stored:08x}"
             ),
             HierarchyError::Decode(e) => write!(f, "cannot decode hierarchy data: {e}"),
             HierarchyError::Invalid(e) => write!(f, "invalid hierarchy: {e}"),
+            HierarchyError::MethodMismatch(e) => f.write_str(e),
             HierarchyError::InFile { path, error } => write!(f, "{}: {error}", path.display()),
         }
     }

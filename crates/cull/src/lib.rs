@@ -22,7 +22,7 @@ pub mod method;
 pub mod safe;
 pub mod sector;
 
-pub use culler::{Camera, CullStats, Culler, DrawList};
+pub use culler::{Camera, CameraError, CullStats, Culler, DrawList};
 pub use error::HierarchyError;
 pub use file::{FORMAT_VERSION, MAGIC, OLDEST_READABLE_VERSION};
 pub use hierarchy::{BuildInfo, Grouping, Hierarchy, Mesh, Node, StoredRegion};

@@ -90,7 +90,6 @@
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-use std::f64::consts::TAU;
 use std::time::{Duration, Instant};
 
 use crate::culler::{Camera, CullStats, DrawList};
@@ -410,7 +409,7 @@ impl LloydEgbertCuller {
                 + (eye[1] - self.origin[1]).abs()
                 + eye[2].abs()
                 + self.zabs);
-        let frustum = (camera.hfov < TAU).then_some((camera.yaw, camera.hfov * 0.5));
+        let frustum = camera.frustum();
         let dmin_of = |n: &BoxNode| {
             let dx = (n.lo[0] - eye[0]).max(eye[0] - n.hi[0]).max(0.0);
             let dy = (n.lo[1] - eye[1]).max(eye[1] - n.hi[1]).max(0.0);

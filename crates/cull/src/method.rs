@@ -62,7 +62,7 @@ impl CullMethod {
     pub fn check(self, h: &Hierarchy) -> Result<(), HierarchyError> {
         let grouping = h.build.grouping;
         let wrong = |needs: &str, build: &str| {
-            Err(HierarchyError::Invalid(format!(
+            Err(HierarchyError::MethodMismatch(format!(
                 "method `{}` needs a {needs} hierarchy, but this one is {}-grouped (build one with `tincull build \
                  --grouping {build}`, or use method `{}`)",
                 self.name(),

@@ -99,7 +99,6 @@
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-use std::f64::consts::TAU;
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
@@ -829,7 +828,7 @@ impl SafeCuller {
                 + (eye[1] - self.origin[1]).abs()
                 + eye[2].abs()
                 + self.zabs);
-        let frustum = (camera.hfov < TAU).then_some((camera.yaw, camera.hfov * 0.5));
+        let frustum = camera.frustum();
         let distance = |n: &TreeNode| {
             let (dx, dy) = (n.centre[0] - eye[0], n.centre[1] - eye[1]);
             (dx * dx + dy * dy).sqrt()

@@ -319,6 +319,9 @@ fn region_methods_refuse_the_other_grouping() {
     assert!(CullMethod::Safe.check(&quad).is_ok());
     let err = CullMethod::Stewart.check(&crystal).expect_err("stewart on crystals");
     assert!(err.to_string().contains("--grouping quadtree"), "{err}");
+    // A valid file the method does not apply to: not an "invalid hierarchy".
+    assert!(matches!(err, HierarchyError::MethodMismatch(_)), "{err:?}");
+    assert!(!err.to_string().contains("invalid"), "{err}");
     let err = CullMethod::Thesis.check(&quad).expect_err("thesis on a quadtree");
     assert!(err.to_string().contains("method `stewart`"), "{err}");
     assert_eq!(CullMethod::regions_for(&quad), CullMethod::Stewart);

@@ -22,7 +22,7 @@ pub enum TinError {
     /// Two input vertices share x and y but not z (a vertical wall or overhang).
     #[error(
         "vertices {first} and {second} share x,y = ({x}, {y}) but have different heights ({z_first} vs {z_second}): \
-         not a height field (use --dedupe keep-highest to keep the higher one)"
+         not a height field (the dedupe policy keep-highest, `--dedupe keep-highest`, keeps the higher one)"
     )]
     DuplicateXy {
         /// Input index of the vertex kept first.

@@ -201,7 +201,7 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
     let culled = match (&terrain.hierarchy, options.eye) {
         (Some(h), Some(eye)) if options.view != ViewKind::Map || options.colour == Some(ColourMode::Visibility) => {
             let culler = AnyCuller::with_params(h, options.method, options.safe);
-            let camera = culling_camera(eye, options);
+            let camera = culling_camera(eye, options)?;
             Some((culler.cull(&camera), culler, camera))
         }
         _ => None,
@@ -332,17 +332,9 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
 }
 
 /// The culler's camera for the options: at the eye, looking along yaw, with the culling field of view.
-pub fn culling_camera(eye: [f64; 3], options: &RenderOptions) -> Camera {
-    let hfov = if options.cull_fov_deg >= 360.0 {
-        std::f64::consts::TAU
-    } else {
-        options.cull_fov_deg.to_radians()
-    };
-    Camera {
-        position: eye,
-        yaw: options.yaw_deg.unwrap_or(0.0).to_radians(),
-        hfov,
-    }
+pub fn culling_camera(eye: [f64; 3], options: &RenderOptions) -> Result<Camera> {
+    Camera::from_degrees(eye, options.yaw_deg.unwrap_or(0.0), options.cull_fov_deg)
+        .map_err(|e| ViewerError::Invalid(format!("cannot cull from there: {e}")))
 }
 
 fn eye_camera(terrain: &Terrain, options: &RenderOptions) -> EyeCamera {

@@ -430,15 +430,8 @@ impl ViewerApp {
     }
 
     fn camera(&self) -> Camera {
-        Camera {
-            position: self.eye,
-            yaw: self.yaw_deg.to_radians(),
-            hfov: if self.fov_deg >= 360.0 {
-                std::f64::consts::TAU
-            } else {
-                self.fov_deg.to_radians()
-            },
-        }
+        // The slider keeps the field of view in (0, 360] and the eye is finite; anything else looks all around.
+        Camera::from_degrees(self.eye, self.yaw_deg, self.fov_deg).unwrap_or(Camera::all_around(self.eye))
     }
 
     fn terrain(&self) -> &Terrain {
