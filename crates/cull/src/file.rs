@@ -170,8 +170,10 @@ impl Hierarchy {
         Ok(h)
     }
 
-    /// Reads a `.tch` file; every error names it ([`HierarchyError::InFile`], or [`HierarchyError::Io`]).
-    pub fn load(path: &Path) -> Result<Hierarchy, HierarchyError> {
+    /// Reads a `.tch` file; every error names it ([`HierarchyError::InFile`], or [`HierarchyError::Io`]). The
+    /// other way, [`Hierarchy::to_bytes`] gives what to write.
+    pub fn load(path: impl AsRef<Path>) -> Result<Hierarchy, HierarchyError> {
+        let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|source| HierarchyError::Io {
             path: path.to_path_buf(),
             source,

@@ -10,6 +10,28 @@
 //! | [`SafeCuller`] (the default) | [`safe`], over the conservative horizon of [`horizon`] | a theorem: every point of the culled triangles is below the terrain's horizon seen from the camera (proof in the modules' docs) |
 //! | [`LloydEgbertCuller`] (`lloyd-egbert`) | [`lloyd_egbert`], cell-edge occluders over the same horizon | the same theorem, with occluders on or below the terrain's exact profile along the cell edges and the node's bounding box as occludee |
 //! | [`Culler`] (`thesis`) | [`culler`] | the thesis' test of the camera against the precomputed sector regions; not conservative unless the regions are (see `occlusion::conservative`) |
+//!
+//! In a renderer (the `pipeline` crate's documentation has a whole build and cull that runs):
+//!
+//! ```no_run
+//! use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let h = Hierarchy::load("terrain.tch")?; // written by `tincull build`
+//! let culler = AnyCuller::new(&h, CullMethod::default()); // the safe culler
+//! let mut list = DrawList::default(); // reused: no allocation once it has grown
+//! # let frames: Vec<([f64; 3], f64)> = Vec::new();
+//! for (eye, yaw_deg) in frames {
+//!     // World coordinates as in the mesh; a 90° horizontal field of view (360 looks all around).
+//!     culler.cull_into(&Camera::from_degrees(eye, yaw_deg, 90.0)?, &mut list);
+//!     for &[start, end] in &list.ranges {
+//!         // draw triangles start..end of h.mesh.triangles (one index-buffer range each)
+//!         # let _ = (start, end);
+//!     }
+//! }
+//! # Ok(())
+//! # }
+//! ```
 #![warn(missing_docs)]
 
 pub mod culler;

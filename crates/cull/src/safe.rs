@@ -113,9 +113,9 @@ pub const DEFAULT_WORK_BUDGET: usize = 200_000;
 /// Parameters of the safe culler (run time only; nothing of them is stored in the `.tch`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SafeParams {
-    /// Horizon columns per 90° face (rounded up to a power of two).
+    /// Horizon columns per 90° face: rounded up to a power of two, and clamped to 2 ..= 65,536.
     pub columns_per_face: usize,
-    /// Largest patch (triangles) below the hierarchy's leaves, at most 64.
+    /// Largest patch (triangles) below the hierarchy's leaves: clamped to 1 ..= 64.
     pub patch: usize,
     /// Most occluder edges written into the horizon per cull, nearest first: bounds the cost of views that
     /// see much of the terrain (fewer occluders only cull less, never wrongly).

@@ -103,7 +103,7 @@ fn corruption_is_a_clear_error() {
     assert!(matches!(Hierarchy::from_bytes(&v), Err(HierarchyError::Invalid(_))));
     let dir = tempfile::tempdir().expect("tempdir");
     assert!(matches!(
-        Hierarchy::load(&dir.path().join("missing.tch")),
+        Hierarchy::load(dir.path().join("missing.tch")),
         Err(HierarchyError::Io { .. })
     ));
 }

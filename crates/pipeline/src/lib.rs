@@ -7,11 +7,40 @@
 //! drives that flow. Crate dependencies point one way, down: this crate uses `tin`, `horizon`, `occlusion`,
 //! `crystal` and `cull` (the run-time format and sector geometry, which `occlusion` and `crystal` share so that
 //! precomputation and run time agree); `eval`, `viewer` and the `tincull` command line use it, never the other way
-//! round. It writes no files (see [`export`]) and compiles no GPU code: `cargo tree -e normal -p pipeline` lists 54
-//! crates.
+//! round. It writes no files (see [`export`]) and compiles no GPU or GUI code (`cargo tree -e normal -p pipeline`
+//! shows what it does compile).
 //!
 //! Besides [`build`] it owns the content for people and other tools ([`export`]: the grouped OBJ + MTL and the
 //! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
+//!
+//! From a mesh to a `.tch` file and a cull, as `tincull build` and `tincull cull` do it (the file's bytes are
+//! [`cull::Hierarchy::to_bytes`]; [`cull::Hierarchy::load`] reads them back):
+//!
+//! ```
+//! use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
+//! use pipeline::{BuildParams, build};
+//! use tin::ObjImportOptions;
+//!
+//! # fn main() -> anyhow::Result<()> {
+//! # let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../meshes/jacksboro-2k.obj");
+//! let (tin, _report) = tin::read_obj(mesh, &ObjImportOptions::default())?;
+//! let built = build(&tin, &BuildParams::default(), None)?; // 16 sectors × 4 subsectors, crystal groups
+//! let bytes = built.hierarchy.to_bytes()?; // what a `.tch` file holds: write it with any atomic file writer
+//! let h = Hierarchy::from_bytes(&bytes)?;
+//! assert_eq!(h, built.hierarchy);
+//!
+//! // Culling: the safe culler by default; one draw list reused frame after frame.
+//! let culler = AnyCuller::new(&h, CullMethod::default());
+//! let mut list = DrawList::default();
+//! let (lo, hi) = (tin.bbox().min, tin.bbox().max);
+//! let eye = [0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), hi.z + 100.0];
+//! culler.cull_into(&Camera::from_degrees(eye, 30.0, 90.0)?, &mut list);
+//! let drawn: u32 = list.ranges.iter().map(|[start, end]| end - start).sum();
+//! assert_eq!(drawn, list.stats.triangles_drawn);
+//! // Draw triangles `start..end` of `h.mesh.triangles` for each range (the order of `tincull export --export-obj`).
+//! # Ok(())
+//! # }
+//! ```
 #![warn(missing_docs)]
 
 pub mod export;
@@ -22,7 +51,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
-use crystal::{Crystal, CrystalParams};
+use crystal::Crystal;
+pub use crystal::CrystalParams;
 use cull::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
 use horizon::{HorizonOptions, SectorConfig};
 use occlusion::{Region, RegionTable, plane_t};

@@ -3,6 +3,9 @@
 //! [`Tin`] is the mesh every later stage works on: f64 positions, counter-clockwise triangles, edge adjacency and a
 //! local origin for f32 conversion. It is built by Delaunay triangulation ([`triangulate`]) of points that come
 //! from OBJ files or DEM grids, or from the simplification of a grid.
+//!
+//! Features: `png` (8/16-bit grayscale height maps) and `geotiff` (GeoTIFF rasters) are on by default; without them
+//! [`read_dem`] reads `.npy`, `.asc` and `.hgt` only and names the feature a `.png` or `.tif` needs.
 
 #![warn(missing_docs)]
 
