@@ -64,9 +64,9 @@ use tin::{Circle, Tin};
 /// Everything that controls a build.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BuildParams {
-    /// Number of sectors `s`.
+    /// Number of sectors `s`: at least 4 ([`horizon::SectorConfig::new`]).
     pub sectors: u32,
-    /// Subsectors per sector `k`.
+    /// Subsectors per sector `k`: at least 1, with `s · k` at most [`horizon::MAX_TOTAL_SUBSECTORS`].
     pub subsectors: u32,
     /// Radius of the horizon undersampling fix (m), off when `None`.
     pub undersampling: Option<f64>,
