@@ -100,6 +100,20 @@ fn cell_size_has_one_name() {
     );
 }
 
+/// A hierarchy given where a mesh is read is named for what it is, whatever its file name.
+#[test]
+fn a_hierarchy_is_not_taken_for_a_mesh() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    let renamed = dir.path().join("h.dat");
+    std::fs::copy(&tch, &renamed).expect("copy");
+    for input in [&tch, &renamed] {
+        fails_with(&["info", s(input)], "is a tincull hierarchy (.tch), not a mesh");
+        fails_with(&["build", s(input), "-o", s(&dir.path().join("x.tch"))], "not a mesh");
+    }
+    assert!(!dir.path().join("x.tch").exists());
+}
+
 #[test]
 fn subsectors_mean_per_sector() {
     let v = json(&[
@@ -158,8 +172,59 @@ fn nonsense_values_are_refused() {
             "--level 99",
         );
         fails_with(&["render", s(&tch), "-o", s(&png), "--yaw", "nan"], "--yaw");
+        fails_with(
+            &["render", s(&tch), "-o", s(&png), "--compare", "--runs", "0"],
+            "--runs",
+        );
+        fails_with(
+            &["render", s(&tch), "-o", s(&png), "--view", "orbit", "--pitch", "95"],
+            "--pitch must be within ±89°, got 95",
+        );
         assert!(!png.exists());
     }
+    let pvs = dir.path().join("x.pvs");
+    fails_with(&["pvs", s(&tch), "--check", "0"], "--check must be at least 1");
+    fails_with(&["pvs", s(&tch), "--check", "2", "-o", s(&pvs)], "--check");
+    fails_with(
+        &["pvs", s(&tch), "--grid", "5000", "--cell-size", "50"],
+        "--cell-size is for --check",
+    );
+    fails_with(
+        &["pvs", s(&tch), "--grid", "5000", "--view-seed", "3"],
+        "--view-seed is for --check",
+    );
+    assert!(!pvs.exists());
+    let out = dir.path().join("demo");
+    fails_with(
+        &[
+            "demo",
+            s(&mesh("jacksboro-2k.obj")),
+            "--out-dir",
+            s(&out),
+            "--viewpoints",
+            "0",
+        ],
+        "--viewpoints",
+    );
+    assert!(!out.exists());
+    // A render path that cannot be written is refused before any work, as the other outputs are.
+    let blocked = out.join("jacksboro-2k-map.png");
+    std::fs::create_dir_all(&blocked).expect("mkdir");
+    fails_with(
+        &["demo", s(&mesh("jacksboro-2k.obj")), "--out-dir", s(&out)],
+        "jacksboro-2k-map.png",
+    );
+    assert_eq!(
+        std::fs::read_dir(&out).expect("out").count(),
+        1,
+        "nothing written beside the blocked path"
+    );
+    let obj = dir.path().join("s.obj");
+    fails_with(
+        &["synth", "-o", s(&obj), "--vertices", "100", "--relief", "1e308"],
+        "relief",
+    );
+    assert!(!obj.exists());
 }
 
 #[test]
@@ -174,7 +239,16 @@ fn every_command_that_reads_a_mesh_takes_keep_faces_and_dedupe() {
             help.contains("--keep-faces") && help.contains("--dedupe"),
             "tincull {c} lacks --keep-faces or --dedupe:\n{help}"
         );
+        // And the DEM options of `tin`, so that every DEM its help lists can be read (a .png needs --spacing).
+        for flag in ["--spacing", "--z-scale", "--band"] {
+            assert!(help.contains(flag), "tincull {c} lacks {flag}:\n{help}");
+        }
     }
+    let png = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/dem_readers/gray16_4x3.png");
+    fails_with(&["info", s(&png)], "--spacing dx,dy");
+    let v = json(&["info", s(&png), "--spacing", "10,10", "--z-scale", "2", "--json"]);
+    assert_eq!(v["dem"]["spacing"], serde_json::json!([10.0, 10.0]), "{v}");
+    assert_eq!(v["dem"]["rows"], 3);
 }
 
 #[test]

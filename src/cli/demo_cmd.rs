@@ -41,6 +41,7 @@ pub struct DemoArgs {
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
+    anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
     if args.out_dir.exists() && !args.out_dir.is_dir() {
         anyhow::bail!("--out-dir {}: exists and is not a directory", args.out_dir.display());
     }
@@ -63,6 +64,10 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     files.check(&path(".json"))?;
     files.check_grouped_obj(&path("-groups.obj"))?;
     check_outputs(&mut files, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
+    // The renders come after the rest (they need a GPU adapter, and are left out without one), but a path that
+    // cannot take them is refused before any work as the others are.
+    files.check(&path("-map.png"))?;
+    files.check(&path("-culling.png"))?;
 
     let result = build(&tin, &params, Some(stage_progress(out)))?;
     print_report(&result.report, out);

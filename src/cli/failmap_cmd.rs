@@ -30,7 +30,8 @@ pub struct FailmapArgs {
     /// The PNG image to write.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// The CSV to write: x, y, eye_z, false_culls, false_cull_area, occlusion_captured, triangles_drawn.
+    /// The CSV to write, one line per cell on the terrain: x, y, eye_z, false_culls, false_cull_area,
+    /// occlusion_captured, triangles_drawn, visible (triangles the exact checker sees).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Output flags.

@@ -36,9 +36,9 @@ pub struct ImportArgs {
     /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
     #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
     pub dem_vertices: usize,
-    /// For a multi-band GeoTIFF: the elevation band (1-based).
-    #[arg(long)]
-    pub band: Option<u16>,
+    /// For a DEM grid: how to read it.
+    #[command(flatten)]
+    pub dem: DemArgs,
 }
 
 impl Default for ImportArgs {
@@ -47,7 +47,7 @@ impl Default for ImportArgs {
             keep_faces: false,
             dedupe: DedupeArg::Reject,
             dem_vertices: DEFAULT_DEM_VERTICES,
-            band: None,
+            dem: DemArgs::default(),
         }
     }
 }
@@ -60,9 +60,56 @@ impl ImportArgs {
             keep_faces: self.keep_faces,
             dedupe: self.dedupe,
             dem_vertices: self.dem_vertices,
+            dem: self.dem,
+        }
+    }
+}
+
+/// How to read a DEM grid: the options of every command that reads one (`tin`, `tiles plan`, and every command
+/// that takes a mesh or a DEM).
+#[derive(Clone, Copy, Debug, Args)]
+pub struct DemArgs {
+    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar or a GeoTIFF's georeference; required for .png and a plain TIFF).
+    #[arg(long, value_parser = parse_spacing)]
+    pub spacing: Option<(f64, f64)>,
+    /// Multiply heights by this (for .png: metres per grey level).
+    #[arg(long, default_value_t = 1.0)]
+    pub z_scale: f64,
+    /// The elevation band (1-based) of a multi-band GeoTIFF.
+    #[arg(long)]
+    pub band: Option<u16>,
+}
+
+impl Default for DemArgs {
+    /// The georeference of the file, heights as they are, the first band.
+    fn default() -> Self {
+        DemArgs {
+            spacing: None,
+            z_scale: 1.0,
+            band: None,
+        }
+    }
+}
+
+impl DemArgs {
+    /// The reader's options.
+    pub fn options(&self) -> tin::DemOptions {
+        tin::DemOptions {
+            spacing: self.spacing,
+            z_scale: self.z_scale,
             band: self.band,
         }
     }
+}
+
+fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s.split_once(',').ok_or_else(|| format!("expected dx,dy, got {s:?}"))?;
+    let parse = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
+    let (dx, dy) = (parse(a)?, parse(b)?);
+    if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
+        return Err(format!("spacing must be positive and finite, got {s:?}"));
+    }
+    Ok((dx, dy))
 }
 
 /// Arguments naming a terrain mesh and how to import it.
@@ -79,9 +126,9 @@ pub struct MeshArgs {
     /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
     #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
     pub dem_vertices: usize,
-    /// For a multi-band GeoTIFF: the elevation band (1-based).
-    #[arg(long)]
-    pub band: Option<u16>,
+    /// For a DEM grid: how to read it.
+    #[command(flatten)]
+    pub dem: DemArgs,
 }
 
 /// Default vertex budget when a command is given a DEM grid instead of a mesh.
@@ -116,6 +163,24 @@ pub fn is_dem(path: &std::path::Path) -> bool {
     matches!(ext.as_str(), "npy" | "asc" | "hgt" | "png" | "tif" | "tiff")
 }
 
+/// Whether `path` is a tincull hierarchy: named `.tch`, or starting with the `.tch` magic number whatever its name
+/// (an unreadable file is left to the reader that opens it, which names the error).
+pub fn is_hierarchy(path: &std::path::Path) -> bool {
+    use std::io::Read;
+    if path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tch"))
+    {
+        return true;
+    }
+    let mut head = [0u8; cull::MAGIC.len()];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && head == cull::MAGIC
+}
+
 impl MeshArgs {
     /// Reads the mesh, reporting what the import did (merged duplicates, re-triangulation) as warnings.
     pub fn load(&self, out: Output) -> Result<(Tin, ObjImportReport)> {
@@ -124,6 +189,13 @@ impl MeshArgs {
 
     /// [`MeshArgs::load`], also returning what was read when the input is a DEM grid.
     pub fn load_with_source(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
+        if is_hierarchy(&self.mesh) {
+            bail!(
+                "{} is a tincull hierarchy (.tch), not a mesh: this command reads an OBJ mesh or a DEM grid (commands \
+                 that read a hierarchy: cull, eval, export, pvs, failmap, render, view)",
+                self.mesh.display()
+            );
+        }
         if is_dem(&self.mesh) {
             return self.load_dem(out);
         }
@@ -157,10 +229,7 @@ impl MeshArgs {
         if self.dem_vertices < 3 {
             bail!("--dem-vertices must be at least 3, got {}", self.dem_vertices);
         }
-        let opts = tin::DemOptions {
-            band: self.band,
-            ..Default::default()
-        };
+        let opts = self.dem.options();
         let spinner = out.spinner("reading DEM");
         let (grid, geotiff) = if matches!(
             self.mesh

@@ -57,7 +57,7 @@ pub enum Command {
     Cull(cull_cmd::CullArgs),
     /// Evaluate every culling method against ground truth from seeded viewpoints: false culls, occlusion captured.
     Eval(eval_cmd::EvalArgs),
-    /// Export a hierarchy as JSON or as an OBJ with one group per leaf.
+    /// Export a hierarchy as JSON, as an OBJ with one group per leaf, or as glTF 2.0.
     Export(export_cmd::ExportArgs),
     /// Build and evaluate every combination of sectors, subsectors and seeds: one CSV line per combination, method
     /// and class (resumable).

@@ -34,12 +34,12 @@ pub struct PvsArgs {
     /// `both` at the highest resolution.
     #[arg(long, value_name = "N")]
     pub check: Option<usize>,
-    /// Side of the random cells of `--check` (m).
-    #[arg(long, default_value_t = 100.0, value_name = "M")]
-    pub cell_size: f64,
-    /// Seed of the random cells of `--check` and of their interior sample points.
-    #[arg(long, default_value_t = 1)]
-    pub view_seed: u64,
+    /// Side of the random cells of `--check` (m) [default: 100].
+    #[arg(long, value_name = "M")]
+    pub cell_size: Option<f64>,
+    /// Seed of the random cells of `--check` and of their interior sample points [default: 1].
+    #[arg(long)]
+    pub view_seed: Option<u64>,
     /// Absolute height band of the cell: `z0,z1` (m).
     #[arg(long, value_name = "Z0,Z1", value_parser = parse_pair, allow_hyphen_values = true,
           conflicts_with = "above_ground")]
@@ -59,8 +59,8 @@ pub struct PvsArgs {
     /// compares with (its other parameters are its defaults).
     #[arg(long, default_value_t = 16, value_name = "N")]
     pub patch: usize,
-    /// Write the PVS of every cell here, in the compact binary form (`.pvs`).
-    #[arg(long, short = 'o', value_name = "FILE")]
+    /// Write the PVS of every cell here, in the compact binary form (`.pvs`); not with `--check`, which writes no PVS.
+    #[arg(long, short = 'o', value_name = "FILE", conflicts_with = "check")]
     pub out: Option<PathBuf>,
     /// Output flags.
     #[command(flatten)]
@@ -125,6 +125,20 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         ..cull::SafeParams::default()
     };
     let mut files = Outputs::new();
+    if args.check == Some(0) {
+        anyhow::bail!("--check must be at least 1 cell");
+    }
+    if args.check.is_none() {
+        for (flag, given) in [
+            ("--cell-size", args.cell_size.is_some()),
+            ("--view-seed", args.view_seed.is_some()),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} is for --check (the random cells it tests); --cell and --grid give theirs"
+            );
+        }
+    }
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.out {
         files.check(path)?;
@@ -275,10 +289,11 @@ fn check(
     safe_params: cull::SafeParams,
     out: Output,
 ) -> Result<()> {
+    let cell_size = args.cell_size.unwrap_or(100.0);
+    let view_seed = args.view_seed.unwrap_or(1);
     ensure!(
-        args.cell_size.is_finite() && args.cell_size > 0.0,
-        "--cell-size must be positive, got {}",
-        args.cell_size
+        cell_size.is_finite() && cell_size > 0.0,
+        "--cell-size must be positive, got {cell_size}"
     );
     let tin = hierarchy_tin(h)?;
     let truth = truth::GroundTruth::new(&tin);
@@ -313,12 +328,12 @@ fn check(
     let prep_s = prep.elapsed().as_secs_f64();
     // Random cells whose centre lies on the terrain.
     let b = tin.bbox();
-    let s = args.cell_size;
+    let s = cell_size;
     ensure!(
         b.max.x - b.min.x > s && b.max.y - b.min.y > s,
         "--cell-size {s} does not fit in the footprint"
     );
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(args.view_seed);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(view_seed);
     let mut cells = Vec::with_capacity(n);
     let mut tries = 0;
     while cells.len() < n {
@@ -343,7 +358,7 @@ fn check(
     let bar = out.progress(n as u64, "cells");
     for (i, cell) in cells.iter().enumerate() {
         let t = Instant::now();
-        let eyes = sample_eyes(&truth, cell, 7, args.view_seed.wrapping_add(i as u64));
+        let eyes = sample_eyes(&truth, cell, 7, view_seed.wrapping_add(i as u64));
         let seen = check_cell(&truth, &safe, &eyes);
         unions.3 += t.elapsed().as_secs_f64();
         let (v, sd) = (seen.visible_count() as f64, seen.safe_count() as f64);
@@ -379,6 +394,8 @@ fn check(
                 "mean_pvs_fraction": mean(&r.pvs) / nt.max(1) as f64,
                 "mean_pvs_over_visible": mean(&r.over_visible),
                 "mean_pvs_over_safe": mean(&r.over_safe),
+                "pvs_over_visible": mean(&r.pvs) / mean(&unions.0).max(1.0),
+                "pvs_over_safe": mean(&r.pvs) / mean(&unions.1).max(1.0),
                 "mean_seconds_per_cell": mean(&r.seconds),
                 "mean_bytes_per_cell": mean(&r.bytes),
             })
@@ -390,7 +407,7 @@ fn check(
             "cells": n,
             "cell_size": s,
             "height": height,
-            "view_seed": args.view_seed,
+            "view_seed": view_seed,
             "triangles": nt,
             "sample_points": unions.2,
             "mean_union_visible": mean(&unions.0),
@@ -401,8 +418,8 @@ fn check(
         }))?;
     } else {
         out.say(format!(
-            "{n} cells of {s} m ({height:?}), {} sample points; union of visible sets {:.0}, of safe drawn sets {:.0} \
-             of {nt} triangles",
+            "{n} cells of {s} m ({height}), {} sample points; per cell (means): union of visible sets {:.0}, of safe \
+             drawn sets {:.0} of {nt} triangles; PVS/visible and PVS/safe are ratios of these means",
             unions.2,
             mean(&unions.0),
             mean(&unions.1)
@@ -419,8 +436,8 @@ fn check(
                 },
                 r.misses,
                 mean(&r.pvs),
-                mean(&r.over_visible),
-                mean(&r.over_safe),
+                mean(&r.pvs) / mean(&unions.0).max(1.0),
+                mean(&r.pvs) / mean(&unions.1).max(1.0),
                 mean(&r.seconds),
                 mean(&r.bytes)
             ));

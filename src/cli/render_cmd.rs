@@ -79,7 +79,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 64, value_name = "R")]
     pub resolution: u32,
     /// With --compare: timed repetitions of each frame (the median is reported).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
     /// Output flags.
     #[command(flatten)]
@@ -103,11 +103,7 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
 
 /// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`].
 pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Terrain> {
-    let is_tch = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("tch"));
-    if is_tch {
+    if super::mesh_input::is_hierarchy(path) {
         let h = cull::Hierarchy::load(path)?;
         Ok(Terrain::from_hierarchy(h)?)
     } else {
@@ -133,7 +129,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         bail!("--compare works with --view eye");
     }
     let terrain = load_terrain(&args.input, &args.import, out)?;
-    let (pvs_mask, pvs_eye) = match args.pvs_cell {
+    let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
         Some(rect) => {
             let h = terrain
                 .hierarchy
@@ -160,9 +156,10 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
                 result.seconds
             ));
             let centre = [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3]), result.ztop];
-            (Some(result.mask(h.num_triangles())), Some(centre))
+            let summary = json!({ "cell": rect, "triangles": result.triangles(), "seconds": result.seconds });
+            (Some(result.mask(h.num_triangles())), Some(centre), Some(summary))
         }
-        None => (None, None),
+        None => (None, None, None),
     };
     let colour = if pvs_mask.is_some() {
         colour.or(Some(ColourMode::Visibility))
@@ -233,6 +230,10 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         "gpu_primitives": result.frame.gpu_primitives,
         "cull": result.cull,
     });
+    if let Some(p) = pvs_json {
+        // What the image paints: the cell's PVS (the `cull` counters are the culling eye's).
+        j["pvs"] = p;
+    }
     if let Some(c) = &result.compare {
         let diff = diff_path(&args.out);
         out.say(format!(

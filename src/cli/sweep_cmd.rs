@@ -162,8 +162,8 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     );
     anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
 
-    // Refuse an output that cannot be written, or that is the mesh or the config, before any work (it is rewritten after each
-    // combination).
+    // Refuse an output that cannot be written, or that is the mesh or the config, before any work (it is rewritten
+    // after each combination).
     let mut check = outfile::Batch::new();
     check.input(&args.mesh.mesh)?;
     if let Some(config) = &args.config {

@@ -11,8 +11,7 @@ use tiles::{Plan, PlanOptions, TileReport, TilesError};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::{Outputs, write_one};
-use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, MeshArgs, is_dem};
-use super::tin_cmd::DemArgs;
+use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, MeshArgs, is_dem};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tiles`.
@@ -218,7 +217,7 @@ fn plan_mesh(
         keep_faces: args.keep_faces,
         dedupe: args.dedupe,
         dem_vertices: DEFAULT_DEM_VERTICES,
-        band: None,
+        dem: DemArgs::default(),
     };
     let (tin, _) = mesh.load(out)?;
     let (mut plan, parts) = tiles::make_mesh_plan(&tin, source, options, tiles_dir)?;

@@ -6,9 +6,10 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
-use tin::{DemOptions, SimplifyOptions};
+use tin::SimplifyOptions;
 
 use super::files::Outputs;
+use super::mesh_input::DemArgs;
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tin`.
@@ -37,41 +38,6 @@ pub struct TinArgs {
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// How to read a DEM grid: the options of every command that reads one (`tin`, `tiles plan`).
-#[derive(Clone, Copy, Debug, Args)]
-pub struct DemArgs {
-    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar or a GeoTIFF's georeference; required for .png and a plain TIFF).
-    #[arg(long, value_parser = parse_spacing)]
-    pub spacing: Option<(f64, f64)>,
-    /// Multiply heights by this (for .png: metres per grey level).
-    #[arg(long, default_value_t = 1.0)]
-    pub z_scale: f64,
-    /// The elevation band (1-based) of a multi-band GeoTIFF.
-    #[arg(long)]
-    pub band: Option<u16>,
-}
-
-impl DemArgs {
-    /// The reader's options.
-    pub fn options(&self) -> DemOptions {
-        DemOptions {
-            spacing: self.spacing,
-            z_scale: self.z_scale,
-            band: self.band,
-        }
-    }
-}
-
-fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s.split_once(',').ok_or_else(|| format!("expected dx,dy, got {s:?}"))?;
-    let parse = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
-    let (dx, dy) = (parse(a)?, parse(b)?);
-    if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
-        return Err(format!("spacing must be positive and finite, got {s:?}"));
-    }
-    Ok((dx, dy))
 }
 
 /// Runs `tincull tin`.

@@ -58,11 +58,7 @@ pub struct ViewArgs {
 
 /// Runs `tincull view`.
 pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
-    let is_tch = args
-        .input
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("tch"));
+    let is_tch = super::mesh_input::is_hierarchy(&args.input);
     let mut params = args.params.resolve(None)?;
     let source = if is_tch {
         let h = cull::Hierarchy::load(&args.input)?;

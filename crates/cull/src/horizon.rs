@@ -613,8 +613,8 @@ impl Horizon {
             }
         }
         // Partial columns at both ends (only when the triangle does not fit inside one column).
-        // `first` may have saturated to `isize::MIN` (a vertex almost beside the camera): the left partial column is then
-        // outside the face, and must not wrap around to `isize::MAX`.
+        // `first` may have saturated to `isize::MIN` (a vertex almost beside the camera): the left partial column is
+        // then outside the face, and must not wrap around to `isize::MAX`.
         let left_col = first.saturating_sub(1); // contains lo_u (unless lo_u is on a boundary, then a weaker cover)
         let right_col = end; // contains hi_u
         if left_col < right_col {

@@ -55,7 +55,7 @@ pub fn grid_size(tin: &Tin, cell: f64) -> Result<(usize, usize)> {
     let rows = ((b.max.y - b.min.y) / cell).ceil().max(1.0);
     ensure!(
         cols * rows <= MAX_CELLS as f64,
-        "a {cell} m cell gives {cols} x {rows} cells, more than {MAX_CELLS}: use a larger --cell"
+        "a {cell} m cell gives {cols} x {rows} cells, more than {MAX_CELLS}: use a larger --cell-size"
     );
     Ok((cols as usize, rows as usize))
 }

@@ -721,7 +721,10 @@ pub fn run(tin: &Tin, mesh: &str, opts: &StressOptions, progress: &dyn Fn(&str))
             name: "crater lake".into(),
             category: "flat".into(),
             status: "skipped".into(),
-            note: "crater_lake.npy not found".into(),
+            note: match opts.dem_dir.as_deref() {
+                Some(d) => format!("{} not found", d.join("crater_lake.npy").display()),
+                None => "runs with --dem-dir DIR (a folder holding crater_lake.npy)".into(),
+            },
             ..CaseResult::default()
         }),
     }

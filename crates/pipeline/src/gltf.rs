@@ -11,7 +11,9 @@
 //!   accessors 0 and 1.
 //! - **Materials**: the group colours of the OBJ export ([`crate::palette`]), converted from sRGB to the linear
 //!   `baseColorFactor` glTF expects, dark grey for the always-visible set; not metallic, fully rough.
-//! - **Nodes**: node 0 `terrain` is the root; its `translation` is the local origin (rounded to f32). Hierarchy node
+//! - **Nodes**: node 0 `terrain` is the root. It turns the terrain's +z up into glTF's +y up (`rotation` −90° about +x:
+//!   `(x, y, z) → (x, z, −y)`, so north is −z) and moves it to its local origin (`translation`: the origin, rounded to
+//!   f32, turned the same way); the buffer and `extras` keep the terrain's own axes. Hierarchy node
 //!   `i` is glTF node `i + 1`, with the children of the hierarchy as its children and, for a leaf, its group's mesh;
 //!   the hierarchy's top-level nodes and a last node `always_visible` (with its mesh) are the children of node 0.
 //! - **Culling data** in `extras.tincull` (documented here; no extension is required to load the file):
@@ -128,9 +130,13 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
     let mut nodes = Vec::with_capacity(h.nodes.len() + 2);
     let mut root_children: Vec<usize> = h.roots.iter().map(|&r| r as usize + 1).collect();
     root_children.push(h.nodes.len() + 1);
+    // glTF is +Y up, the terrain +Z up: node 0 turns it by −90° about +x, `(x, y, z) → (x, z, −y)`, after moving it
+    // to its origin (glTF applies the rotation first, so the translation is the origin turned the same way).
+    let half = std::f32::consts::FRAC_1_SQRT_2;
     nodes.push(json!({
         "name": "terrain",
-        "translation": [o[0] as f32, o[1] as f32, o[2] as f32],
+        "rotation": [-half, 0.0, 0.0, half],
+        "translation": [o[0] as f32, o[2] as f32, -(o[1] as f32)],
         "children": root_children,
     }));
     for (i, n) in h.nodes.iter().enumerate() {

@@ -81,8 +81,30 @@ fn check_reimport(h: &Hierarchy, document: &gltf::Document, bin: &[u8]) {
     assert_eq!(primitives, leaves.len() + 1);
     // The node tree mirrors the hierarchy: node 0 carries the origin, hierarchy node i is node i + 1.
     let nodes: Vec<gltf::Node> = document.nodes().collect();
-    let (t, _, _) = nodes[0].transform().decomposed();
-    assert_eq!(t, h.origin.map(|c| c as f32));
+    let (t, r, s) = nodes[0].transform().decomposed();
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    assert_eq!(
+        (t, r, s),
+        (
+            [h.origin[0] as f32, h.origin[2] as f32, -(h.origin[1] as f32)],
+            [-half, 0.0, 0.0, half],
+            [1.0; 3]
+        )
+    );
+    // glTF is +y up: node 0 puts a vertex (x, y, z) of the terrain at (x, z, −y), in world units.
+    let m = nodes[0].transform().matrix();
+    for p in h.mesh.positions.iter().step_by(97) {
+        let q = [0, 1, 2].map(|k| (p[k] - h.origin[k]) as f32);
+        let world = [0, 1, 2].map(|r| f64::from(m[0][r] * q[0] + m[1][r] * q[1] + m[2][r] * q[2] + m[3][r]));
+        let expected = [p[0], p[2], -p[1]];
+        // f32 throughout (the quaternion's matrix too): about 1e-7 of the coordinates involved.
+        let scale =
+            1.0 + q.iter().map(|c| f64::from(c.abs())).sum::<f64>() + h.origin.iter().map(|c| c.abs()).sum::<f64>();
+        for k in 0..3 {
+            let tolerance = 1e-6 * scale;
+            assert!((world[k] - expected[k]).abs() <= tolerance, "{p:?} lands at {world:?}");
+        }
+    }
     for (i, n) in h.nodes.iter().enumerate() {
         let kids: Vec<usize> = nodes[i + 1].children().map(|c| c.index()).collect();
         assert_eq!(kids, n.children.iter().map(|&c| c as usize + 1).collect::<Vec<_>>());

@@ -44,7 +44,7 @@ pub enum PvsError {
     #[error("invalid viewcell: {0}")]
     BadCell(String),
     /// A resolution outside 1..=256.
-    #[error("resolution {0} is outside 1..={MAX_RESOLUTION}")]
+    #[error("the resolution must be from 1 to {MAX_RESOLUTION}, got {0}")]
     BadResolution(u32),
     /// A `.pvs` file that cannot be read.
     #[error("not a readable PVS file: {0}")]
@@ -58,6 +58,15 @@ pub enum Height {
     Band([f64; 2]),
     /// Heights above the ground under each point of the cell `[h0, h1]` (m).
     AboveGround([f64; 2]),
+}
+
+impl std::fmt::Display for Height {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Height::Band([z0, z1]) => write!(f, "heights {z0} to {z1} m"),
+            Height::AboveGround([h0, h1]) => write!(f, "{h0} to {h1} m above the ground"),
+        }
+    }
 }
 
 /// Which from-region test decides that a node is hidden.

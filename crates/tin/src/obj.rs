@@ -160,7 +160,8 @@ pub enum ObjLineError {
     /// Two vertices share x,y but not z.
     #[error(
         "vertex {vertex} and vertex {other_vertex} (line {other_line}) share x,y = ({x}, {y}) but have heights {z} and \
-         {other_z}: a vertical wall, not a height field (the dedupe policy keep-highest, `--dedupe keep-highest`, keeps the higher one)"
+         {other_z}: a vertical wall, not a height field (the dedupe policy keep-highest, `--dedupe keep-highest`, \
+         keeps the higher one)"
     )]
     DuplicateXy {
         /// 1-based number of the vertex on this line.

@@ -199,7 +199,8 @@ pub fn simplify_constrained(
     if start_vertices.len() > budget {
         let more = start_vertices.len() - hull_corners;
         return Err(TinError::InvalidParameter(format!(
-            "max_vertices is {budget}, but the convex hull of the valid samples already has {hull_corners} corners{}",
+            "a budget of {budget} vertices is too small: the convex hull of the valid samples already has {hull_corners} \
+             corners{}",
             if more > 0 {
                 format!(" and {more} more fixed samples")
             } else {

@@ -56,7 +56,8 @@ impl SynthOptions {
     }
 
     /// Checks the vertex count (4 to 2^31), extent (positive, finite, below 1e12 m, and at least 1 mm per point
-    /// spacing, `extent / √vertices`) and relief (non-negative, finite).
+    /// spacing, `extent / √vertices`) and relief (non-negative, below 1e12 m: every coordinate stays within what the
+    /// mesh readers accept).
     pub fn validate(&self) -> Result<()> {
         if !(4..=1 << 31).contains(&self.vertices) {
             return Err(TinError::InvalidParameter(format!(
@@ -78,9 +79,9 @@ impl SynthOptions {
                 self.extent, self.vertices
             )));
         }
-        if !(self.relief.is_finite() && self.relief >= 0.0) {
+        if !(self.relief.is_finite() && self.relief >= 0.0 && self.relief < 1e12) {
             return Err(TinError::InvalidParameter(format!(
-                "synthetic terrain relief must be finite and non-negative, got {}",
+                "synthetic terrain relief must be non-negative and below 1e12 m, got {}",
                 self.relief
             )));
         }

@@ -149,8 +149,10 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
             return bad(format!("{name} must be finite"));
         }
     }
-    if o.pitch_deg.is_some_and(|p| p.abs() >= 89.0) {
-        return bad(format!("--pitch must be within ±89°, got {:?}", o.pitch_deg));
+    if let Some(p) = o.pitch_deg
+        && p.abs() >= 89.0
+    {
+        return bad(format!("--pitch must be within ±89°, got {p}"));
     }
     if let (Some(level), Some(h)) = (o.level, &terrain.hierarchy) {
         let top = h.nodes.iter().map(|n| n.level).max().unwrap_or(0);

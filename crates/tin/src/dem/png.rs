@@ -54,7 +54,7 @@ pub fn read_png_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
 fn spacing(path: &Path, opts: &DemOptions) -> Result<(f64, f64)> {
     opts.spacing.ok_or_else(|| {
         TinError::InvalidParameter(format!(
-            "{}: a PNG height map has no georeference: the sample spacing must be given",
+            "{}: a PNG height map has no georeference: the sample spacing must be given (`--spacing dx,dy`)",
             path.display()
         ))
     })
