@@ -45,6 +45,23 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
     let h: serde_json::Value = serde_json::from_slice(&text).expect("the hierarchy's JSON on stdout");
     assert!(h["nodes"].is_array());
     fails_with(&["export", s(&tch), "--export-json", "-", "--json"], "standard output");
+    // `horizon --export-json -` too, as `export`.
+    let m = mesh("jacksboro-2k.obj");
+    let text = ok(&[
+        "horizon",
+        s(&m),
+        "--sectors",
+        "4",
+        "--subsectors",
+        "1",
+        "--export-json",
+        "-",
+        "-q",
+    ])
+    .stdout;
+    let v: serde_json::Value = serde_json::from_slice(&text).expect("the horizons' JSON on stdout");
+    assert_eq!(v["sectors"], 4);
+    fails_with(&["horizon", s(&m), "--export-json", "-", "--json"], "standard output");
 }
 
 #[test]

@@ -34,7 +34,7 @@ pub struct HorizonArgs {
     /// Also run the O(n²) brute-force oracle and report mismatches (0 is the only acceptable value).
     #[arg(long)]
     pub verify: bool,
-    /// Write every vertex's horizon per subsector and its sector summaries as JSON.
+    /// Write every vertex's horizon per subsector and its sector summaries as JSON (`-`: standard output).
     #[arg(long, value_name = "FILE")]
     pub export_json: Option<PathBuf>,
     /// Output flags.
@@ -71,9 +71,10 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
         anyhow::bail!("--undersampling radius must be positive and finite, got {r}");
     }
     let mut files = Outputs::new();
+    let mut out = out;
     files.input(&args.mesh.mesh)?;
     if let Some(path) = &args.export_json {
-        files.check(path)?;
+        files.check_or_stdout(path, &mut out)?;
     }
     let (tin, _) = args.mesh.load(out)?;
     let (field, seconds) = compute_with_progress(&tin, &config, args.undersampling, out)?;
