@@ -236,6 +236,17 @@ fn nonsense_values_are_refused() {
         1,
         "nothing written beside the blocked path"
     );
+    let wrong = dir.path().join("s.tch");
+    fails_with(
+        &["synth", "-o", s(&wrong), "--vertices", "100"],
+        "(.obj) or a height grid (.npy)",
+    );
+    assert!(!wrong.exists());
+    if cfg!(feature = "viewer") {
+        let jpg = dir.path().join("x.jpg");
+        fails_with(&["render", s(&tch), "-o", s(&jpg)], "render writes a PNG image");
+        assert!(!jpg.exists());
+    }
     let obj = dir.path().join("s.obj");
     fails_with(
         &["synth", "-o", s(&obj), "--vertices", "100", "--relief", "1e308"],

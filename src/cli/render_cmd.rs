@@ -185,6 +185,11 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     viewer::validate(&terrain, &options)?;
     let mut files = Outputs::new();
     files.input(&args.input)?;
+    anyhow::ensure!(
+        args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
+        "{}: render writes a PNG image; name it .png",
+        args.out.display()
+    );
     files.check(&args.out)?;
     if args.compare {
         files.check(&diff_path(&args.out))?;

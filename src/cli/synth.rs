@@ -37,6 +37,16 @@ pub struct SynthArgs {
 
 /// Runs `tincull synth`.
 pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
+    let ext = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    anyhow::ensure!(
+        matches!(ext.as_deref(), Some("obj" | "npy")),
+        "{}: synth writes an OBJ mesh (.obj) or a height grid (.npy); name the output so",
+        args.out.display()
+    );
     let mut files = Outputs::new();
     files.check(&args.out)?;
     let grid_out = args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
