@@ -29,18 +29,34 @@ fn main() -> ExitCode {
 
 /// Ctrl-C, `SIGTERM` or `SIGHUP` while an output is written: its temporary files are removed (outputs are all or
 /// nothing, and nothing else is left behind either), then the process exits with status 130.
-/// Not where the shell made the process ignore Ctrl-C (a background job of a script): it keeps ignoring it.
+/// Where the shell made the process ignore Ctrl-C (a background job of a script), it keeps ignoring it; `SIGTERM`
+/// and `SIGHUP` still clean up.
 fn remove_temporaries_on_interrupt() {
-    if interrupts_ignored() {
-        return;
-    }
+    let ignored = interrupts_ignored();
     // Without a handler (it cannot be installed), an interrupt still leaves every output untouched; only the hidden
     // temporary files would stay.
     let _ = ctrlc::set_handler(|| {
         outfile::remove_temporaries();
         std::process::exit(130);
     });
+    // The handler covers SIGINT, SIGTERM and SIGHUP together: give SIGINT back the disposition the shell chose.
+    if ignored {
+        ignore_interrupts();
+    }
 }
+
+/// Ignores `SIGINT` again.
+#[cfg(unix)]
+fn ignore_interrupts() {
+    // SAFETY: signal(2) with SIG_IGN installs no handler; nothing else is changed.
+    unsafe {
+        libc::signal(libc::SIGINT, libc::SIG_IGN);
+    }
+}
+
+/// Ignores `SIGINT` again: nothing to do where it cannot be ignored.
+#[cfg(not(unix))]
+fn ignore_interrupts() {}
 
 /// Whether `SIGINT` is ignored (inherited from the shell).
 #[cfg(unix)]

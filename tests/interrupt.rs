@@ -1,5 +1,6 @@
 //! Ctrl-C (`SIGINT`) while a command works: it exits with status 130 and leaves neither its outputs nor temporary
-//! files; where the shell made it ignore `SIGINT` (a background job of a script), it keeps ignoring it.
+//! files; where the shell made it ignore `SIGINT` (a background job of a script), it keeps ignoring it, and `SIGTERM`
+//! and `SIGHUP` still clean up.
 
 use std::os::unix::process::CommandExt;
 use std::path::Path;
@@ -10,9 +11,14 @@ mod common;
 
 use common::{mesh, ok, s};
 
-/// Runs `tincull args` with `SIGINT` at its default disposition (or ignored), interrupts it after `delay`, and
+/// Runs `tincull args` with `SIGINT` at its default disposition (or ignored), sends it `SIGINT` after `delay`, and
 /// returns its exit status code.
 fn interrupted(args: &[&str], delay: Duration, ignore: bool) -> Option<i32> {
+    signalled(args, delay, ignore, libc::SIGINT)
+}
+
+/// [`interrupted`] with the signal `signal`.
+fn signalled(args: &[&str], delay: Duration, ignore: bool, signal: libc::c_int) -> Option<i32> {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_tincull"));
     cmd.args(args).stdout(Stdio::null()).stderr(Stdio::null());
     // SAFETY: only async-signal-safe calls between fork and exec (signal(2)).
@@ -25,7 +31,7 @@ fn interrupted(args: &[&str], delay: Duration, ignore: bool) -> Option<i32> {
     let mut child = cmd.spawn().expect("the binary runs");
     std::thread::sleep(delay);
     // SAFETY: kill(2) on the child's pid.
-    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    unsafe { libc::kill(child.id() as libc::pid_t, signal) };
     child.wait().expect("wait").code()
 }
 
@@ -81,4 +87,16 @@ fn an_interrupted_command_leaves_nothing_behind() {
     );
     assert_eq!(code, Some(0));
     assert_eq!(names(dir.path()), ["e.csv", "h.tch"]);
+    std::fs::remove_file(&csv).expect("remove");
+    // There, `SIGTERM` and `SIGHUP` still clean up (they killed the process outright, leaving its temporary files).
+    for signal in [libc::SIGTERM, libc::SIGHUP] {
+        let code = signalled(
+            &["eval", s(&tch), "--viewpoints", "50", "--csv", s(&csv)],
+            Duration::from_millis(400),
+            true,
+            signal,
+        );
+        assert_eq!(code, Some(130), "signal {signal}");
+        assert_eq!(names(dir.path()), ["h.tch"], "signal {signal}");
+    }
 }

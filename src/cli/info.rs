@@ -49,6 +49,11 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
                 g.bands.0,
                 g.nodata.map_or("none".to_string(), |v| v.to_string())
             ));
+            if let Some((scale, offset)) = g.scale_offset {
+                out.say(format!(
+                    "  heights       sample x {scale} + {offset} (GDAL scale and offset)"
+                ));
+            }
         }
         out.say(format!(
             "  simplified    to {} vertices (max error {:.3} m; --dem-vertices)",

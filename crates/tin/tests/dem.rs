@@ -177,6 +177,29 @@ fn npy_sidecar_gives_spacing_nodata_and_origin() {
     std::fs::write(dir.path().join("dem.json"), "{ not json").expect("sidecar");
     let m = format_message(read_dem(&path, &opts()));
     assert!(m.contains("not valid JSON"), "{m}");
+    // Python's json.dump writes a NaN nodata as the bare word NaN: named, with what to write instead.
+    std::fs::write(
+        dir.path().join("dem.json"),
+        r#"{"spacing_x_m": 1, "spacing_y_m": 2, "nodata": NaN}"#,
+    )
+    .expect("sidecar");
+    let m = format_message(read_dem(&path, &opts()));
+    assert!(m.contains("not valid JSON") && m.contains("write null"), "{m}");
+    // In a float32 array, the nodata value rounded to float32 is a void (as in a GeoTIFF): 0.1 is 0.1f32 there.
+    let f4: Vec<u8> = [0.1f32, 1.0, 2.0, 3.0, 0.1, 5.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    write_npy(&path, 1, "<f4", false, "(2, 3)", &f4);
+    std::fs::write(
+        dir.path().join("dem.json"),
+        r#"{"spacing_x_m": 1, "spacing_y_m": 2, "nodata": 0.1}"#,
+    )
+    .expect("sidecar");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!(g.voids(), 2);
+    let windowed = tin::dem::read_dem_window_heights(&path, &opts(), [0, 1], [0, 2]).expect("window");
+    assert_eq!(windowed.1.iter().filter(|h| h.is_nan()).count(), 2);
 }
 
 #[test]
@@ -297,7 +320,19 @@ fn asc_malformed_files() {
         (format!("{header}1 2 3\n4 5 6 7\n"), "line 7: more than the 6 values"),
         (
             format!("{header}1 2 3\n4 x 6\n"),
-            "line 7: \"x\" is not a number (row 1, column 1)",
+            "line 7: \"x\" is not a finite number (row 2, column 2)",
+        ),
+        (
+            format!("{header}inf 2 3\n4 5 6\n"),
+            "line 6: \"inf\" is not a finite number (row 1, column 1)",
+        ),
+        // GDAL writes `NODATA_value nan` for a float grid whose voids are NaN; Notepad may start a file with a BOM.
+        (format!("{header}NODATA_value nan\n1 2 3\nnan 5 6\n"), ""),
+        (format!("\u{feff}{header}1 2 3\n4 5 6\n"), ""),
+        // A file with carriage returns only is one long line: quoted in part.
+        (
+            header.replace('\n', "\r") + "1 2 3\r4 5 6\r",
+            "\\r4 5\"… has more than one value",
         ),
         (format!("{header}1 2 3\n4 5 6."), ""), // "6." is a number: complete
         (

@@ -169,6 +169,41 @@ fn missing_file_names_it() {
     assert!(e.to_string().contains("/nonexistent/dem.tif"), "{e}");
 }
 
+/// `tests/data/lzw_tiles_70x50.tif`: 70 x 50 int16 samples `⌊100 + row + column / 2⌋`, LZW in 16 x 16 tiles (which do
+/// not divide the image: GDAL's default tiling of a DEM does the same), EPSG:32633, 10 x 20 m, written by Python's
+/// `tifffile`. The `tiff` crate's own `read_image` and `read_chunk` fail on its right-edge tiles ("no lzw end code
+/// found"); the reader decodes every tile at its padded width.
+#[test]
+fn lzw_tiles_at_the_right_edge_decode() {
+    let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/lzw_tiles_70x50.tif"));
+    let expected = |r: usize, c: usize| (100.0 + r as f64 + 0.5 * c as f64).floor();
+    let (g, i) = info(&path);
+    assert_eq!((g.rows, g.cols, i.layout.as_str()), (50, 70, "tiles"));
+    assert!(i.compression.starts_with("lzw"), "{}", i.compression);
+    for r in 0..50 {
+        for c in 0..70 {
+            assert_eq!(g.z[r * 70 + c], expected(r, c), "row {r}, column {c}");
+        }
+    }
+    // A window across the right-edge tiles, as a tile job reads it.
+    let (rows, cols) = ([10, 40], [60, 69]);
+    let (_, z) = tin::dem::read_dem_window_heights(&path, &DemOptions::default(), rows, cols).expect("window");
+    for (k, &v) in z.iter().enumerate() {
+        let (r, c) = (rows[0] + k / 10, cols[0] + k % 10);
+        assert_eq!(v, expected(r, c), "window row {r}, column {c}");
+    }
+}
+
+/// A GeoTIFF cut short (a partial download) is named as such, with the strip that runs past its end.
+#[test]
+fn a_truncated_geotiff_is_named_truncated() {
+    let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/lzw_tiles_70x50.tif"));
+    let bytes = std::fs::read(&path).expect("fixture");
+    let cut = &bytes[..bytes.len() / 2];
+    let msg = message(parse_geotiff(cut, Path::new("test.tif"), &DemOptions::default()));
+    assert!(msg.contains("truncated") && msg.contains("strip or tile"), "{msg}");
+}
+
 // ---------------------------------------------------------------- written by the tests
 
 /// GeoKeys of a projected CRS in metres (EPSG:32633), pixel-is-area.
@@ -181,6 +216,8 @@ struct Spec<'a> {
     tie: Option<Vec<f64>>,
     transform: Option<[f64; 16]>,
     nodata: Option<&'a str>,
+    /// GDAL's metadata XML (tag 42112).
+    metadata: Option<&'a str>,
     compression: Compression,
     predictor: Predictor,
 }
@@ -193,6 +230,7 @@ impl Default for Spec<'_> {
             tie: Some(vec![0.0, 0.0, 0.0, 500_000.0, 4_000_000.0, 0.0]),
             transform: None,
             nodata: None,
+            metadata: None,
             compression: Compression::Uncompressed,
             predictor: Predictor::None,
         }
@@ -225,6 +263,9 @@ macro_rules! write_tif {
             }
             if let Some(n) = spec.nodata {
                 d.write_tag(Tag::Unknown(42113), n).expect("tag");
+            }
+            if let Some(m) = spec.metadata {
+                d.write_tag(Tag::Unknown(42112), m).expect("tag");
             }
             img.write_data($data).expect("data");
         }
@@ -296,6 +337,45 @@ fn nodata_pixel_is_point_and_transformation() {
     let (g, i) = parse(&write_tif!(colortype::Gray32Float, 3, 2, &data, &spec)).expect("point");
     assert_eq!(i.raster_type, RasterType::PixelIsPoint);
     assert_eq!(g.voids(), 2);
+    // GDAL's scale and offset (as `gdal_translate -a_scale 0.1 -a_offset -1000` writes them) give the heights; the
+    // nodata value is a raw sample.
+    let raw: Vec<u16> = vec![21000, 21835, 0, 21010, 21020, 21030];
+    let xml = r#"<GDALMetadata>
+  <Item name="OFFSET" sample="0" role="offset">-1000</Item>
+  <Item name="SCALE" sample="0" role="scale">0.1</Item>
+</GDALMetadata>"#;
+    let spec = Spec {
+        keys: Some(&keys),
+        nodata: Some("0"),
+        metadata: Some(xml),
+        ..Spec::default()
+    };
+    let (sc, si) = parse(&write_tif!(colortype::Gray16, 3, 2, &raw, &spec)).expect("scaled");
+    assert_eq!(si.scale_offset, Some((0.1, -1000.0)));
+    assert_eq!(sc.voids(), 1);
+    assert!(
+        (sc.z[0] - 1100.0).abs() < 1e-9 && (sc.z[1] - 1183.5).abs() < 1e-9,
+        "{:?}",
+        sc.z
+    );
+    let spec = Spec {
+        keys: Some(&keys),
+        metadata: Some(r#"<GDALMetadata><Item name="SCALE" sample="0" role="scale">x</Item></GDALMetadata>"#),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::Gray16, 3, 2, &raw, &spec)));
+    assert!(msg.contains("GDAL_METADATA") && msg.contains("\"x\""), "{msg}");
+    // The largest float32 as nodata, written in its short form: those samples are voids.
+    let fill: Vec<f32> = vec![-f32::MAX, 2.0, 3.0, 4.0, -f32::MAX, 6.0];
+    for text in ["-3.40282e+38", "-3.4028234663852886e+38", "-3.40282346638528859812e+38"] {
+        let spec = Spec {
+            keys: Some(&keys),
+            nodata: Some(text),
+            ..Spec::default()
+        };
+        let (f, _) = parse(&write_tif!(colortype::Gray32Float, 3, 2, &fill, &spec)).expect(text);
+        assert_eq!(f.voids(), 2, "{text}");
+    }
     assert_eq!(g.origin, DVec2::new(500_000.0, 4_000_000.0));
     assert_eq!(i.epsg, None);
     // The same georeference as a ModelTransformation (pixel-is-point): x = 10 i + 500000, y = -20 j + 4000000.

@@ -76,10 +76,7 @@ pub(super) fn read_asc_window(
                 break 'lines;
             }
             if r >= rows[0] && (cols[0]..=cols[1]).contains(&c) {
-                let v: f64 = word
-                    .parse()
-                    .map_err(|_| err(format!("line {n}: {word:?} is not a number (row {r}, column {c})")))?;
-                z.push(if nodata == Some(v) { f64::NAN } else { v });
+                z.push(sample(word, n, k, shape.cols, nodata, path)?);
             }
             k += 1;
         }
@@ -139,14 +136,7 @@ pub(super) fn read_asc_strips(
                     "line {n}: more than the {expected} values that nrows x ncols = {rows} x {cols} announce"
                 )));
             }
-            let v: f64 = word.parse().map_err(|_| {
-                err(format!(
-                    "line {n}: {word:?} is not a number (row {}, column {})",
-                    k / cols,
-                    k % cols
-                ))
-            })?;
-            z.push(if nodata == Some(v) { f64::NAN } else { v });
+            z.push(sample(word, n, k, cols, nodata, path)?);
             k += 1;
             if z.len() == strip {
                 each(first, &mut z)?;
@@ -167,6 +157,33 @@ pub(super) fn read_asc_strips(
 }
 
 /// The lines of a text file, read one at a time (1-based numbers), naming the file and line in errors.
+/// The height of the value `word` at index `k` of the grid (row-major, `cols` wide) on line `n`: NaN for a void (the
+/// nodata value, or NaN); an error naming the line and the 1-based row and column for anything else that is not a
+/// finite number.
+fn sample(word: &str, n: usize, k: usize, cols: usize, nodata: Option<f64>, path: &Path) -> Result<f64> {
+    match word.parse::<f64>() {
+        Ok(v) if nodata == Some(v) || v.is_nan() => Ok(f64::NAN),
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(TinError::format(
+            path,
+            format!(
+                "line {n}: {} is not a finite number (row {}, column {})",
+                quote(word),
+                k / cols + 1,
+                k % cols + 1
+            ),
+        )),
+    }
+}
+
+/// `s` quoted for a message, cut after 60 characters (a file without line endings is one long line).
+fn quote(s: &str) -> String {
+    match s.char_indices().nth(60) {
+        Some((at, _)) => format!("{:?}…", &s[..at]),
+        None => format!("{s:?}"),
+    }
+}
+
 struct Lines<'p> {
     reader: std::io::BufReader<std::fs::File>,
     buf: Vec<u8>,
@@ -231,6 +248,12 @@ impl Header {
     /// (its first word is a number). Blank lines are header lines.
     fn line(&mut self, n: usize, line: &str, path: &Path) -> Result<bool> {
         let err = |m: String| TinError::format(path, m);
+        // A byte-order mark (as Notepad's "UTF-8 with BOM" writes) is not part of the first key.
+        let line = if n == 1 {
+            line.strip_prefix('\u{feff}').unwrap_or(line)
+        } else {
+            line
+        };
         let mut words = line.split_whitespace();
         let Some(key) = words.next() else {
             return Ok(true);
@@ -240,23 +263,26 @@ impl Header {
         }
         let value = words
             .next()
-            .ok_or_else(|| err(format!("line {n}: header key {key:?} has no value")))?;
+            .ok_or_else(|| err(format!("line {n}: header key {} has no value", quote(key))))?;
         if words.next().is_some() {
-            return Err(err(format!("line {n}: header line {line:?} has more than one value")));
+            return Err(err(format!(
+                "line {n}: header line {} has more than one value",
+                quote(line)
+            )));
         }
         let number = || -> Result<f64> {
             value
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| err(format!("line {n}: {key} = {value:?} is not a finite number")))
+                .ok_or_else(|| err(format!("line {n}: {key} = {} is not a finite number", quote(value))))
         };
         let count = || -> Result<usize> {
             value
                 .parse::<usize>()
                 .ok()
                 .filter(|&v| v > 0)
-                .ok_or_else(|| err(format!("line {n}: {key} = {value:?} is not a positive integer")))
+                .ok_or_else(|| err(format!("line {n}: {key} = {} is not a positive integer", quote(value))))
         };
         let slot_taken = |taken: bool| -> Result<()> {
             if taken {
@@ -296,11 +322,19 @@ impl Header {
             }
             "nodata_value" => {
                 slot_taken(self.nodata.is_some())?;
-                self.nodata = Some(number()?);
+                // GDAL writes `nan` for a float grid whose voids are NaN (which are voids anyway).
+                self.nodata = Some(
+                    if value.eq_ignore_ascii_case("nan") || value.eq_ignore_ascii_case("-nan") {
+                        f64::NAN
+                    } else {
+                        number()?
+                    },
+                );
             }
             _ => {
                 return Err(err(format!(
-                    "line {n}: unknown header key {key:?} (not an ESRI ASCII grid?)"
+                    "line {n}: unknown header key {} (not an ESRI ASCII grid?)",
+                    quote(key)
                 )));
             }
         }
@@ -378,15 +412,7 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
                     i + 1
                 )));
             }
-            let v: f64 = word.parse().map_err(|_| {
-                err(format!(
-                    "line {}: {word:?} is not a number (row {}, column {})",
-                    i + 1,
-                    z.len() / cols,
-                    z.len() % cols
-                ))
-            })?;
-            z.push(if nodata == Some(v) { f64::NAN } else { v });
+            z.push(sample(word, i + 1, z.len(), cols, nodata, path)?);
         }
     }
     if z.len() < expected {

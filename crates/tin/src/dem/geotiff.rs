@@ -2,11 +2,17 @@
 //!
 //! What is read:
 //! - one image (the first IFD); samples int8/16/32/64, uint8/16/32/64, float32 or float64, in strips or tiles,
-//!   uncompressed, LZW or Deflate, with no predictor, the horizontal predictor (2) or the floating-point predictor
-//!   (3): whatever the `tiff` crate decodes;
+//!   uncompressed, LZW, Deflate or PackBits, with no predictor, the horizontal predictor (2) or the floating-point
+//!   predictor (3): whatever the `tiff` crate decodes. Strips and tiles are decoded one by one at their full padded
+//!   width (see `decode_window`); a whole-file read decodes at most [`MAX_DECODED_BYTES`], and a file that ends
+//!   before the data its tags point at is named as truncated;
 //! - one band: a single-band image, or band [`DemOptions::band`] (1-based, like GDAL) of an interleaved multi-band
 //!   image; a multi-band image without a chosen band is an error;
-//! - `GDAL_NODATA` (tag 42113): samples equal to it become voids, as do NaN samples;
+//! - `GDAL_NODATA` (tag 42113): samples equal to it become voids, as do NaN samples; for float32 samples, also those
+//!   equal to it rounded to float32 (a value within 1e-5 of the largest float32, like `-3.40282e+38`, being that
+//!   largest float32);
+//! - GDAL's band scale and offset (`GDAL_METADATA`, tag 42112: the `<Item>`s of roles `scale` and `offset` of the
+//!   band read): heights are `sample · scale + offset` (voids are judged on the raw sample, as GDAL does);
 //! - the georeference: ModelPixelScale (33550) + one ModelTiepoint (33922), or a ModelTransformation (34264) without
 //!   rotation or shear; north-up only (row 0 north). `GTRasterTypeGeoKey` says whether the tie point is the corner
 //!   of a pixel (pixel-is-area, the default) or its centre (pixel-is-point); the grid origin is always the centre of
@@ -62,6 +68,8 @@ pub const MAX_DECODED_BYTES: usize = 1 << 30;
 
 /// The tag of GDAL's nodata value.
 const GDAL_NODATA: u16 = 42113;
+/// The tag of GDAL's metadata (XML), which holds a band's scale and offset.
+const GDAL_METADATA: u16 = 42112;
 /// The GeoTIFF tag holding GeoKey ASCII parameters.
 const GEO_ASCII_PARAMS: u16 = 34737;
 
@@ -113,6 +121,10 @@ pub struct GeoTiffInfo {
     pub layout: String,
     /// Number of bands (samples per pixel), and the one read (1-based).
     pub bands: (u16, u16),
+    /// GDAL's scale and offset of the band read (`GDAL_METADATA` items of roles `scale` and `offset`): heights are
+    /// `sample · scale + offset`. `None` when the file gives neither.
+    #[serde(default)]
+    pub scale_offset: Option<(f64, f64)>,
 }
 
 /// Reads a GeoTIFF DEM (see the module documentation).
@@ -131,32 +143,24 @@ pub fn read_geotiff_info(path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTif
 pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTiffInfo)> {
     opts.check()?;
     let err = |m: String| TinError::format(path, m);
-    let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
     let (mut dec, meta) = open_tiff(Cursor::new(bytes), path, opts)?;
     let (rows, cols) = (meta.shape.rows, meta.shape.cols);
-    let image = dec
-        .read_image()
-        .map_err(|e| tiff_err(&format!("cannot decode the samples ({})", meta.info.compression), e))?;
-    let (sample_type, values) = to_f64(image);
-    let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
-    let n = rows
+    let decoded = rows
         .checked_mul(cols)
-        .ok_or_else(|| err(format!("{cols} x {rows} samples overflow")))?;
-    let stride = meta.stride;
-    if values.len() < n * stride {
+        .and_then(|n| n.checked_mul(meta.stride))
+        .and_then(|n| n.checked_mul(meta.sample_bytes.max(1)));
+    if decoded.is_none_or(|b| b > MAX_DECODED_BYTES) {
         return Err(err(format!(
-            "decoded {} samples, expected {} ({cols} x {rows} x {stride})",
-            values.len(),
-            n * stride
+            "{cols} x {rows} samples of {} bytes are more than the {} MiB a whole-file read decodes; \
+             `tincull tiles plan` reads a DEM this large in windows",
+            meta.sample_bytes.max(1) * meta.stride,
+            MAX_DECODED_BYTES >> 20
         )));
     }
-    let z: Vec<f64> = values
-        .iter()
-        .skip(meta.band - 1)
-        .step_by(stride)
-        .take(n)
-        .map(|&v| meta.height(v, sample_type))
-        .collect();
+    if rows == 0 || cols == 0 {
+        return Err(err(format!("the image has {cols} x {rows} samples")));
+    }
+    let (sample_type, z) = decode_window(&mut dec, &meta, [0, rows - 1], [0, cols - 1], bytes.len() as u64, path)?;
     let info = GeoTiffInfo {
         sample_type: sample_type.to_string(),
         ..meta.info
@@ -181,12 +185,33 @@ pub(super) fn read_geotiff_window(
     rows: [usize; 2],
     cols: [usize; 2],
 ) -> Result<(GridShape, Vec<f64>)> {
-    let err = |m: String| TinError::format(path, m);
-    let tiff_err = |what: &str, e: tiff::TiffError| TinError::format(path, format!("{what}: {e}"));
-    let file = std::io::BufReader::new(open(path)?);
-    let (mut dec, meta) = open_tiff(file, path, opts)?;
+    let file = open(path)?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let (mut dec, meta) = open_tiff(std::io::BufReader::new(file), path, opts)?;
     let shape = meta.shape;
     check_window(&shape, rows, cols, path)?;
+    let (_, z) = decode_window(&mut dec, &meta, rows, cols, len, path)?;
+    Ok((shape, z))
+}
+
+/// Decodes the samples of rows `rows[0]..=rows[1]` and columns `cols[0]..=cols[1]` (a window inside the image) of
+/// the band `meta` names, strip by strip or tile by tile, as heights (voids NaN, not scaled), with the sample type's
+/// name. Only the strips or tiles (of the first plane) that meet the window are decoded. `file_len` (bytes) names a
+/// truncated file as such.
+///
+/// A strip or tile is decoded with its full padded width as the row stride: the `tiff` crate (0.11) fails on an LZW
+/// tile at the right edge of an image that its tiles do not divide when asked for the unpadded width (it skips the
+/// padding of the last row past the end of the LZW stream), and GDAL writes such files by default.
+fn decode_window<R: Read + Seek>(
+    dec: &mut Decoder<R>,
+    meta: &Meta,
+    rows: [usize; 2],
+    cols: [usize; 2],
+    file_len: u64,
+    path: &Path,
+) -> Result<(&'static str, Vec<f64>)> {
+    let err = |m: String| TinError::format(path, m);
+    let shape = meta.shape;
     let (cw, ch) = dec.chunk_dimensions();
     let (cw, ch) = (cw as usize, ch as usize);
     if cw == 0 || ch == 0 {
@@ -195,41 +220,61 @@ pub(super) fn read_geotiff_window(
     let across = shape.cols.div_ceil(cw);
     let nc = cols[1] - cols[0] + 1;
     let mut z = vec![0.0; (rows[1] - rows[0] + 1) * nc];
+    let mut sample_type = "";
+    let stride = meta.stride;
     for ty in rows[0] / ch..=rows[1] / ch {
         for tx in cols[0] / cw..=cols[1] / cw {
             let index = u32::try_from(ty * across + tx).map_err(|_| err("too many strips or tiles".into()))?;
-            let chunk = dec.read_chunk(index).map_err(|e| {
-                tiff_err(
-                    &format!("cannot decode strip or tile {index} ({})", meta.info.compression),
-                    e,
-                )
-            })?;
             let (dw, dh) = dec.chunk_data_dimensions(index);
             let (dw, dh) = (dw as usize, dh as usize);
             if dw == 0 || dh == 0 {
                 return Err(err(format!("strip or tile {index} has {dw} x {dh} samples")));
             }
-            let (sample_type, values) = to_f64(chunk);
-            let sample_type = sample_type.ok_or_else(|| err("float16 samples are not supported".into()))?;
-            let stride = meta.stride;
-            if values.len() < dw * dh * stride {
+            // Whole bytes per sample: decoded at the padded width (see above); else as the crate lays it out.
+            let (chunk, row) = if meta.sample_bytes > 0 {
+                let mut chunk = DecodingResult::U8(Vec::new());
+                let row_bytes = cw * stride * meta.sample_bytes;
+                dec.read_chunk_to_buffer(&mut chunk, index, row_bytes)
+                    .map(|()| (chunk, cw))
+            } else {
+                dec.read_chunk(index).map(|chunk| (chunk, dw))
+            }
+            .map_err(|e| chunk_error(meta, index, file_len, e, path))?;
+            let (kind, values) = to_f64(chunk);
+            sample_type = kind.ok_or_else(|| err("float16 samples are not supported".into()))?;
+            let needed = ((dh - 1) * row + dw) * stride;
+            if values.len() < needed {
                 return Err(err(format!(
-                    "strip or tile {index}: decoded {} samples, expected {} ({dw} x {dh} x {stride})",
+                    "strip or tile {index}: decoded {} samples, expected {needed} ({dw} x {dh} x {stride})",
                     values.len(),
-                    dw * dh * stride
                 )));
             }
             // The chunk's samples inside the window, in whole-grid rows and columns.
             let (y0, x0) = (ty * ch, tx * cw);
             for r in rows[0].max(y0)..=rows[1].min(y0 + dh - 1) {
                 for c in cols[0].max(x0)..=cols[1].min(x0 + dw - 1) {
-                    let v = values[((r - y0) * dw + (c - x0)) * stride + meta.band - 1];
+                    let v = values[((r - y0) * row + (c - x0)) * stride + meta.band - 1];
                     z[(r - rows[0]) * nc + (c - cols[0])] = meta.height(v, sample_type);
                 }
             }
         }
     }
-    Ok((shape, z))
+    Ok((sample_type, z))
+}
+
+/// The error of a strip or tile that cannot be decoded: a file that ends before the data its tags point at is
+/// named as truncated.
+fn chunk_error(meta: &Meta, index: u32, file_len: u64, e: tiff::TiffError, path: &Path) -> TinError {
+    let what = format!("cannot decode strip or tile {index} ({})", meta.info.compression);
+    let short = matches!(&e, tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
+    let end = meta.chunk_ends.get(index as usize).copied();
+    match end {
+        Some(end) if short && end > file_len => TinError::format(
+            path,
+            format!("{what}: its data runs to byte {end}, but the file has {file_len} bytes (a truncated file?)"),
+        ),
+        _ => TinError::format(path, format!("{what}: {e}")),
+    }
 }
 
 /// What the tags of a GeoTIFF say: its grid, the band to read and how voids are marked.
@@ -238,6 +283,12 @@ struct Meta {
     /// The band read (1-based) and the samples per pixel of a decoded chunk or image.
     band: usize,
     stride: usize,
+    /// Bytes per sample (0 when samples are not whole bytes).
+    sample_bytes: usize,
+    /// Per strip or tile, the end of its data in the file (offset plus byte count), where the tags say.
+    chunk_ends: Vec<u64>,
+    /// GDAL's scale and offset of the band read.
+    scale_offset: Option<(f64, f64)>,
     nodata: Option<f64>,
     /// What the tags say, but the sample type (known once samples are decoded).
     info: GeoTiffInfo,
@@ -245,13 +296,63 @@ struct Meta {
 
 impl Meta {
     /// The height of a decoded sample: NaN for voids (NaN, the nodata value, or for float32 samples the nodata
-    /// value rounded to float32).
+    /// value rounded to float32; a nodata value within 1e-5 (relative) of the largest float32, such as the short form
+    /// `-3.40282e+38`, stands for that largest float32, as GDAL reads it).
     fn height(&self, v: f64, sample_type: &str) -> f64 {
+        let single = |nd: f64| {
+            if nd.is_finite() && nd.abs() >= f64::from(f32::MAX) * (1.0 - 1e-5) {
+                f32::MAX.copysign(nd as f32)
+            } else {
+                nd as f32
+            }
+        };
         let void = v.is_nan()
             || self.nodata.is_some_and(|nd| v == nd)
-            || (sample_type == "float32" && self.nodata.is_some_and(|nd| v as f32 == nd as f32));
-        if void { f64::NAN } else { v }
+            || (sample_type == "float32" && self.nodata.is_some_and(|nd| v as f32 == single(nd)));
+        match (void, self.scale_offset) {
+            (true, _) => f64::NAN,
+            (false, Some((scale, offset))) => v * scale + offset,
+            (false, None) => v,
+        }
     }
+}
+
+/// The scale and offset of band `band` (1-based) in GDAL's metadata XML: its `<Item>`s of `role="scale"` and
+/// `role="offset"` with `sample="band − 1"` (a missing one is 1 or 0). `None` when neither is there; an error naming
+/// the item when a value is not a finite number (a zero scale included).
+fn gdal_scale_offset(xml: &str, band: usize, path: &Path) -> Result<Option<(f64, f64)>> {
+    let sample = format!("sample=\"{}\"", band - 1);
+    let mut found = (None, None);
+    for item in xml.split("<Item").skip(1) {
+        let Some((attributes, rest)) = item.split_once('>') else {
+            continue;
+        };
+        if !attributes.contains(&sample) {
+            continue;
+        }
+        let slot = if attributes.contains("role=\"scale\"") {
+            &mut found.0
+        } else if attributes.contains("role=\"offset\"") {
+            &mut found.1
+        } else {
+            continue;
+        };
+        let text = rest.split('<').next().unwrap_or("").trim();
+        let value = text.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+            TinError::format(
+                path,
+                format!("tag GDAL_METADATA (42112): the item <Item{attributes}> holds {text:?}, not a finite number"),
+            )
+        })?;
+        *slot = Some(value);
+    }
+    if found.0 == Some(0.0) {
+        return Err(TinError::format(path, "tag GDAL_METADATA (42112): band scale 0"));
+    }
+    Ok(match found {
+        (None, None) => None,
+        (scale, offset) => Some((scale.unwrap_or(1.0), offset.unwrap_or(0.0))),
+    })
 }
 
 /// Opens a TIFF, reads its tags and georeference ([`Meta`]).
@@ -280,6 +381,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         1 => "none".to_string(),
         5 => "lzw".to_string(),
         8 | 32946 => "deflate".to_string(),
+        32773 => "packbits".to_string(),
         c => format!("compression {c}"),
     };
     let predictor = match find_u64(&mut dec, Tag::Predictor, path)?.unwrap_or(1) {
@@ -316,7 +418,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         }
         (n, None) => {
             return Err(err(format!(
-                "the image has {n} bands (SamplesPerPixel = {n}): choose the elevation band (1..{n})"
+                "the image has {n} bands (SamplesPerPixel = {n}): choose the elevation band (1..{n}) with `--band B`"
             )));
         }
         (n, Some(b)) if b == 0 || b > n => {
@@ -333,6 +435,29 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
     };
 
     let stride = if planar == 2 { 1 } else { usize::from(spp) };
+    let scale_offset = match dec.find_tag(Tag::Unknown(GDAL_METADATA)) {
+        Ok(Some(v)) => match v.into_string() {
+            Ok(xml) => gdal_scale_offset(&xml, usize::from(band), path)?,
+            Err(e) => return Err(tiff_err("tag GDAL_METADATA (42112) is not text", e)),
+        },
+        Ok(None) => None,
+        Err(e) => return Err(tiff_err("tag GDAL_METADATA (42112)", e)),
+    };
+    let bits = dec
+        .get_tag_u64_vec(Tag::BitsPerSample)
+        .ok()
+        .and_then(|b| b.first().copied())
+        .unwrap_or(1);
+    let sample_bytes = if bits % 8 == 0 { (bits / 8) as usize } else { 0 };
+    let (offsets, counts) = if layout == "tiles" {
+        (Tag::TileOffsets, Tag::TileByteCounts)
+    } else {
+        (Tag::StripOffsets, Tag::StripByteCounts)
+    };
+    let chunk_ends = match (dec.get_tag_u64_vec(offsets), dec.get_tag_u64_vec(counts)) {
+        (Ok(o), Ok(c)) => o.iter().zip(&c).map(|(o, c)| o.saturating_add(*c)).collect(),
+        _ => Vec::new(),
+    };
     // The georeference: native coordinates of the centre of sample (0, 0) and the native spacing.
     let c = match georef.raster_type {
         RasterType::PixelIsArea => 0.5,
@@ -402,11 +527,15 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         compression: format!("{compression}, predictor {predictor}"),
         layout: layout.to_string(),
         bands: (spp, band),
+        scale_offset,
     };
     let meta = Meta {
         shape,
         band: usize::from(band),
         stride,
+        sample_bytes,
+        chunk_ends,
+        scale_offset,
         nodata,
         info,
     };

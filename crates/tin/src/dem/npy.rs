@@ -59,7 +59,7 @@ pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
     let array = parse_npy(&bytes, path)?;
     let (shape, nodata) = placement(path, array.rows, array.cols, opts)?;
     let mut z = array.values;
-    void_nodata(&mut z, nodata);
+    void_nodata(&mut z, nodata, &array.descr);
     finish(
         path,
         shape.rows,
@@ -113,7 +113,7 @@ pub(super) fn read_npy_window(
             }
         }
     }
-    void_nodata(&mut z, nodata);
+    void_nodata(&mut z, nodata, &layout.descr);
     Ok((shape, z))
 }
 
@@ -194,11 +194,17 @@ fn placement(path: &Path, rows: usize, cols: usize, opts: &DemOptions) -> Result
     Ok((shape, side.nodata))
 }
 
-/// Turns samples equal to the nodata value into voids.
-fn void_nodata(z: &mut [f64], nodata: Option<f64>) {
+/// Turns samples equal to the nodata value into voids; in a float32 array (`descr` `f4`), also samples equal to the
+/// nodata value rounded to float32 (a sidecar's `0.1` is the float32 sample `0.1f32`), as for GeoTIFFs.
+fn void_nodata(z: &mut [f64], nodata: Option<f64>, descr: &str) {
     if let Some(nodata) = nodata {
+        let single = if descr.ends_with("f4") {
+            f64::from(nodata as f32)
+        } else {
+            nodata
+        };
         for h in z {
-            if *h == nodata {
+            if *h == nodata || *h == single {
                 *h = f64::NAN;
             }
         }
@@ -246,8 +252,17 @@ pub fn sidecar_json(grid: &Grid) -> String {
 /// Reads a sidecar (see the module documentation).
 pub fn read_sidecar(path: &Path) -> Result<Sidecar> {
     let bytes = read_bytes(path)?;
-    let value: serde_json::Value =
-        serde_json::from_slice(&bytes).map_err(|e| TinError::format(path, format!("not valid JSON: {e}")))?;
+    let value: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| {
+        // Python's `json.dump` writes a NaN or infinite float as the bare word `NaN` or `Infinity`.
+        let text = String::from_utf8_lossy(&bytes);
+        let hint = if text.contains("NaN") || text.contains("Infinity") {
+            " (JSON has no NaN or Infinity, which Python's json.dump writes for float('nan'): write null for \
+                 `nodata`)"
+        } else {
+            ""
+        };
+        TinError::format(path, format!("not valid JSON: {e}{hint}"))
+    })?;
     let obj = value
         .as_object()
         .ok_or_else(|| TinError::format(path, "expected a JSON object"))?;
