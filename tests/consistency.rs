@@ -201,6 +201,12 @@ fn nonsense_values_are_refused() {
     }
     let pvs = dir.path().join("x.pvs");
     fails_with(&["pvs", s(&tch), "--check", "0"], "--check must be at least 1");
+    // A reversed band is refused before the hierarchy is even read (that takes seconds on a large one).
+    let missing = dir.path().join("missing.tch");
+    fails_with(
+        &["pvs", s(&missing), "--check", "2", "--above-ground", "5,1"],
+        "the height above ground 5,1 must be two finite values, the lower first",
+    );
     fails_with(&["pvs", s(&tch), "--check", "2", "-o", s(&pvs)], "--check");
     fails_with(
         &["pvs", s(&tch), "--grid", "5000", "--cell-size", "50"],

@@ -104,6 +104,8 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         (None, Some(h)) => Height::AboveGround(h),
         (None, None) => Height::AboveGround([0.0, 2.0]),
     };
+    // Before the hierarchy is read and prepared (seconds on a large one).
+    height.validate()?;
     for &r in &args.resolution {
         ensure!(
             (1..=pvs::MAX_RESOLUTION).contains(&r),

@@ -117,7 +117,14 @@ impl ViewCell {
                 "the rectangle {x0},{y0},{x1},{y1} must be finite with x0 < x1 and y0 < y1"
             )));
         }
-        let ([a, b], what) = match self.height {
+        self.height.validate()
+    }
+}
+
+impl Height {
+    /// Checks the band: two finite values, the lower first.
+    pub fn validate(&self) -> Result<(), PvsError> {
+        let ([a, b], what) = match *self {
             Height::Band(z) => (z, "height band"),
             Height::AboveGround(h) => (h, "height above ground"),
         };
