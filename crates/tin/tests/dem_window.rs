@@ -480,7 +480,7 @@ fn truncated_files_are_errors_naming_them() {
     assert!(read_dem(&p, &opts).is_err());
     let strips = |p: &Path| read_dem_strips(p, &opts, 3, |_, _| Ok(()));
     assert!(names_file(strips(&p).expect_err("truncated"), &p).contains("truncated"));
-    // .asc with a value too many, or a word that is not a number: strips read every value, as read_dem does.
+    // .asc with a value too many, or a word that is not a finite number: strips read every value, as read_dem does.
     let p = dir.path().join("long.asc");
     std::fs::write(&p, format!("{text}{} 1 2 3 4 5 6 7 8", ival(0, 0))).expect("write");
     assert!(read_dem(&p, &opts).is_err());
@@ -488,7 +488,7 @@ fn truncated_files_are_errors_naming_them() {
     let p = dir.path().join("word.asc");
     std::fs::write(&p, format!("{text}1 2 3 4 5 6 x")).expect("write");
     assert!(read_dem(&p, &opts).is_err());
-    assert!(names_file(strips(&p).expect_err("a word"), &p).contains("\"x\" is not a number"));
+    assert!(names_file(strips(&p).expect_err("a word"), &p).contains("\"x\" is not a finite number"));
     // A PNG cut short: its strips are refused, naming the file.
     let png = fixtures().iter().find(|f| f.name == "png").expect("the PNG fixture");
     let bytes = std::fs::read(&png.path).expect("read");
