@@ -64,6 +64,52 @@ fn tin_simplifies_an_ascii_grid() {
     assert_eq!(info["vertices"], v["vertices"]);
 }
 
+/// A grid in degrees: with its `.prj` it is put into metres and `info` says how; without, `info` and `tin` warn that
+/// degrees look read as metres.
+#[test]
+fn a_geographic_asc_is_converted_or_warned_about() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asc = dir.path().join("deg.asc");
+    let mut text = "ncols 12\nnrows 10\nxllcorner -122.5\nyllcorner 46.8\ncellsize 0.000833333333333\n".to_string();
+    for r in 0..10 {
+        let row: Vec<String> = (0..12).map(|c| format!("{}", 1000 + (r * 7 + c * 3) % 23)).collect();
+        text += &row.join(" ");
+        text += "\n";
+    }
+    std::fs::write(&asc, text).expect("fixture");
+    let out = ok(&["info", s(&asc)]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("look like degrees read as metres"), "{stderr}");
+    let obj = dir.path().join("deg.obj");
+    let out = ok(&["tin", s(&asc), "-o", s(&obj), "--keep-grid"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("look like degrees"));
+    std::fs::write(
+        dir.path().join("deg.prj"),
+        "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563]],PRIMEM[\"Greenwich\",0],\
+         UNIT[\"degree\",0.0174532925199433]]",
+    )
+    .expect("prj");
+    let out = ok(&["info", s(&asc)]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(!stderr.contains("look like degrees"), "{stderr}");
+    assert!(stdout.contains("to metres") && stdout.contains("deg.prj"), "{stdout}");
+    let v = json(&["info", s(&asc), "--json", "-q"]);
+    // 1/1200 of a degree of latitude.
+    assert!(
+        (v["dem"]["spacing"][1].as_f64().expect("dy") - 111_320.0 / 1200.0).abs() < 1e-9,
+        "{v}"
+    );
+    assert!(
+        v["dem"]["to_metres"]
+            .as_str()
+            .expect("said")
+            .contains("degrees to metres")
+    );
+}
+
 /// The full-resolution path (issue #18): a regular grid kept whole (every cell's four corners are cocircular, so
 /// the Delaunay triangulation is degenerate everywhere) and at max error 0 builds, evaluates and culls, and the
 /// build does not depend on the thread count.

@@ -30,6 +30,9 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
             "  DEM grid      {} x {} samples ({} voids), spacing {:.4} x {:.4} m, north-west sample at ({:.3}, {:.3})",
             d.rows, d.cols, d.voids, d.spacing.0, d.spacing.1, d.origin[0], d.origin[1]
         ));
+        if let Some(c) = &d.to_metres {
+            out.say(format!("  to metres     {c}"));
+        }
         if let Some(g) = &d.geotiff {
             out.say(format!("  CRS           {}", g.crs));
             let [w, s, e, n] = g.native_bbox;
@@ -37,9 +40,6 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
                 "  native bbox   x {w} .. {e}, y {s} .. {n} (sample centres, {:?})",
                 g.raster_type
             ));
-            if !g.conversion.is_empty() {
-                out.say(format!("  to metres     {}", g.conversion));
-            }
             out.say(format!(
                 "  GeoTIFF       {} {}, {}, band {} of {}, nodata {}",
                 g.sample_type,

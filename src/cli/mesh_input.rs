@@ -151,6 +151,27 @@ pub struct DemSource {
     pub max_error: f64,
     /// The GeoTIFF's CRS, units and layout, for `.tif` inputs.
     pub geotiff: Option<tin::dem::geotiff::GeoTiffInfo>,
+    /// How coordinates in degrees were put into metres (a geographic GeoTIFF, or an `.asc` whose `.prj` says
+    /// geographic); None when they were metres.
+    pub to_metres: Option<String>,
+}
+
+/// Warns when a DEM's grid looks like degrees read as metres: spacings under a centimetre and a north-west sample
+/// within ±180, ±90 (a geographic `.asc` without its `.prj`, say). Only a warning: a millimetre grid near the origin
+/// is a fine terrain too.
+pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
+    let o = grid.origin;
+    if grid.dx < 0.01 && grid.dy < 0.01 && o.x.abs() <= 180.0 && o.y.abs() <= 90.0 {
+        out.warn(format!(
+            "{}: spacing {} x {} m and a north-west sample at ({}, {}) look like degrees read as metres; if they are \
+             degrees, put the CRS beside the grid (a .prj for .asc) or give --spacing in metres",
+            path.display(),
+            grid.dx,
+            grid.dy,
+            o.x,
+            o.y
+        ));
+    }
 }
 
 /// Whether `path` names a DEM grid (by extension) rather than a mesh.
@@ -231,20 +252,26 @@ impl MeshArgs {
         }
         let opts = self.dem.options();
         let spinner = out.spinner("reading DEM");
-        let (grid, geotiff) = if matches!(
-            self.mesh
-                .extension()
-                .and_then(|e| e.to_str())
-                .map(str::to_ascii_lowercase)
-                .as_deref(),
-            Some("tif" | "tiff")
-        ) {
-            let (g, i) = tin::dem::geotiff::read_geotiff_info(&self.mesh, &opts)?;
-            (g, Some(i))
-        } else {
-            (tin::read_dem(&self.mesh, &opts)?, None)
+        let ext = self
+            .mesh
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let (grid, geotiff, to_metres) = match ext.as_deref() {
+            Some("tif" | "tiff") => {
+                let (g, i) = tin::dem::geotiff::read_geotiff_info(&self.mesh, &opts)?;
+                let to_metres = Some(i.conversion.clone()).filter(|c| !c.is_empty());
+                (g, Some(i), to_metres)
+            }
+            Some("asc") => (
+                tin::read_dem(&self.mesh, &opts)?,
+                None,
+                tin::dem::asc::read_asc_conversion(&self.mesh, &opts)?,
+            ),
+            _ => (tin::read_dem(&self.mesh, &opts)?, None, None),
         };
         spinner.finish_and_clear();
+        warn_if_degrees(&grid, &self.mesh, out);
         let bar = out.progress(self.dem_vertices as u64, "simplifying DEM");
         let progress = |v: usize| bar.set_position(v as u64);
         let simplify = tin::SimplifyOptions {
@@ -277,6 +304,7 @@ impl MeshArgs {
             voids: grid.voids(),
             max_error: simplified.max_error,
             geotiff,
+            to_metres,
         };
         Ok((tin, report, Some(source)))
     }

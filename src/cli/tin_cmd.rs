@@ -50,6 +50,7 @@ pub fn run(args: &TinArgs, out: Output) -> Result<()> {
     let spinner = out.spinner("reading DEM");
     let grid = tin::read_dem(&args.dem, &dem_opts)?;
     spinner.finish_and_clear();
+    super::mesh_input::warn_if_degrees(&grid, &args.dem, out);
     if args.keep_grid {
         return keep_grid(args, &grid, files, start, out);
     }

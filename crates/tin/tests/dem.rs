@@ -294,6 +294,114 @@ fn asc_corner_and_centre_conventions() {
     assert_eq!(g.sample(1, 0).map(|p| p.truncate()), Some(DVec2::new(100.0, 200.0)));
 }
 
+/// WKT of WGS 84 as GDAL writes it into a `.prj` (ESRI flavour).
+const WGS84_PRJ: &str = "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137.0,298.257223563]],\
+    PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
+
+#[test]
+fn geographic_asc_is_put_into_metres_like_an_hgt_tile() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // The same 3-arc-second tile as an .hgt and as an .asc in degrees with a .prj: the same grid.
+    let n = 1201;
+    let f = |r: usize, c: usize| ((r * 7 + c * 3) % 500) as i16;
+    let hgt = dir.path().join("N43W123.hgt");
+    std::fs::write(&hgt, hgt_bytes(n, f)).expect("write");
+    let asc = dir.path().join("tile.asc");
+    let mut text = format!(
+        "ncols {n}\nnrows {n}\nxllcorner {}\nyllcorner {}\ncellsize {}\n",
+        -123.0 - 0.5 / 1200.0,
+        43.0 - 0.5 / 1200.0,
+        1.0 / 1200.0
+    );
+    for r in 0..n {
+        let row: Vec<String> = (0..n).map(|c| f(r, c).to_string()).collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&asc, &text).expect("write");
+    std::fs::write(dir.path().join("tile.prj"), WGS84_PRJ).expect("write");
+    let (a, h) = (
+        read_dem(&asc, &opts()).expect("asc"),
+        read_dem(&hgt, &opts()).expect("hgt"),
+    );
+    assert_eq!((a.rows, a.cols, a.dy), (h.rows, h.cols, h.dy));
+    // The mid-latitude is 43.5° up to the rounding of the corner's half cell.
+    assert!((a.dx / h.dx - 1.0).abs() < 1e-12, "{} against {}", a.dx, h.dx);
+    assert_eq!(a.origin.x, 0.0);
+    assert!(
+        (a.origin.y - h.origin.y).abs() < 1e-6,
+        "{} against {}",
+        a.origin.y,
+        h.origin.y
+    );
+    assert_eq!(a.z, h.z);
+    // A window reads the same as the whole file cut.
+    let w = tin::read_dem_window(&asc, &opts(), [10, 20], [30, 45]).expect("window");
+    assert_eq!((w.dx, w.dy), (a.dx, a.dy));
+    assert_eq!(w.origin, a.origin + DVec2::new(30.0 * a.dx, -10.0 * a.dy));
+    assert_eq!(w.z[0], a.z[10 * n + 30]);
+    // --spacing still overrides; the southern row stays at the southern latitude.
+    let s = read_dem(&asc, &with_spacing(50.0, 60.0)).expect("spacing");
+    assert_eq!((s.dx, s.dy), (50.0, 60.0));
+    assert!((s.sample(n - 1, 0).expect("not void").y - 43.0 * METRES_PER_DEGREE).abs() < 1e-6);
+}
+
+#[test]
+fn asc_prj_forms_and_units() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("g.asc");
+    std::fs::write(
+        &path,
+        "ncols 2\nnrows 2\nxllcenter 10\nyllcenter 45\ncellsize 0.5\n1 2\n3 4\n",
+    )
+    .expect("write");
+    let prj = dir.path().join("g.prj");
+    // No .prj, or a projected one: metres.
+    assert_eq!(read_dem(&path, &opts()).expect("reads").dx, 0.5);
+    std::fs::write(&prj, format!("PROJCS[\"UTM 33N\",{WGS84_PRJ},UNIT[\"Meter\",1.0]]")).expect("write");
+    assert_eq!(read_dem(&path, &opts()).expect("reads").dx, 0.5);
+    // Geographic in each form: half a degree of latitude.
+    let wkt2 = "GEOGCRS[\"WGS 84\",DATUM[\"World Geodetic System 1984\",ELLIPSOID[\"WGS 84\",6378137,298.257223563,\
+                LENGTHUNIT[\"metre\",1]]],CS[ellipsoidal,2],ANGLEUNIT[\"degree\",0.0174532925199433]]";
+    for text in [
+        WGS84_PRJ,
+        wkt2,
+        "Projection    GEOGRAPHIC\nDatum         WGS84\nUnits         DD\n",
+    ] {
+        std::fs::write(&prj, text).expect("write");
+        let g = read_dem(&path, &opts()).expect("reads");
+        assert_eq!(g.dy, 0.5 * METRES_PER_DEGREE, "{text}");
+        assert_eq!(g.dx, 0.5 * METRES_PER_DEGREE * 45.25f64.to_radians().cos(), "{text}");
+    }
+    assert_eq!(tin::dem::asc::prj_geographic_unit(wkt2), Some(1.0));
+    // Grads: 0.9° each.
+    let grads = "GEOGCS[\"NTF (Paris)\",DATUM[\"NTF\",SPHEROID[\"Clarke 1880\",6378249.2,293.46]],\
+                 PRIMEM[\"Paris\",2.5969213],UNIT[\"grad\",0.01570796326794897]]";
+    let unit = tin::dem::asc::prj_geographic_unit(grads).expect("geographic");
+    assert!((unit - 0.9).abs() < 1e-12, "{unit}");
+    assert_eq!(tin::dem::asc::prj_geographic_unit("PROJCS[\"x\",GEOGCS[\"y\"]]"), None);
+    // Not degrees after all: an error naming the .prj, not a terrain at the wrong scale.
+    std::fs::write(
+        &path,
+        "ncols 2\nnrows 2\nxllcorner 500000\nyllcorner 4800000\ncellsize 30\n1 2\n3 4\n",
+    )
+    .expect("write");
+    std::fs::write(&prj, WGS84_PRJ).expect("write");
+    let m = format_message(read_dem(&path, &opts()));
+    assert!(
+        m.contains("g.prj says geographic, but latitudes") && m.contains("not degrees"),
+        "{m}"
+    );
+    std::fs::write(&prj, [0xffu8, 0xfe, 0x00]).expect("write");
+    match read_dem(&path, &opts()) {
+        Err(e) => {
+            let m = e.to_string();
+            assert!(m.contains("g.prj") && m.contains("not text"), "{m}");
+        }
+        Ok(_) => panic!("an unreadable .prj is an error"),
+    }
+}
+
 #[test]
 fn heights_out_of_range_are_refused_naming_file_row_and_column() {
     let dir = tempfile::tempdir().expect("tempdir");

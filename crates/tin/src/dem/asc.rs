@@ -7,6 +7,11 @@
 //! origin is the centre of the north-west sample: `x = xll + dx/2`, `y = yll + dy/2 + (nrows − 1)·dy` for corners.
 //! Samples equal to `NODATA_value` (and NaN) become voids. Errors name the line.
 //!
+//! The header has no CRS; a `.prj` beside the grid (same stem, as GDAL and ArcGIS write it) does. When its root is a
+//! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
+//! the corners and cell sizes are degrees (or the WKT's angular unit) and are put into metres as GeoTIFFs in degrees
+//! are ([`super::degrees`]); any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
+//!
 //! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
 //! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values
 //! outside the window are not checked. Strips ([`super::read_dem_strips`]) stream the whole text once, every value
@@ -17,7 +22,7 @@ use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, GridShape, check_window, file_len, finish, open, read_bytes};
+use super::{DemOptions, GridShape, check_window, degrees, file_len, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -30,6 +35,17 @@ pub fn read_asc(path: &Path, opts: &DemOptions) -> Result<Grid> {
 
 /// The grid of an ESRI ASCII grid from its header, without reading its values.
 pub fn read_asc_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
+    Ok(read_header(path, opts)?.shape(path, opts)?.0)
+}
+
+/// How the grid's coordinates were put into metres: a sentence when a `.prj` beside it says they are degrees (see
+/// the module documentation), None when they are metres already.
+pub fn read_asc_conversion(path: &Path, opts: &DemOptions) -> Result<Option<String>> {
+    Ok(read_header(path, opts)?.grid(path, opts)?.2)
+}
+
+/// The header of an ESRI ASCII grid, read up to its first line of values.
+fn read_header(path: &Path, opts: &DemOptions) -> Result<Header> {
     opts.check()?;
     let mut lines = Lines::open(path)?;
     let mut h = Header::default();
@@ -38,7 +54,7 @@ pub fn read_asc_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
             break;
         }
     }
-    Ok(h.shape(path, opts)?.0)
+    Ok(h)
 }
 
 /// The samples of a window of an ESRI ASCII grid (voids NaN, not scaled) and its whole grid, streaming the text
@@ -54,7 +70,8 @@ pub(super) fn read_asc_window(
     let file_len = lines.len;
     let mut h = Header::default();
     let mut window: Option<(GridShape, Option<f64>)> = None;
-    let nc = cols[1] - cols[0] + 1;
+    // Checked against the grid below, once the header is read: never underflows before that.
+    let nc = cols[1].saturating_sub(cols[0]).saturating_add(1);
     let mut z = Vec::new();
     // Index of the next value in the whole grid (row-major).
     let mut k = 0usize;
@@ -343,6 +360,11 @@ impl Header {
 
     /// The grid the header describes (with [`DemOptions::spacing`] applied) and its nodata value.
     fn shape(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Option<f64>)> {
+        self.grid(path, opts).map(|(shape, nodata, _)| (shape, nodata))
+    }
+
+    /// [`Header::shape`], and how degrees were put into metres when the `.prj` says geographic.
+    fn grid(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Option<f64>, Option<String>)> {
         let err = |m: String| TinError::format(path, m);
         let h = self;
         let missing = |key: &str| err(format!("the header has no {key} (not an ESRI ASCII grid?)"));
@@ -364,22 +386,88 @@ impl Header {
                 header_spacing.0, header_spacing.1
             )));
         }
-        let (dx, dy) = opts.spacing.unwrap_or(header_spacing);
         rows.checked_mul(cols)
             .filter(|&n| n <= (1 << 31))
             .ok_or_else(|| err(format!("{rows} x {cols} samples is too many")))?;
-        let x0 = if x_corner { xll + 0.5 * dx } else { xll };
-        let y_south = if y_corner { yll + 0.5 * dy } else { yll };
-        let origin = DVec2::new(x0, y_south + (rows as f64 - 1.0) * dy);
-        let shape = GridShape {
-            rows,
-            cols,
-            dx,
-            dy,
-            origin,
+        let (shape, conversion) = if let Some((deg, prj)) = geographic_prj(path)? {
+            // The header's numbers are angles: the sample (0, 0) and spacing in degrees, then metres.
+            let (dx, dy) = (header_spacing.0 * deg, header_spacing.1 * deg);
+            let west = xll * deg + if x_corner { 0.5 * dx } else { 0.0 };
+            let south = yll * deg + if y_corner { 0.5 * dy } else { 0.0 };
+            let north = south + (rows as f64 - 1.0) * dy;
+            let (shape, conversion) = degrees::grid_in_metres(rows, cols, west, north, (dx, dy), opts)
+                .map_err(|m| err(format!("{} says geographic, but {m}", prj.display())))?;
+            (shape, Some(format!("{} (CRS from {})", conversion, prj.display())))
+        } else {
+            let (dx, dy) = opts.spacing.unwrap_or(header_spacing);
+            let x0 = if x_corner { xll + 0.5 * dx } else { xll };
+            let y_south = if y_corner { yll + 0.5 * dy } else { yll };
+            let origin = DVec2::new(x0, y_south + (rows as f64 - 1.0) * dy);
+            let shape = GridShape {
+                rows,
+                cols,
+                dx,
+                dy,
+                origin,
+            };
+            (shape, None)
         };
-        Ok((shape, h.nodata))
+        Ok((shape, h.nodata, conversion))
     }
+}
+
+/// The `.prj` beside `grid` (same stem, extension `prj` in lower or upper case), if there is one.
+fn prj_of(grid: &Path) -> Option<std::path::PathBuf> {
+    ["prj", "PRJ"]
+        .into_iter()
+        .map(|e| grid.with_extension(e))
+        .find(|p| p.is_file())
+}
+
+/// How `.asc` coordinates are to be read, from the text of a `.prj`: `Some(degrees per unit)` when its root is a
+/// geographic CRS (see the module documentation), None for anything else.
+pub fn prj_geographic_unit(text: &str) -> Option<f64> {
+    let t = text.trim_start_matches('\u{feff}').trim_start();
+    let root: String = t
+        .chars()
+        .take_while(|c| c.is_ascii_alphabetic())
+        .collect::<String>()
+        .to_ascii_uppercase();
+    let wkt_geographic = matches!(root.as_str(), "GEOGCS" | "GEOGCRS" | "GEODCRS" | "GEOGRAPHICCRS")
+        && t[root.len()..].trim_start().starts_with(['[', '(']);
+    if wkt_geographic {
+        // The angular unit: `ANGLEUNIT[name, radians]`, or a plain `UNIT[…]` (WKT 1's only unit in a GEOGCS), never
+        // an ellipsoid's `LENGTHUNIT[…]`.
+        let upper = t.to_ascii_uppercase();
+        let unit_at = upper.match_indices("UNIT[").map(|(at, _)| at).find(|&at| {
+            let before = &upper[..at];
+            before.ends_with("ANGLE") || !before.ends_with(|c: char| c.is_ascii_alphabetic())
+        });
+        let radians = unit_at
+            .and_then(|at| t[at + "UNIT[".len()..].split([',', ']']).nth(1))
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .filter(|r| r.is_finite() && *r > 0.0);
+        // A degree written to 15 digits (`0.0174532925199433`) is a degree.
+        let deg = radians.map_or(1.0, f64::to_degrees);
+        return Some(if (deg - 1.0).abs() < 1e-9 { 1.0 } else { deg });
+    }
+    // The ESRI text form: `Projection GEOGRAPHIC`, with `Units DD` (decimal degrees) or none.
+    let mut words = t.lines().map(|l| l.split_whitespace().collect::<Vec<_>>());
+    words
+        .any(|w| w.len() == 2 && w[0].eq_ignore_ascii_case("projection") && w[1].eq_ignore_ascii_case("geographic"))
+        .then_some(1.0)
+}
+
+/// The degrees per unit and path of the geographic `.prj` beside `grid`; None when there is none or it is not
+/// geographic.
+fn geographic_prj(grid: &Path) -> Result<Option<(f64, std::path::PathBuf)>> {
+    let Some(prj) = prj_of(grid) else {
+        return Ok(None);
+    };
+    let bytes = read_bytes(&prj)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|_| TinError::format(&prj, String::from("not text: a .prj holds a CRS in WKT")))?;
+    Ok(prj_geographic_unit(text).map(|deg| (deg, prj)))
 }
 
 /// Parses an ESRI ASCII grid held in memory; `path` names it in errors.

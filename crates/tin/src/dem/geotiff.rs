@@ -45,7 +45,7 @@ use glam::DVec2;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-use super::hgt::METRES_PER_DEGREE;
+use super::degrees;
 use super::{DemOptions, GridShape, check_window, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
@@ -474,45 +474,26 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         )));
     }
 
-    let (spacing, origin, conversion) = match georef.kind {
-        CrsKind::Projected => ((sx, sy), DVec2::new(x0, y0), String::new()),
+    let (shape, conversion) = match georef.kind {
+        CrsKind::Projected => {
+            let (dx, dy) = opts.spacing.unwrap_or((sx, sy));
+            let origin = DVec2::new(x0, y0);
+            (
+                GridShape {
+                    rows,
+                    cols,
+                    dx,
+                    dy,
+                    origin,
+                },
+                String::new(),
+            )
+        }
         CrsKind::Geographic => {
             let deg = georef.angular_unit_deg;
-            let (per_deg_x, per_deg_y) = (per_degree(sx * deg), per_degree(sy * deg));
-            let north = y0 * deg;
-            let south = north - (rows as f64 - 1.0) / per_deg_y;
-            if !(-90.0..=90.0).contains(&south) || !(-90.0..=90.0).contains(&north) {
-                return Err(err(format!(
-                    "latitudes {south}..{north} are outside -90..90: the GeoKeys say geographic but the \
-                     coordinates are not degrees"
-                )));
-            }
-            let centre = 0.5 * (north + south);
-            let dy = METRES_PER_DEGREE / per_deg_y;
-            let dx = METRES_PER_DEGREE / per_deg_x * centre.to_radians().cos();
-            if dx.is_nan() || dx <= 0.0 {
-                return Err(err(format!("the raster reaches a pole (mid-latitude {centre})")));
-            }
-            let conversion = format!(
-                "degrees to metres like .hgt: 1° latitude = 111320 m, 1° longitude = 111320·cos({centre:.6}°) = \
-                 {:.3} m; x from the western sample column ({:.9}°), y = latitude·111320",
-                METRES_PER_DEGREE * centre.to_radians().cos(),
-                x0 * deg
-            );
-            let spacing = (dx, dy);
-            let dy_used = opts.spacing.map_or(dy, |s| s.1);
-            let origin = DVec2::new(0.0, south * METRES_PER_DEGREE + (rows as f64 - 1.0) * dy_used);
-            (spacing, origin, conversion)
+            degrees::grid_in_metres(rows, cols, x0 * deg, y0 * deg, (sx * deg, sy * deg), opts)
+                .map_err(|m| err(format!("the GeoKeys say geographic, but {m}")))?
         }
-    };
-    let spacing = opts.spacing.unwrap_or(spacing);
-    let (dx, dy) = spacing;
-    let shape = GridShape {
-        rows,
-        cols,
-        dx,
-        dy,
-        origin,
     };
     let info = GeoTiffInfo {
         crs_kind: georef.kind,
@@ -540,16 +521,6 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         info,
     };
     Ok((dec, meta))
-}
-
-/// Samples per degree for a spacing of `s` degrees: a whole number n when `s` is within 1e-9 (relative) of 1/n.
-fn per_degree(s: f64) -> f64 {
-    let n = (1.0 / s).round();
-    if n >= 1.0 && ((1.0 / s) - n).abs() <= 1e-9 * n {
-        n
-    } else {
-        1.0 / s
-    }
 }
 
 /// Parses GDAL's nodata text (a decimal number, `nan`, `inf`, `-inf`).

@@ -27,6 +27,7 @@
 //! sample once but not all at once (the far field of a tiled plan).
 
 pub mod asc;
+mod degrees;
 #[cfg(feature = "geotiff")]
 pub mod geotiff;
 pub mod hgt;
