@@ -431,8 +431,11 @@ fn geographic_arc_seconds_snap_to_whole_fractions() {
 #[test]
 fn clear_errors() {
     let data = vec![1i16; 6];
+    // A plain TIFF: no GeoKeys, no scale and tie point, no spacing given.
     let no_keys = Spec {
         keys: None,
+        scale: None,
+        tie: None,
         ..Spec::default()
     };
     let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &no_keys)));
@@ -517,4 +520,41 @@ fn a_plain_tiff_reads_with_a_given_spacing() {
     );
     assert_eq!(g.z, data.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
     assert!(info.crs.contains("plain TIFF"), "{}", info.crs);
+}
+
+/// A TIFF with a pixel scale and tie point but no GeoKeys (a world file turned into tags, say) keeps its place:
+/// the tie point, taken as metres (no CRS, as GDAL reads it), pixel-is-area; `--spacing` overrides the spacing only.
+#[test]
+fn a_georeference_without_geokeys_is_kept_as_metres() {
+    let data: Vec<f32> = (0..12).map(|i| i as f32).collect();
+    let no_keys = Spec {
+        keys: None,
+        ..Spec::default()
+    };
+    let bytes = write_tif!(colortype::Gray32Float, 4, 3, &data, &no_keys);
+    let (g, info) = parse(&bytes).expect("reads without a spacing");
+    assert_eq!((g.rows, g.cols, g.dx, g.dy), (3, 4, 10.0, 20.0));
+    // Pixel-is-area: the tie point (500000, 4000000) is the corner of sample (0, 0), its centre half a cell in.
+    assert_eq!(g.origin, DVec2::new(500_005.0, 3_999_990.0));
+    assert!(info.crs.contains("no GeoKeyDirectory"), "{}", info.crs);
+    let opts = DemOptions {
+        spacing: Some((1.0, 2.0)),
+        ..DemOptions::default()
+    };
+    let (g, _) = parse_geotiff(&bytes, Path::new("test.tif"), &opts).expect("reads with a spacing");
+    assert_eq!((g.dx, g.dy), (1.0, 2.0));
+    assert_eq!(g.origin, DVec2::new(500_005.0, 3_999_990.0), "the tie point stays");
+    // A transformation instead of a scale and tie point.
+    let transform = Spec {
+        keys: None,
+        scale: None,
+        tie: None,
+        transform: Some([
+            10.0, 0.0, 0.0, 300.0, 0.0, -20.0, 0.0, 900.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ]),
+        ..Spec::default()
+    };
+    let bytes = write_tif!(colortype::Gray32Float, 4, 3, &data, &transform);
+    let (g, _) = parse(&bytes).expect("reads");
+    assert_eq!((g.dx, g.dy, g.origin), (10.0, 20.0, DVec2::new(305.0, 890.0)));
 }

@@ -29,7 +29,9 @@
 //!   column (column 0 at x = 0), y is `latitude · 111,320` (the southern row at `south · 111,320`). A spacing within
 //!   10⁻⁹ (relative) of 1/n degree for a whole n is taken as exactly 1/n degree, because writers store 3″ as
 //!   0.000833…; so a GeoTIFF written from an `.hgt` tile reads to exactly the tile's grid.
-//! - No GeoKeyDirectory (a plain TIFF): read like a 16-bit PNG height map ([`super::png`]) when
+//! - No GeoKeyDirectory but a pixel scale and tie point (or a transformation): georeferenced in metres, no CRS, and
+//!   pixel-is-area (as GDAL reads it).
+//! - No GeoKeyDirectory and no georeference (a plain TIFF): read like a 16-bit PNG height map ([`super::png`]) when
 //!   [`DemOptions::spacing`] is given (metres, the south-western sample at (0, 0)), an error otherwise.
 //! - A geocentric or user-defined model, radians or grads, a rotated or sheared transformation,
 //!   several tie points, or a south-up raster are errors naming the file and the tag.
@@ -575,6 +577,78 @@ fn find_f64s<R: Read + Seek>(dec: &mut Decoder<R>, tag: Tag, name: &str, path: &
     }
 }
 
+/// The pixel scale and tie point, or the transformation: native spacing (x east, y south), the tie point's raster
+/// (column, row) and native (x, y) coordinates; None when the file has neither.
+type ModelTransform = ((f64, f64), (f64, f64), (f64, f64));
+
+/// Reads [`ModelTransform`] from the tags ModelPixelScale and ModelTiepoint, or ModelTransformation (no rotation).
+fn model_transform<R: Read + Seek>(dec: &mut Decoder<R>, path: &Path) -> Result<Option<ModelTransform>> {
+    let err = |m: String| TinError::format(path, m);
+    let scale = find_f64s(dec, Tag::ModelPixelScaleTag, "ModelPixelScale", path)?;
+    let tie = find_f64s(dec, Tag::ModelTiepointTag, "ModelTiepoint", path)?;
+    let transform = find_f64s(dec, Tag::ModelTransformationTag, "ModelTransformation", path)?;
+    let georef = match (scale, tie, transform) {
+        (Some(s), Some(t), _) => {
+            if s.len() < 2 {
+                return Err(err(format!(
+                    "tag ModelPixelScale (33550) has {} values, expected 3",
+                    s.len()
+                )));
+            }
+            if t.len() != 6 {
+                return Err(err(format!(
+                    "tag ModelTiepoint (33922) has {} values: exactly one tie point (6 values) is supported, \
+                     several tie points (a warped raster) are not",
+                    t.len()
+                )));
+            }
+            if !(s[0].is_finite() && s[1].is_finite() && s[0] > 0.0) || s[1] == 0.0 {
+                return Err(err(format!(
+                    "tag ModelPixelScale (33550) = {:?}: the scales must be positive and finite",
+                    &s[..2]
+                )));
+            }
+            if s[1] < 0.0 {
+                return Err(err(format!(
+                    "tag ModelPixelScale (33550) has a negative y scale {}: south-up rasters are not supported",
+                    s[1]
+                )));
+            }
+            ((s[0], s[1]), (t[0], t[1]), (t[3], t[4]))
+        }
+        (_, _, Some(m)) => {
+            if m.len() != 16 {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264) has {} values, expected 16",
+                    m.len()
+                )));
+            }
+            let (a, b, d, e, f, h) = (m[0], m[1], m[3], m[4], m[5], m[7]);
+            if b != 0.0 || e != 0.0 {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264) rotates or shears the raster (terms {b}, {e}): not supported"
+                )));
+            }
+            if !(a > 0.0 && a.is_finite() && f.is_finite() && f != 0.0) {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264): pixel sizes {a} x {f} must be finite, x positive"
+                )));
+            }
+            if f > 0.0 {
+                return Err(err(format!(
+                    "tag ModelTransformation (34264) has a positive y term {f}: south-up rasters are not supported"
+                )));
+            }
+            ((a, -f), (0.0, 0.0), (d, h))
+        }
+        (None, _, None) => return Ok(None),
+        (Some(_), None, None) => {
+            return Err(err("ModelPixelScale (33550) without a ModelTiepoint (33922)".into()));
+        }
+    };
+    Ok(Some(georef))
+}
+
 /// The georeference of the image.
 struct Georef {
     kind: CrsKind,
@@ -591,7 +665,8 @@ struct Georef {
     tie_world: (f64, f64),
 }
 
-/// Reads the GeoKeys, the pixel scale and tie point (or the transformation). A plain TIFF (no GeoKeyDirectory)
+/// Reads the GeoKeys, the pixel scale and tie point (or the transformation). Without a GeoKeyDirectory, a pixel scale
+/// and tie point (or transformation) are taken as metres (no CRS, as GDAL reads such a file); a plain TIFF (neither)
 /// is read like a PNG height map when a spacing is given: metres, the south-western sample at (0, 0).
 fn read_georef<R: Read + Seek>(
     dec: &mut Decoder<R>,
@@ -605,6 +680,21 @@ fn read_georef<R: Read + Seek>(
             .into_u16_vec()
             .map_err(|e| err(format!("tag GeoKeyDirectory (34735): {e}")))?,
         Ok(None) => {
+            if let Some((scale, tie_raster, tie_world)) = model_transform(dec, path)? {
+                // GDAL reads such a file with its transform and no CRS: so do we, taking the units for metres.
+                return Ok(Georef {
+                    kind: CrsKind::Projected,
+                    epsg: None,
+                    description: "unknown (no GeoKeyDirectory, tag 34735): the pixel scale and tie point taken as \
+                                  metres"
+                        .into(),
+                    raster_type: RasterType::PixelIsArea,
+                    angular_unit_deg: 1.0,
+                    scale,
+                    tie_raster,
+                    tie_world,
+                });
+            }
             let Some((dx, dy)) = spacing else {
                 return Err(err(
                     "no GeoKeyDirectory tag (34735): a plain TIFF has no georeference; give the \
@@ -737,71 +827,10 @@ fn read_georef<R: Read + Seek>(
         }
     };
 
-    let scale = find_f64s(dec, Tag::ModelPixelScaleTag, "ModelPixelScale", path)?;
-    let tie = find_f64s(dec, Tag::ModelTiepointTag, "ModelTiepoint", path)?;
-    let transform = find_f64s(dec, Tag::ModelTransformationTag, "ModelTransformation", path)?;
-    let (scale, tie_raster, tie_world) = match (scale, tie, transform) {
-        (Some(s), Some(t), _) => {
-            if s.len() < 2 {
-                return Err(err(format!(
-                    "tag ModelPixelScale (33550) has {} values, expected 3",
-                    s.len()
-                )));
-            }
-            if t.len() != 6 {
-                return Err(err(format!(
-                    "tag ModelTiepoint (33922) has {} values: exactly one tie point (6 values) is supported, \
-                     several tie points (a warped raster) are not",
-                    t.len()
-                )));
-            }
-            if !(s[0].is_finite() && s[1].is_finite() && s[0] > 0.0) || s[1] == 0.0 {
-                return Err(err(format!(
-                    "tag ModelPixelScale (33550) = {:?}: the scales must be positive and finite",
-                    &s[..2]
-                )));
-            }
-            if s[1] < 0.0 {
-                return Err(err(format!(
-                    "tag ModelPixelScale (33550) has a negative y scale {}: south-up rasters are not supported",
-                    s[1]
-                )));
-            }
-            ((s[0], s[1]), (t[0], t[1]), (t[3], t[4]))
-        }
-        (_, _, Some(m)) => {
-            if m.len() != 16 {
-                return Err(err(format!(
-                    "tag ModelTransformation (34264) has {} values, expected 16",
-                    m.len()
-                )));
-            }
-            let (a, b, d, e, f, h) = (m[0], m[1], m[3], m[4], m[5], m[7]);
-            if b != 0.0 || e != 0.0 {
-                return Err(err(format!(
-                    "tag ModelTransformation (34264) rotates or shears the raster (terms {b}, {e}): not supported"
-                )));
-            }
-            if !(a > 0.0 && a.is_finite() && f.is_finite() && f != 0.0) {
-                return Err(err(format!(
-                    "tag ModelTransformation (34264): pixel sizes {a} x {f} must be finite, x positive"
-                )));
-            }
-            if f > 0.0 {
-                return Err(err(format!(
-                    "tag ModelTransformation (34264) has a positive y term {f}: south-up rasters are not supported"
-                )));
-            }
-            ((a, -f), (0.0, 0.0), (d, h))
-        }
-        (None, _, None) => {
-            return Err(err(
-                "no ModelPixelScale (33550) and no ModelTransformation (34264): the raster has no georeference".into(),
-            ));
-        }
-        (Some(_), None, None) => {
-            return Err(err("ModelPixelScale (33550) without a ModelTiepoint (33922)".into()));
-        }
+    let Some((scale, tie_raster, tie_world)) = model_transform(dec, path)? else {
+        return Err(err(
+            "no ModelPixelScale (33550) and no ModelTransformation (34264): the raster has no georeference".into(),
+        ));
     };
     Ok(Georef {
         kind,
