@@ -416,8 +416,9 @@ fn garbage_is_reported() {
             }
         )
     );
-    let png = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
-    let (line, kind) = line_error(parse_obj(png, "x.obj", &KEEP));
+    // Binary without a known signature (a PNG is named as such: `foreign_files_are_named_by_their_first_bytes`).
+    let binary = b"\x89XYZ\r\n\x1a\n\0\0\0\rIHDR";
+    let (line, kind) = line_error(parse_obj(binary, "x.obj", &KEEP));
     assert_eq!(line, 1);
     assert_eq!(kind, K::NotUtf8);
     assert_eq!(
@@ -559,4 +560,32 @@ fn coordinates_out_of_range_are_refused_at_import() {
         "{kind:?}"
     );
     assert!(keep("v 5e5 5e6 1e4\nv 500001 5e6 0\nv 5e5 5000001 0\nf 1 2 3\n").is_ok());
+}
+
+/// A DEM or a mesh of another format given where an OBJ is read is named, with what to do, not parsed as text.
+#[test]
+fn foreign_files_are_named_by_their_first_bytes() {
+    let cases: [(&[u8], &str); 6] = [
+        (b"II*\0\x08\0\0\0", "a TIFF: name it .tif"),
+        (b"MM\0*\0\0\0\x08", "a TIFF"),
+        (b"\x89PNG\r\n\x1a\n\0\0", "a PNG"),
+        (b"\x93NUMPY\x01\0", "a NumPy array"),
+        (b"ply\nformat ascii 1.0\n", "a PLY mesh"),
+        (b"solid t\n facet normal 0 0 1\n", "an ASCII STL"),
+    ];
+    for (bytes, needle) in cases {
+        match parse_obj(bytes, "terrain.dat", &DELAUNAY) {
+            Err(e @ TinError::Format { .. }) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains("terrain.dat") && m.contains("not an OBJ mesh") && m.contains(needle),
+                    "{m}"
+                );
+            }
+            other => panic!("{needle}: {:?}", other.map(|(t, _)| t.num_vertices())),
+        }
+    }
+    // A text OBJ whose first statement is a comment about STL is still an OBJ.
+    let text = "# solid facet\nv 0 0 0\nv 1 0 0\nv 0 1 1\n";
+    assert!(parse_obj(text.as_bytes(), "ok.obj", &DELAUNAY).is_ok());
 }
