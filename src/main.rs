@@ -2,12 +2,10 @@
 
 use std::process::ExitCode;
 
-use clap::Parser;
-
 fn main() -> ExitCode {
     quiet_headless_vulkan();
     remove_temporaries_on_interrupt();
-    let cli = tincull::cli::Cli::parse();
+    let cli = tincull::cli::Cli::parse_args();
     match tincull::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of standard output went away (`tincull export h.tch --export-json - | head`): nothing to say,

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
-use common::{fails_with, json, mesh, ok, s};
+use common::{fails_with, json, mesh, ok, run, s};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tincull"))
@@ -600,4 +600,25 @@ fn messages_name_the_flag_at_fault() {
     std::fs::write(&file, "x").expect("file");
     fails_with(&["demo", "--out-dir", s(&file)], "is not a directory");
     fails_with(&["pvs", "x.tch"], "--grid");
+    // A negative number is the option's value, refused by its own check (not an unknown flag with a tip to write
+    // `-- -1`), in subcommands of subcommands too.
+    for (args, needle) in [
+        (
+            vec!["tin", s(&asc), "--max-error", "-1", "-o", s(&out)],
+            "max_error must be finite and non-negative",
+        ),
+        (
+            vec!["tin", s(&asc), "--vertices", "-5", "-o", s(&out)],
+            "'-5' for '--vertices",
+        ),
+        (
+            vec!["tiles", "plan", s(&asc), "--tile", "-5", "-o", s(&out)],
+            "'-5' for '--tile",
+        ),
+    ] {
+        fails_with(&args, needle);
+        let stderr = String::from_utf8_lossy(&run(&args).stderr).into_owned();
+        assert!(!stderr.contains("-- -"), "{stderr}");
+    }
+    assert!(!out.exists());
 }

@@ -38,6 +38,20 @@ pub struct Cli {
     pub command: Command,
 }
 
+impl Cli {
+    /// Parses the process's arguments, exiting with clap's message on an error. A negative number is taken as the
+    /// value of the option before it everywhere (`--max-error -1` is then refused by the option's own check, not
+    /// taken for an unknown flag with the misleading tip to write `-- -1`).
+    pub fn parse_args() -> Cli {
+        use clap::{CommandFactory, FromArgMatches};
+        fn negative_numbers(c: clap::Command) -> clap::Command {
+            c.allow_negative_numbers(true).mut_subcommands(negative_numbers)
+        }
+        let matches = negative_numbers(Cli::command()).get_matches();
+        Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    }
+}
+
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
