@@ -110,6 +110,30 @@ fn a_geographic_asc_is_converted_or_warned_about() {
     );
 }
 
+/// A terrain exported y-up (height in y) is named as such, whether it fails as vertical walls or reads.
+#[test]
+fn a_y_up_mesh_gets_a_hint() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let text = std::fs::read_to_string(mesh("jacksboro-2k.obj")).expect("bundled mesh");
+    let y_up: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(rest) => {
+                let v: Vec<f64> = rest.split_whitespace().map(|w| w.parse().expect("number")).collect();
+                format!("v {} {} {}\n", v[0], v[2], -v[1])
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let obj = dir.path().join("yup.obj");
+    std::fs::write(&obj, y_up).expect("fixture");
+    fails_with(&["info", s(&obj)], "the mesh looks y-up");
+    let out = ok(&["info", s(&obj), "--dedupe", "keep-highest"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("looks y-up"));
+    let out = ok(&["info", s(&mesh("jacksboro-2k.obj"))]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("y-up"));
+}
+
 /// The full-resolution path (issue #18): a regular grid kept whole (every cell's four corners are cocircular, so
 /// the Delaunay triangulation is degenerate everywhere) and at max error 0 builds, evaluates and culls, and the
 /// build does not depend on the thread count.

@@ -174,6 +174,43 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
     }
 }
 
+/// Warns when a mesh looks modelled with y up ([`y_up_hint`]).
+pub fn warn_if_y_up(tin: &Tin, path: &std::path::Path, out: Output) {
+    if let Some(hint) = y_up_hint(tin::mesh_stats(tin).bbox.size().to_array(), path) {
+        out.warn(hint);
+    }
+}
+
+/// A hint when a mesh of extents `size` (x, y, z) looks modelled with y up (as many 3-D tools export OBJ): read z-up,
+/// its "north-south" extent is under a quarter of both its east-west extent and its "relief". tincull reads z as
+/// height; only a hint, since a narrow strip of steep terrain looks the same.
+fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path) -> Option<String> {
+    (y < 0.25 * x.min(z)).then(|| {
+        format!(
+            "{}: extents x {x:.1}, y {y:.1}, z {z:.1}: the mesh looks y-up; tincull takes z as height, so convert it \
+             to z up first (e.g. (x, y, z) -> (x, -z, y), Blender's \"Z up\" OBJ export)",
+            path.display()
+        )
+    })
+}
+
+/// The extents (x, y, z) of the `v` lines of an OBJ file, for [`y_up_hint`] once its import failed; None when the
+/// file cannot be read or has no vertex.
+fn read_extents(path: &std::path::Path) -> Option<[f64; 3]> {
+    let text = std::fs::read(path).ok()?;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for line in text.split(|&b| b == b'\n') {
+        let Some(rest) = line.strip_prefix(b"v ") else { continue };
+        let mut words = std::str::from_utf8(rest).ok()?.split_whitespace();
+        for k in 0..3 {
+            let v: f64 = words.next()?.parse().ok()?;
+            (lo[k], hi[k]) = (lo[k].min(v), hi[k].max(v));
+        }
+    }
+    let size = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    size.iter().all(|s| s.is_finite()).then_some(size)
+}
+
 /// Whether `path` names a DEM grid (by extension) rather than a mesh.
 pub fn is_dem(path: &std::path::Path) -> bool {
     let ext = path
@@ -228,7 +265,13 @@ impl MeshArgs {
             },
         };
         let spinner = out.spinner("reading mesh");
-        let (tin, report) = tin::read_obj(&self.mesh, &opts)?;
+        let (tin, report) = tin::read_obj(&self.mesh, &opts).map_err(|e| {
+            // A y-up mesh usually fails as vertical walls: say why, from the file's extents.
+            match read_extents(&self.mesh).and_then(|size| y_up_hint(size, &self.mesh)) {
+                Some(hint) => anyhow::anyhow!("{e}\n{hint}"),
+                None => e.into(),
+            }
+        })?;
         spinner.finish_and_clear();
         if report.merged_duplicates > 0 {
             out.warn(format!(
@@ -242,6 +285,7 @@ impl MeshArgs {
                 report.dropped_lower
             ));
         }
+        warn_if_y_up(&tin, &self.mesh, out);
         Ok((tin, report, None))
     }
 
