@@ -58,6 +58,13 @@ fn tin_simplifies_an_ascii_grid() {
     assert_eq!(v["vertices"], 200);
     assert_eq!(v["voids"], 1);
     assert!(v["max_error"].as_f64().expect("error") > 0.0);
+    // `-o -`: the same OBJ on standard output, and nothing else there.
+    let piped = ok(&["tin", s(&asc), "-o", "-", "--vertices", "200"]);
+    assert_eq!(piped.stdout, std::fs::read(&obj).expect("written"));
+    fails_with(
+        &["tin", s(&asc), "-o", "-", "--vertices", "200", "--json"],
+        "both write to standard output",
+    );
     let v = json(&["tin", s(&asc), "-o", s(&obj), "--max-error", "0", "--json"]);
     assert_eq!(v["max_error"], 0.0);
     let info = json(&["info", s(&obj), "--json"]);

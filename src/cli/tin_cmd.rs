@@ -19,7 +19,7 @@ pub struct TinArgs {
     /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF
     /// (.tif, .tiff; geographic CRSs are converted to metres like .hgt).
     pub dem: PathBuf,
-    /// Output OBJ file.
+    /// Output OBJ file (`-` for standard output).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Stop at this many vertices.
@@ -41,10 +41,10 @@ pub struct TinArgs {
 }
 
 /// Runs `tincull tin`.
-pub fn run(args: &TinArgs, out: Output) -> Result<()> {
+pub fn run(args: &TinArgs, mut out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.input(&args.dem)?;
-    files.check(&args.out)?;
+    files.check_or_stdout(&args.out, &mut out)?;
     let start = Instant::now();
     let dem_opts = args.read.options();
     let spinner = out.spinner("reading DEM");

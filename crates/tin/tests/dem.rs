@@ -532,6 +532,35 @@ fn hgt_tiles() {
     assert_eq!(parse_tile_name("N4"), None);
 }
 
+/// A tile written little-endian reads as wild heights big-endian: refused with the cause, whole or in a window; a
+/// sound tile with deep and high terrain (and voids) is not.
+#[test]
+fn a_little_endian_hgt_is_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("N27E086.hgt");
+    // Heights 100..4196 m written in the wrong byte order.
+    let f = |r: usize, c: usize| (100 + (r * 31 + c * 17) % 4097) as i16;
+    let le: Vec<u8> = (0..1201 * 1201).flat_map(|i| f(i / 1201, i % 1201).to_le_bytes()).collect();
+    std::fs::write(&path, &le).expect("write");
+    let m = format_message(read_dem(&path, &opts()));
+    assert!(m.contains("little-endian") && m.contains("row 1, column 1"), "{m}");
+    let e = tin::read_dem_window(&path, &opts(), [100, 200], [300, 400]).map(|g| g.rows);
+    match e {
+        Err(TinError::Format { message, .. }) => {
+            assert!(message.contains("little-endian") && message.contains("row 101, column 301"), "{message}")
+        }
+        other => panic!("expected a format error, got {other:?}"),
+    }
+    // Sound: from the Dead Sea shore (-430 m) to Everest (8848 m), with voids.
+    let sound = hgt_bytes(1201, |r, c| match (r + c) % 3 {
+        0 => -430,
+        1 => 8848,
+        _ => -32768,
+    });
+    std::fs::write(&path, &sound).expect("write");
+    assert!(read_dem(&path, &opts()).is_ok());
+}
+
 // ---------------------------------------------------------------- png
 
 fn write_png(path: &Path, w: u32, h: u32, color: png::ColorType, depth: png::BitDepth, data: &[u8]) {

@@ -3,7 +3,8 @@
 //! A tile is a square of big-endian i16 heights (metres), 1201 x 1201 samples for 3 arc-seconds (SRTM3) or
 //! 3601 x 3601 for 1 arc-second (SRTM1), row 0 north, column 0 west; neighbouring tiles share their edge rows and
 //! columns. -32768 marks a void. The file name gives the south-west corner: `N43W123.hgt` covers 43°N–44°N,
-//! 123°W–122°W. Any other file size is rejected.
+//! 123°W–122°W. Any other file size is rejected, and so is a tile that reads as terrain only with its bytes swapped
+//! (written little-endian).
 //!
 //! Metric frame (a local, tile-based choice, not a map projection):
 //! - 1° of latitude is 111,320 m ([`METRES_PER_DEGREE`]), so `dy = 111320 / (n − 1)` m.
@@ -100,6 +101,7 @@ pub(super) fn read_hgt_window(
         read_at(&mut file, 2 * (r * n + cols[0]) as u64, &mut buf, path)?;
         z.extend(buf.chunks_exact(2).map(height));
     }
+    check_byte_order(&z, nc, [rows[0], cols[0]], path)?;
     Ok((shape, z))
 }
 
@@ -156,10 +158,48 @@ fn height(b: &[u8]) -> f64 {
     }
 }
 
+/// Heights an SRTM sample can take (m): below the Dead Sea shore and above Everest there is no terrain on Earth.
+const PLAUSIBLE: std::ops::RangeInclusive<f64> = -1000.0..=9000.0;
+
+/// Refuses samples `z` (read big-endian, `cols` per row, the first at `row0`, `col0` of the tile) that look written little-endian: more than 1% of the
+/// heights outside [`PLAUSIBLE`], but under 1% once their bytes are swapped. A tile of real terrain read with the
+/// wrong byte order is mostly thousands of metres off, so this never refuses a sound tile.
+fn check_byte_order(z: &[f64], cols: usize, [row0, col0]: [usize; 2], path: &Path) -> Result<()> {
+    let (mut valid, mut bad, mut bad_swapped, mut first_bad) = (0usize, 0usize, 0usize, None);
+    for (k, &h) in z.iter().enumerate() {
+        if h.is_nan() {
+            continue;
+        }
+        valid += 1;
+        if !PLAUSIBLE.contains(&h) {
+            bad += 1;
+            first_bad.get_or_insert((k, h));
+        }
+        // Every non-void sample is a whole i16.
+        if !PLAUSIBLE.contains(&f64::from((h as i16).swap_bytes())) {
+            bad_swapped += 1;
+        }
+    }
+    match first_bad {
+        Some((k, h)) if bad * 100 > valid && bad_swapped * 100 < valid => Err(TinError::format(
+            path,
+            format!(
+                "{bad} of {valid} samples lie outside -1000..9000 m read big-endian, as SRTM tiles are written (row \
+                 {}, column {}: {h} m); with their bytes swapped all but {bad_swapped} lie within: the file seems \
+                 written little-endian (swap its byte pairs, e.g. `dd conv=swab`)",
+                row0 + k / cols + 1,
+                col0 + k % cols + 1
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Parses the bytes of a tile at `tile`; `path` names it in errors.
 pub fn parse_hgt(bytes: &[u8], tile: TileName, path: &Path, opts: &DemOptions) -> Result<Grid> {
     let n = side(bytes.len() as u64, path)?;
     let z: Vec<f64> = bytes.chunks_exact(2).map(height).collect();
+    check_byte_order(&z, n, [0, 0], path)?;
     let s = shape(n, tile, opts);
     finish(path, n, n, (s.dx, s.dy), s.origin, z, opts)
 }
