@@ -540,14 +540,19 @@ fn a_little_endian_hgt_is_refused() {
     let path = dir.path().join("N27E086.hgt");
     // Heights 100..4196 m written in the wrong byte order.
     let f = |r: usize, c: usize| (100 + (r * 31 + c * 17) % 4097) as i16;
-    let le: Vec<u8> = (0..1201 * 1201).flat_map(|i| f(i / 1201, i % 1201).to_le_bytes()).collect();
+    let le: Vec<u8> = (0..1201 * 1201)
+        .flat_map(|i| f(i / 1201, i % 1201).to_le_bytes())
+        .collect();
     std::fs::write(&path, &le).expect("write");
     let m = format_message(read_dem(&path, &opts()));
     assert!(m.contains("little-endian") && m.contains("row 1, column 1"), "{m}");
     let e = tin::read_dem_window(&path, &opts(), [100, 200], [300, 400]).map(|g| g.rows);
     match e {
         Err(TinError::Format { message, .. }) => {
-            assert!(message.contains("little-endian") && message.contains("row 101, column 301"), "{message}")
+            assert!(
+                message.contains("little-endian") && message.contains("row 101, column 301"),
+                "{message}"
+            )
         }
         other => panic!("expected a format error, got {other:?}"),
     }
