@@ -141,6 +141,32 @@ fn a_y_up_mesh_gets_a_hint() {
     assert!(!String::from_utf8_lossy(&out.stderr).contains("y-up"));
 }
 
+/// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and
+/// an eye off the terrain is an error naming it.
+#[test]
+fn cull_above_ground() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("j.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "-q"]);
+    let rel = json(&["cull", s(&tch), "--eye", "10000,12000,2", "--above-ground", "--json"]);
+    let eye: Vec<f64> = rel["eye"]
+        .as_array()
+        .expect("eye")
+        .iter()
+        .map(|v| v.as_f64().expect("number"))
+        .collect();
+    assert_eq!(&eye[..2], &[10000.0, 12000.0]);
+    // Within the mesh's heights (236 .. 1076 m), 2 m up.
+    assert!(eye[2] > 238.0 && eye[2] < 1078.0, "{eye:?}");
+    let world = format!("{},{},{}", eye[0], eye[1], eye[2]);
+    let abs = json(&["cull", s(&tch), "--eye", &world, "--json"]);
+    assert_eq!(rel["ranges"], abs["ranges"]);
+    fails_with(
+        &["cull", s(&tch), "--eye", "-5000,0,2", "--above-ground"],
+        "eye 1 (-5000, 0) is outside the terrain's footprint",
+    );
+}
+
 /// The full-resolution path (issue #18): a regular grid kept whole (every cell's four corners are cocircular, so
 /// the Delaunay triangulation is degenerate everywhere) and at max error 0 builds, evaluates and culls, and the
 /// build does not depend on the thread count.

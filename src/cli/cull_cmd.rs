@@ -9,7 +9,7 @@ use serde_json::json;
 
 use super::culling_args::{SafeArgs, read_eyes};
 use super::{Output, OutputArgs};
-use eval::evaluate::timed_cull;
+use eval::evaluate::{hierarchy_tin, timed_cull};
 
 /// Arguments of `tincull cull`.
 #[derive(Debug, Args)]
@@ -23,6 +23,10 @@ pub struct CullArgs {
     /// line: JSON Lines).
     #[arg(long, conflicts_with = "eye")]
     pub eyes: Option<PathBuf>,
+    /// Read each eye's z as a height above the terrain under its x,y (m) instead of a world z: `--eye x,y,2
+    /// --above-ground` stands 2 m above the ground. An eye outside the terrain's footprint is an error.
+    #[arg(long)]
+    pub above_ground: bool,
     /// View direction in degrees, counter-clockwise from east (+x).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f64,
@@ -80,11 +84,28 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         .check(&h)
         .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
     let culler = AnyCuller::with_params(&h, args.method, args.safe.params()?);
-    let eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
+    let mut eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
         (Some(e), _) => vec![*e],
         (None, Some(path)) => read_eyes(path)?,
         (None, None) => bail!("give --eye x,y,z or --eyes FILE"),
     };
+    if args.above_ground {
+        let tin = hierarchy_tin(&h)?;
+        let locator = truth::Locator::new(&tin);
+        for (i, eye) in eyes.iter_mut().enumerate() {
+            let ground = locator
+                .ground_height(&tin, glam::DVec2::new(eye[0], eye[1]))
+                .with_context(|| {
+                    format!(
+                        "eye {} ({}, {}) is outside the terrain's footprint: --above-ground has no ground there",
+                        i + 1,
+                        eye[0],
+                        eye[1]
+                    )
+                })?;
+            eye[2] += ground;
+        }
+    }
     let mut list = DrawList::default();
     for eye in eyes {
         let camera = Camera::from_degrees(eye, args.yaw, args.fov)?;
