@@ -117,16 +117,26 @@ fn cell_size_has_one_name() {
     );
 }
 
-/// A hierarchy given where a mesh is read is named for what it is, whatever its file name.
+/// A hierarchy given where a mesh is read is named for what it is, whatever its file name; `info` describes it.
 #[test]
 fn a_hierarchy_is_not_taken_for_a_mesh() {
     let dir = tempfile::tempdir().expect("tempdir");
     let tch = hierarchy(dir.path());
     let renamed = dir.path().join("h.dat");
     std::fs::copy(&tch, &renamed).expect("copy");
+    let h = cull::Hierarchy::load(&tch).expect("loads");
     for input in [&tch, &renamed] {
-        fails_with(&["info", s(input)], "is a tincull hierarchy (.tch), not a mesh");
-        fails_with(&["build", s(input), "-o", s(&dir.path().join("x.tch"))], "not a mesh");
+        fails_with(
+            &["build", s(input), "-o", s(&dir.path().join("x.tch"))],
+            "is a tincull hierarchy (.tch), not a mesh",
+        );
+        let v = json(&["info", s(input), "--json"]);
+        assert_eq!(v["triangles"], h.num_triangles());
+        assert_eq!(v["vertices"], h.mesh.positions.len());
+        assert_eq!(v["nodes"], h.nodes.len());
+        assert_eq!(v["visibility_bytes"], h.visibility_bytes());
+        assert_eq!(v["file_bytes"], std::fs::metadata(input).expect("file").len());
+        assert_eq!(v["build"]["rng_seed"], h.build.rng_seed);
     }
     assert!(!dir.path().join("x.tch").exists());
 }

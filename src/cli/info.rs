@@ -1,6 +1,6 @@
 //! `tincull info`: what a terrain mesh holds and whether it is a sound height field.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
 
@@ -20,6 +20,9 @@ pub struct InfoArgs {
 
 /// Runs `tincull info`.
 pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
+    if super::mesh_input::is_hierarchy(&args.mesh.mesh) {
+        return hierarchy(&args.mesh.mesh, out);
+    }
     let (tin, import, dem) = args.mesh.load_with_source(out)?;
     let stats = tin::mesh_stats(&tin);
     let check = tin::validate(&tin);
@@ -114,5 +117,81 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
         "validation": check,
         "import": import,
         "dem": dem,
+    }))
+}
+
+/// `tincull info FILE.tch`: what a hierarchy holds (its mesh, its nodes, its visibility data, how it was built).
+fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
+    let h = cull::Hierarchy::load(path)?;
+    let file_bytes = std::fs::metadata(path)
+        .with_context(|| path.display().to_string())?
+        .len();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in &h.mesh.positions {
+        for k in 0..3 {
+            (lo[k], hi[k]) = (lo[k].min(p[k]), hi[k].max(p[k]));
+        }
+    }
+    let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count();
+    let depth = h.nodes.iter().map(|n| n.level).max().unwrap_or(0);
+    let regions: usize = h.nodes.iter().map(|n| n.regions.len()).sum();
+    let triangles = h.num_triangles();
+    let bytes = h.visibility_bytes();
+    let per_triangle = bytes as f64 / triangles.max(1) as f64;
+    let [a, b] = h.always_visible;
+    let b_info = &h.build;
+    out.say(format!("{} (a tincull hierarchy, {file_bytes} bytes)", path.display()));
+    out.say(format!(
+        "  mesh          {} vertices, {} triangles",
+        h.mesh.positions.len(),
+        triangles
+    ));
+    if lo[0] <= hi[0] {
+        out.say(format!(
+            "  bbox          x {:.3} .. {:.3}, y {:.3} .. {:.3}, z {:.3} .. {:.3}",
+            lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]
+        ));
+    }
+    out.say(format!(
+        "  hierarchy     {}: {} nodes ({} leaves, {} roots, depth {depth}), {} triangles always visible",
+        b_info.grouping.name(),
+        h.nodes.len(),
+        leaves,
+        h.roots.len(),
+        b - a
+    ));
+    out.say(format!(
+        "  regions       {regions} in {} sectors x {} subsectors; visibility data {bytes} bytes ({per_triangle:.2} per \
+         triangle)",
+        h.sectors, b_info.subsectors
+    ));
+    out.say(format!(
+        "  built with    seeds {}, orphan passes {}, min group {}, max expanse {}, rng seed {}{}",
+        b_info.seeds,
+        b_info.orphan_passes,
+        b_info.min_group,
+        b_info.max_expanse,
+        b_info.rng_seed,
+        b_info
+            .undersampling
+            .map_or(String::new(), |u| format!(", undersampling {u} m"))
+    ));
+    out.json(&json!({
+        "hierarchy": path,
+        "file_bytes": file_bytes,
+        "vertices": h.mesh.positions.len(),
+        "triangles": triangles,
+        "bbox": { "min": lo, "max": hi },
+        "grouping": b_info.grouping,
+        "nodes": h.nodes.len(),
+        "leaves": leaves,
+        "roots": h.roots.len(),
+        "depth": depth,
+        "always_visible": h.always_visible,
+        "sectors": h.sectors,
+        "regions": regions,
+        "visibility_bytes": bytes,
+        "visibility_bytes_per_triangle": per_triangle,
+        "build": b_info,
     }))
 }

@@ -250,7 +250,7 @@ impl MeshArgs {
         if is_hierarchy(&self.mesh) {
             bail!(
                 "{} is a tincull hierarchy (.tch), not a mesh: this command reads an OBJ mesh or a DEM grid (commands \
-                 that read a hierarchy: cull, eval, export, pvs, failmap, render, view)",
+                 that read a hierarchy: info, cull, eval, export, pvs, failmap, render, view)",
                 self.mesh.display()
             );
         }
