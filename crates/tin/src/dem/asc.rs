@@ -10,7 +10,7 @@
 //! The header has no CRS; a `.prj` beside the grid (same stem, as GDAL and ArcGIS write it) does. When its root is a
 //! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
 //! the corners and cell sizes are degrees (or the WKT's angular unit) and are put into metres as GeoTIFFs in degrees
-//! are ([`super::degrees`]); any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
+//! are (the frame of [`super::hgt`]); any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
 //!
 //! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
 //! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values
@@ -470,7 +470,7 @@ fn geographic_prj(grid: &Path) -> Result<Option<(f64, std::path::PathBuf)>> {
     Ok(prj_geographic_unit(text).map(|deg| (deg, prj)))
 }
 
-/// Parses an ESRI ASCII grid held in memory; `path` names it in errors.
+/// Parses an ESRI ASCII grid held in memory; `path` names it in errors and locates its `.prj` (if any).
 pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
     let err = |m: String| TinError::format(path, m);
     let text = std::str::from_utf8(bytes).map_err(|e| {
