@@ -139,6 +139,35 @@ fn a_y_up_mesh_gets_a_hint() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("looks y-up"));
     let out = ok(&["info", s(&mesh("jacksboro-2k.obj"))]);
     assert!(!String::from_utf8_lossy(&out.stderr).contains("y-up"));
+    // The hint names the way out, and `--up y` reads the file as the z-up mesh it was made from, exactly (the
+    // rotation only moves and negates coordinates), with no warning; it is refused for a DEM grid.
+    fails_with(&["info", s(&obj)], "give --up y");
+    let out = ok(&["info", s(&obj), "--up", "y", "--json"]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("y-up"));
+    let read: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let orig = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
+    for key in ["bbox", "import", "relief", "slivers"] {
+        assert_eq!(read[key], orig[key], "{key}");
+    }
+    let grid = dir.path().join("g.asc");
+    std::fs::write(
+        &grid,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("fixture");
+    fails_with(&["info", s(&grid), "--up", "y"], "--up y applies to OBJ meshes");
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&grid),
+            "--up",
+            "y",
+            "-o",
+            s(&dir.path().join("p.json")),
+        ],
+        "applies to OBJ",
+    );
 }
 
 /// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and

@@ -1,6 +1,6 @@
 //! The bodies of the fuzz targets: each takes arbitrary bytes and must never panic (errors are fine).
 //!
-//! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies.
+//! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies (the second with y up).
 //! - `dem_readers`: the `.npy`, `.asc`, `.hgt`, `.png` and GeoTIFF parsers of `tin::dem`.
 //! - `geotiff`: [`tin::dem::geotiff::parse_geotiff`] alone (TIFF structure, GeoKeys, decompression, predictors),
 //!   with no band and with band 2 chosen; a grid that loads is simplified a little.
@@ -11,7 +11,7 @@ use std::path::Path;
 
 use cull::{AnyCuller, Camera, CullMethod, Hierarchy};
 use tin::dem::hgt::TileName;
-use tin::{DedupePolicy, DemOptions, ObjImportOptions};
+use tin::{DedupePolicy, DemOptions, ObjImportOptions, UpAxis};
 
 /// Inputs larger than this are cut (keeps each run fast; the parsers' limits are tested elsewhere).
 pub const MAX_INPUT: usize = 1 << 20;
@@ -20,8 +20,11 @@ pub const MAX_INPUT: usize = 1 << 20;
 pub fn obj_import(data: &[u8]) {
     let data = &data[..data.len().min(MAX_INPUT)];
     for keep_faces in [false, true] {
-        for dedupe in [DedupePolicy::Reject, DedupePolicy::KeepHighest] {
-            let opts = ObjImportOptions { keep_faces, dedupe };
+        for (dedupe, up) in [
+            (DedupePolicy::Reject, UpAxis::Z),
+            (DedupePolicy::KeepHighest, UpAxis::Y),
+        ] {
+            let opts = ObjImportOptions { keep_faces, dedupe, up };
             if let Ok((tin, _)) = tin::parse_obj(data, "fuzz.obj", &opts) {
                 // A TIN that loads is a valid height field: its basic queries must hold up.
                 let _ = tin.bbox();

@@ -22,6 +22,39 @@ pub enum DedupeArg {
     KeepHighest,
 }
 
+/// Which axis of an OBJ file points up.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum UpArg {
+    /// z is height (tincull's own frame).
+    #[default]
+    Z,
+    /// y is height (as many 3-D tools write OBJ): rotated to z up, (x, y, z) -> (x, -z, y).
+    Y,
+}
+
+impl UpArg {
+    /// The importer's axis.
+    pub fn axis(self) -> tin::UpAxis {
+        match self {
+            UpArg::Z => tin::UpAxis::Z,
+            UpArg::Y => tin::UpAxis::Y,
+        }
+    }
+
+    /// An error when an up axis other than z is given for the DEM grid `path` (its samples are heights).
+    pub fn check_dem(self, path: &std::path::Path) -> Result<()> {
+        if self != UpArg::Z {
+            bail!(
+                "{}: --up {} applies to OBJ meshes; a DEM grid's samples are heights",
+                path.display(),
+                self.to_possible_value()
+                    .map_or_else(String::new, |v| v.get_name().to_string())
+            );
+        }
+        Ok(())
+    }
+}
+
 /// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
 /// `--keep-faces` and `--dedupe` as every command that reads a mesh.
 #[derive(Clone, Copy, Debug, Args)]
@@ -33,6 +66,9 @@ pub struct ImportArgs {
     /// For a mesh input: what to do with vertices that share x,y but differ in z.
     #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
     pub dedupe: DedupeArg,
+    /// For a mesh input: the file's up axis (y for a y-up OBJ, rotated to z up on import).
+    #[arg(long, value_enum, default_value_t = UpArg::Z)]
+    pub up: UpArg,
     /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
     #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
     pub dem_vertices: usize,
@@ -46,6 +82,7 @@ impl Default for ImportArgs {
         ImportArgs {
             keep_faces: false,
             dedupe: DedupeArg::Reject,
+            up: UpArg::Z,
             dem_vertices: DEFAULT_DEM_VERTICES,
             dem: DemArgs::default(),
         }
@@ -59,6 +96,7 @@ impl ImportArgs {
             mesh: path.to_path_buf(),
             keep_faces: self.keep_faces,
             dedupe: self.dedupe,
+            up: self.up,
             dem_vertices: self.dem_vertices,
             dem: self.dem,
         }
@@ -123,6 +161,9 @@ pub struct MeshArgs {
     /// What to do with vertices that share x,y but differ in z.
     #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
     pub dedupe: DedupeArg,
+    /// The mesh's up axis: y for a y-up OBJ (as many 3-D tools write), rotated to z up on import.
+    #[arg(long, value_enum, default_value_t = UpArg::Z)]
+    pub up: UpArg,
     /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
     #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
     pub dem_vertices: usize,
@@ -187,8 +228,8 @@ pub fn warn_if_y_up(tin: &Tin, path: &std::path::Path, out: Output) {
 fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path) -> Option<String> {
     (y < 0.25 * x.min(z)).then(|| {
         format!(
-            "{}: extents x {x:.1}, y {y:.1}, z {z:.1}: the mesh looks y-up; tincull takes z as height, so convert it \
-             to z up first (e.g. (x, y, z) -> (x, -z, y), Blender's \"Z up\" OBJ export)",
+            "{}: extents x {x:.1}, y {y:.1}, z {z:.1}: the mesh looks y-up; tincull takes z as height: give --up y \
+             to read it y-up (rotated to z up), or export it with z up",
             path.display()
         )
     })
@@ -255,6 +296,7 @@ impl MeshArgs {
             );
         }
         if is_dem(&self.mesh) {
+            self.up.check_dem(&self.mesh)?;
             return self.load_dem(out);
         }
         let opts = ObjImportOptions {
@@ -263,6 +305,7 @@ impl MeshArgs {
                 DedupeArg::Reject => DedupePolicy::Reject,
                 DedupeArg::KeepHighest => DedupePolicy::KeepHighest,
             },
+            up: self.up.axis(),
         };
         let spinner = out.spinner("reading mesh");
         let (tin, report) = tin::read_obj(&self.mesh, &opts).map_err(|e| {

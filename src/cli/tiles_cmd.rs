@@ -11,7 +11,7 @@ use tiles::{Plan, PlanOptions, TileReport, TilesError};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::{Outputs, write_one};
-use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, MeshArgs, is_dem};
+use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, MeshArgs, UpArg, is_dem};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tiles`.
@@ -46,6 +46,9 @@ pub struct PlanArgs {
     /// For a mesh: what to do with vertices that share x,y but differ in z (as every command that reads a mesh).
     #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
     pub dedupe: DedupeArg,
+    /// For a mesh: its up axis (y for a y-up OBJ, rotated to z up; as every command that reads a mesh).
+    #[arg(long, value_enum, default_value_t = UpArg::Z)]
+    pub up: UpArg,
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -151,6 +154,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     if !is_dem(&args.dem) {
         return plan_mesh(args, out, files, options, &source, &tiles_dir);
     }
+    args.up.check_dem(&args.dem)?;
     let dem = args.read.options();
     let bar = out.progress(0, "reading DEM rows");
     let (mut plan, field) = tiles::make_plan(&source, dem, options, &tiles_dir, |done, rows| {
@@ -216,6 +220,7 @@ fn plan_mesh(
         mesh: args.dem.clone(),
         keep_faces: args.keep_faces,
         dedupe: args.dedupe,
+        up: args.up,
         dem_vertices: DEFAULT_DEM_VERTICES,
         dem: DemArgs::default(),
     };

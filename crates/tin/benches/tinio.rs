@@ -48,6 +48,7 @@ fn bench(c: &mut Criterion) {
     let keep = ObjImportOptions {
         keep_faces: true,
         dedupe: DedupePolicy::Reject,
+        ..ObjImportOptions::default()
     };
     g.bench_function("parse_obj_keep_faces_100k", |b| {
         b.iter(|| black_box(parse_obj(&text, "bench.obj", &keep).expect("valid")))

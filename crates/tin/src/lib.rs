@@ -28,7 +28,7 @@ pub use dem::{
 pub use error::{Result, TinError};
 pub use grid::Grid;
 pub use mesh::{Aabb, Circle, NO_NEIGHBOUR, Tin, VertexTriangles, bounding_circle_of_points};
-pub use obj::{ObjImportOptions, ObjImportReport, ObjLineError, parse_obj, read_obj, write_obj_to};
+pub use obj::{ObjImportOptions, ObjImportReport, ObjLineError, UpAxis, parse_obj, read_obj, write_obj_to};
 pub use predicates::{COORDINATE_LIMIT, coordinate_in_range, orient2d, orientation};
 pub use prefetch::prefetch;
 pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify, simplify_constrained};

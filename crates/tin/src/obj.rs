@@ -52,6 +52,31 @@ pub struct ObjImportOptions {
     pub keep_faces: bool,
     /// What to do with vertices that share x,y but differ in z.
     pub dedupe: DedupePolicy,
+    /// Which of the file's axes points up (see [`UpAxis`]).
+    pub up: UpAxis,
+}
+
+/// The axis that points up in an OBJ file. tincull's terrains are z-up (x east, y north, z height); many 3-D tools
+/// write OBJ with y up instead (x east, y up, z towards the viewer, i.e. south), which import turns into z-up by the
+/// rotation `(x, y, z) → (x, −z, y)` (a proper rotation, so faces keep their orientation). Everything after import,
+/// error messages about positions included, is in the z-up frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum UpAxis {
+    /// z is height (tincull's own frame; the default).
+    #[default]
+    Z,
+    /// y is height: rotated to z-up on import.
+    Y,
+}
+
+impl UpAxis {
+    /// The z-up position of a point written as `p` in a file whose up axis is `self`.
+    pub fn to_z_up(self, p: DVec3) -> DVec3 {
+        match self {
+            UpAxis::Z => p,
+            UpAxis::Y => DVec3::new(p.x, -p.z, p.y),
+        }
+    }
 }
 
 /// What an OBJ import read and what it did to the data.
@@ -472,7 +497,12 @@ fn import(text: &[u8], path: &Path, opts: &ObjImportOptions) -> Result<(Tin, Obj
             format!("not an OBJ mesh: it starts like {what}"),
         ));
     }
-    let parsed = parse_lines(text, path)?;
+    let mut parsed = parse_lines(text, path)?;
+    if opts.up != UpAxis::Z {
+        for p in &mut parsed.positions {
+            *p = opts.up.to_z_up(*p);
+        }
+    }
     let mut report = ObjImportReport {
         vertices_read: parsed.positions.len(),
         faces_read: parsed.face_lines.len(),

@@ -6,15 +6,17 @@ use std::path::Path;
 use glam::DVec3;
 use proptest::prelude::*;
 use tin::obj::ObjLineError as K;
-use tin::{DedupePolicy, ObjImportOptions, Tin, TinError, parse_obj, read_obj, triangulate, write_obj_to};
+use tin::{DedupePolicy, ObjImportOptions, Tin, TinError, UpAxis, parse_obj, read_obj, triangulate, write_obj_to};
 
 const KEEP: ObjImportOptions = ObjImportOptions {
     keep_faces: true,
     dedupe: DedupePolicy::Reject,
+    up: UpAxis::Z,
 };
 const DELAUNAY: ObjImportOptions = ObjImportOptions {
     keep_faces: false,
     dedupe: DedupePolicy::Reject,
+    up: UpAxis::Z,
 };
 
 fn obj_text(tin: &Tin) -> Vec<u8> {
@@ -92,6 +94,37 @@ proptest! {
         prop_assert_eq!(report.vertices_read, tin.num_vertices());
         prop_assert_eq!(report.faces_read, tin.num_triangles());
         prop_assert_eq!(report.merged_duplicates + report.dropped_lower + report.unreferenced_dropped, 0);
+    }
+
+    /// A y-up file (the z-up TIN written as `(x, z, −y)`, as a y-up exporter would) read with [`UpAxis::Y`] is the
+    /// z-up TIN again, bit for bit, in both modes: the rotation keeps the faces' orientation, so kept faces pass the
+    /// height-field checks unchanged.
+    #[test]
+    fn y_up_import_undoes_the_y_up_rotation(tin in random_tin()) {
+        let Some(tin) = tin else { return Ok(()) };
+        let text = String::from_utf8(obj_text(&tin)).expect("utf-8");
+        let y_up: String = text
+            .lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let v: Vec<f64> = rest.split_whitespace().map(|w| w.parse().expect("number")).collect();
+                    format!("v {} {} {}\n", v[0], v[2], -v[1])
+                }
+                None => format!("{l}\n"),
+            })
+            .collect();
+        let (kept, _) = parse_obj(y_up.as_bytes(), "y.obj", &ObjImportOptions { up: UpAxis::Y, ..KEEP })
+            .expect("the y-up file reads with up y");
+        assert_same_bits(&tin, &kept);
+        let (direct, _) = parse_obj(&obj_text(&tin), "z.obj", &DELAUNAY).expect("z-up");
+        let (rotated, _) = parse_obj(y_up.as_bytes(), "y.obj", &ObjImportOptions { up: UpAxis::Y, ..DELAUNAY })
+            .expect("y-up");
+        prop_assert_eq!(direct.num_vertices(), rotated.num_vertices());
+        for (p, q) in direct.positions().iter().zip(rotated.positions()) {
+            prop_assert_eq!(p.to_array().map(f64::to_bits), q.to_array().map(f64::to_bits));
+        }
+        prop_assert_eq!(direct.num_triangles(), rotated.num_triangles());
+        prop_assert_eq!(UpAxis::Y.to_z_up(DVec3::new(1.0, 2.0, 3.0)), DVec3::new(1.0, -3.0, 2.0));
     }
 
     /// The default import Delaunay-triangulates the file's vertices: the same TIN as triangulating them directly.
@@ -182,7 +215,7 @@ proptest! {
         ], 0..200)) {
         let text = words.join(" ");
         let lines = text.split('\n').count();
-        for opts in [KEEP, DELAUNAY, ObjImportOptions { keep_faces: true, dedupe: DedupePolicy::KeepHighest }] {
+        for opts in [KEEP, DELAUNAY, ObjImportOptions { keep_faces: true, dedupe: DedupePolicy::KeepHighest, up: UpAxis::Z }] {
             if let Err(TinError::ObjLine { line, .. }) = parse_obj(text.as_bytes(), "soup.obj", &opts) {
                 prop_assert!(line >= 1 && line <= lines);
             }
@@ -306,6 +339,7 @@ fn duplicate_xy_with_different_z_is_a_wall() {
     let highest = ObjImportOptions {
         keep_faces: true,
         dedupe: DedupePolicy::KeepHighest,
+        up: UpAxis::Z,
     };
     let (tin, report) = parse_obj(text.as_bytes(), "x.obj", &highest).expect("resolved");
     assert_eq!(report.dropped_lower, 1);
@@ -333,6 +367,7 @@ fn vertical_faces_are_degenerate() {
     let highest = ObjImportOptions {
         keep_faces: true,
         dedupe: DedupePolicy::KeepHighest,
+        up: UpAxis::Z,
     };
     assert_eq!(
         line_error(parse_obj(text.as_bytes(), "x.obj", &highest)),
