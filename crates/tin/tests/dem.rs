@@ -426,6 +426,16 @@ fn asc_malformed_files() {
     let cases = [
         (format!("{header}1 2 3\n4 5"), "truncated: 5 values"),
         (format!("{header}1 2 3\n4 5 6 7\n"), "line 7: more than the 6 values"),
+        // One row per line: the one line that is too long or too short is named, wherever the count runs out.
+        (
+            format!("{header}1 2 3 9\n4 5 6\n"),
+            "line 7: more than the 6 values that nrows x ncols = 2 x 3 announce; line 6 has 4 values where every \
+             other line has ncols = 3",
+        ),
+        (
+            "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 6\n7 8 9\n".to_string(),
+            "truncated: 8 values, but nrows x ncols = 3 x 3 = 9; line 7 has 2 values where every other line has ncols = 3",
+        ),
         (
             format!("{header}1 2 3\n4 x 6\n"),
             "line 7: \"x\" is not a finite number (row 2, column 2)",

@@ -485,6 +485,28 @@ fn truncated_files_are_errors_naming_them() {
     std::fs::write(&p, format!("{text}{} 1 2 3 4 5 6 7 8", ival(0, 0))).expect("write");
     assert!(read_dem(&p, &opts).is_err());
     assert!(names_file(strips(&p).expect_err("too many"), &p).contains("more than the"));
+    // One row per line with one value too many in the first row: the whole read and the strips name that line.
+    let p = dir.path().join("row.asc");
+    let rows: Vec<String> = (0..3)
+        .map(|r| {
+            let extra = if r == 0 { " 7" } else { "" };
+            format!(
+                "{}{extra}",
+                (0..4).map(|c| ival(r, c).to_string()).collect::<Vec<_>>().join(" ")
+            )
+        })
+        .collect();
+    std::fs::write(
+        &p,
+        format!(
+            "ncols 4\nnrows 3\nxllcenter 0\nyllcenter 0\ncellsize 1\n{}\n",
+            rows.join("\n")
+        ),
+    )
+    .expect("write");
+    let hint = "line 6 has 5 values where every other line has ncols = 4";
+    assert!(names_file(read_dem(&p, &opts).expect_err("too many"), &p).contains(hint));
+    assert!(names_file(strips(&p).expect_err("too many"), &p).contains(hint));
     let p = dir.path().join("word.asc");
     std::fs::write(&p, format!("{text}1 2 3 4 5 6 x")).expect("write");
     assert!(read_dem(&p, &opts).is_err());

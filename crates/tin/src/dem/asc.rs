@@ -5,7 +5,9 @@
 //! non-square cells; optional `NODATA_value`. The `…corner` keys give the lower-left corner of the lower-left *cell*,
 //! so its sample (cell centre) lies half a cell further in; the `…center` keys give that sample directly. The grid
 //! origin is the centre of the north-west sample: `x = xll + dx/2`, `y = yll + dy/2 + (nrows − 1)·dy` for corners.
-//! Samples equal to `NODATA_value` (and NaN) become voids. Errors name the line.
+//! Samples equal to `NODATA_value` (and NaN) become voids. Errors name the line. The values are a stream (a row may
+//! wrap over lines), so a row with a value too many or too few shows only as too many or too few values in all; when
+//! exactly one line holds a number of values other than `ncols`, that message names it too.
 //!
 //! The header has no CRS; a `.prj` beside the grid (same stem, as GDAL and ArcGIS write it) does. When its root is a
 //! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
@@ -75,6 +77,7 @@ pub(super) fn read_asc_window(
     let mut z = Vec::new();
     // Index of the next value in the whole grid (row-major).
     let mut k = 0usize;
+    let mut counts = LineCounts::default();
     'lines: while let Some((n, line)) = lines.next()? {
         if window.is_none() {
             if h.line(n, line, path)? {
@@ -87,6 +90,7 @@ pub(super) fn read_asc_window(
             window = Some((shape, nodata));
         }
         let Some((shape, nodata)) = window else { break };
+        let before = k;
         for word in line.split_whitespace() {
             let (r, c) = (k / shape.cols, k % shape.cols);
             if r > rows[1] {
@@ -97,6 +101,7 @@ pub(super) fn read_asc_window(
             }
             k += 1;
         }
+        counts.add(n, k - before, shape.cols);
     }
     let (shape, _) = match window {
         Some(w) => w,
@@ -109,13 +114,51 @@ pub(super) fn read_asc_window(
     };
     if z.len() < (rows[1] - rows[0] + 1) * nc {
         return Err(err(format!(
-            "truncated: {k} values, but nrows x ncols = {} x {} = {}",
+            "truncated: {k} values, but nrows x ncols = {} x {} = {}{}",
             shape.rows,
             shape.cols,
-            shape.rows * shape.cols
+            shape.rows * shape.cols,
+            counts.hint(shape.cols, false)
         )));
     }
     Ok((shape, z))
+}
+
+/// Values per line of a grid's body, for the messages about too many or too few values: the format is a stream of
+/// values (a row may wrap over lines), but most files write one row per line, and when exactly one line of several
+/// holds a number other than `ncols`, that line is where a row went wrong.
+#[derive(Debug, Default)]
+struct LineCounts {
+    /// Lines with values.
+    lines: usize,
+    /// Lines whose number of values is not `ncols`, and the first of them: (line, values).
+    odd_lines: usize,
+    first_odd: Option<(usize, usize)>,
+}
+
+impl LineCounts {
+    /// Counts line `n`, which held `values` values (lines without any are not counted).
+    fn add(&mut self, n: usize, values: usize, cols: usize) {
+        if values == 0 {
+            return;
+        }
+        self.lines += 1;
+        if values != cols {
+            self.odd_lines += 1;
+            self.first_odd.get_or_insert((n, values));
+        }
+    }
+
+    /// `"; line L has V values where every other line has ncols = C"` when one line alone of those counted is odd,
+    /// and there is another line (counted, or the line being read when `reading` holds), else nothing.
+    fn hint(&self, cols: usize, reading: bool) -> String {
+        match self.first_odd {
+            Some((n, v)) if self.odd_lines == 1 && self.lines + usize::from(reading) > 1 => {
+                format!("; line {n} has {v} values where every other line has ncols = {cols}")
+            }
+            _ => String::new(),
+        }
+    }
 }
 
 /// Streams a whole ESRI ASCII grid once, handing its values out in strips of `strip_rows` rows (voids NaN, not
@@ -139,6 +182,7 @@ pub(super) fn read_asc_strips(
     let mut z = Vec::with_capacity(strip.min(lines.len / 2 + 1));
     // Values read so far, and the first row of the strip being filled.
     let (mut k, mut first) = (0usize, 0usize);
+    let mut counts = LineCounts::default();
     while let Some((n, line)) = lines.next()? {
         if in_header {
             if h.line(n, line, path)? {
@@ -147,10 +191,12 @@ pub(super) fn read_asc_strips(
             in_header = false;
             nodata = std::mem::take(&mut h).shape(path, opts)?.1;
         }
+        let before = k;
         for word in line.split_whitespace() {
             if k == expected {
                 return Err(err(format!(
-                    "line {n}: more than the {expected} values that nrows x ncols = {rows} x {cols} announce"
+                    "line {n}: more than the {expected} values that nrows x ncols = {rows} x {cols} announce{}",
+                    counts.hint(cols, true)
                 )));
             }
             z.push(sample(word, n, k, cols, nodata, path)?);
@@ -161,10 +207,12 @@ pub(super) fn read_asc_strips(
                 z.clear();
             }
         }
+        counts.add(n, k - before, cols);
     }
     if k < expected {
         return Err(err(format!(
-            "truncated: {k} values, but nrows x ncols = {rows} x {cols} = {expected}"
+            "truncated: {k} values, but nrows x ncols = {rows} x {cols} = {expected}{}",
+            counts.hint(cols, false)
         )));
     }
     if !z.is_empty() {
@@ -492,21 +540,26 @@ pub fn parse_asc(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
     // Every value takes at least two bytes: never reserve more than the file can hold (a lying header must not
     // allocate gigabytes).
     let mut z = Vec::with_capacity(expected.min(bytes.len() / 2 + 1));
+    let mut counts = LineCounts::default();
     for (i, line) in lines {
+        let before = z.len();
         for word in line.split_whitespace() {
             if z.len() == expected {
                 return Err(err(format!(
-                    "line {}: more than the {expected} values that nrows x ncols = {rows} x {cols} announce",
-                    i + 1
+                    "line {}: more than the {expected} values that nrows x ncols = {rows} x {cols} announce{}",
+                    i + 1,
+                    counts.hint(cols, true)
                 )));
             }
             z.push(sample(word, i + 1, z.len(), cols, nodata, path)?);
         }
+        counts.add(i + 1, z.len() - before, cols);
     }
     if z.len() < expected {
         return Err(err(format!(
-            "truncated: {} values, but nrows x ncols = {rows} x {cols} = {expected}",
-            z.len()
+            "truncated: {} values, but nrows x ncols = {rows} x {cols} = {expected}{}",
+            z.len(),
+            counts.hint(cols, false)
         )));
     }
     finish(path, rows, cols, (shape.dx, shape.dy), shape.origin, z, opts)
