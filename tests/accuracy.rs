@@ -20,7 +20,7 @@ fn measure(mesh: &str) -> Vec<(String, String, usize, usize, usize, Option<f64>)
     let htin = hierarchy_tin(&built.hierarchy).expect("hierarchy mesh");
     let opts = EvalOptions {
         viewpoints: 6,
-        rng_seed: 1,
+        view_seed: 1,
         ..EvalOptions::default()
     };
     let e = evaluate(&built.hierarchy, &htin, &opts, &|_, _| {}).expect("evaluates");

@@ -93,7 +93,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     let opts = EvalOptions {
         viewpoints: args.viewpoints,
         classes: args.classes.clone(),
-        rng_seed: args.view_seed,
+        view_seed: args.view_seed,
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
         safe,
@@ -118,7 +118,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         "hierarchy": args.hierarchy,
         "triangles": e.triangles,
         "viewpoints_per_class": opts.viewpoints,
-        "view_seed": opts.rng_seed,
+        "view_seed": opts.view_seed,
         "fov_deg": opts.fov_deg,
         "ground_truth_seconds_per_viewpoint": e.ground_truth_seconds_per_viewpoint,
         "rows": e.rows,

@@ -148,7 +148,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     let eval = EvalOptions {
         viewpoints: args.viewpoints,
         classes: args.classes.clone(),
-        rng_seed: args.view_seed,
+        view_seed: args.view_seed,
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
         safe: cull::SafeParams::default(),

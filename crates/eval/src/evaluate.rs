@@ -57,8 +57,8 @@ pub struct EvalOptions {
     pub viewpoints: usize,
     /// Classes to draw viewpoints from.
     pub classes: Vec<ViewpointClass>,
-    /// Seed of the viewpoint generator.
-    pub rng_seed: u64,
+    /// Seed of the viewpoint generator (`--view-seed`; `rng_seed` seeds the grouping, elsewhere).
+    pub view_seed: u64,
     /// Horizontal field of view in degrees (360 = all around, the thesis' measurement mode).
     pub fov_deg: f64,
     /// Also evaluate the per-triangle method (needs the horizons of the mesh again).
@@ -76,7 +76,7 @@ impl Default for EvalOptions {
         EvalOptions {
             viewpoints: 20,
             classes: ViewpointClass::ALL.to_vec(),
-            rng_seed: 1,
+            view_seed: 1,
             fov_deg: 360.0,
             per_triangle: true,
             safe: SafeParams::default(),
@@ -241,7 +241,7 @@ impl GroundTruthSet {
                 vec![(
                     ViewpointClass::Path,
                     eyes.iter().map(|&e| DVec3::from_array(e)).collect(),
-                    opts.rng_seed,
+                    opts.view_seed,
                 )]
             }
             None => opts
@@ -250,7 +250,7 @@ impl GroundTruthSet {
                 .enumerate()
                 .map(|(ci, &class)| {
                     let seed = opts
-                        .rng_seed
+                        .view_seed
                         .wrapping_mul(0x9e37_79b9_7f4a_7c15)
                         .wrapping_add(ci as u64);
                     (class, truth::viewpoints(tin, class, opts.viewpoints, seed), seed)

@@ -54,7 +54,7 @@ pub fn setup_digest(tin: &Tin, base: &BuildParams, eval: &EvalOptions) -> String
     let options = format!(
         "{base:?}|{:?}|{}|{}|{}|{:?}",
         eval.classes,
-        eval.rng_seed,
+        eval.view_seed,
         eval.fov_deg.to_bits(),
         eval.per_triangle,
         eval.safe
