@@ -173,6 +173,29 @@ fn npy_sidecar_gives_spacing_nodata_and_origin() {
     let g = read_dem(&path, &opts()).expect("reads");
     assert_eq!(g.origin, DVec2::new(10.0, 102.0));
     assert_eq!(g.voids(), 0);
+    // Both northings: they must agree with the rows and the spacing (2 rows at 2 m: 2 m apart). An easting or a
+    // northing alone is used alone.
+    let sidecar = |text: &str| std::fs::write(dir.path().join("dem.json"), text).expect("sidecar");
+    sidecar(r#"{"spacing_x_m": 1, "spacing_y_m": 2, "northing_min": 100, "northing_max": 102}"#);
+    assert_eq!(read_dem(&path, &opts()).expect("agree").origin, DVec2::new(0.0, 102.0));
+    sidecar(r#"{"spacing_x_m": 1, "spacing_y_m": 2, "northing_min": 100, "northing_max": 200}"#);
+    let e = read_dem(&path, &opts()).expect_err("disagree");
+    assert!(
+        matches!(&e, TinError::Format { path, .. } if path.ends_with("dem.json")),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("are 100 m apart, but 2 rows at a spacing of 2 m span 2 m"),
+        "{e}"
+    );
+    sidecar(r#"{"spacing_x_m": 1, "spacing_y_m": 2, "easting_min": 7}"#);
+    assert_eq!(read_dem(&path, &opts()).expect("easting").origin, DVec2::new(7.0, 2.0));
+    sidecar(r#"{"spacing_x_m": 1, "spacing_y_m": 2, "northing_max": 50}"#);
+    assert_eq!(
+        read_dem(&path, &opts()).expect("northing").origin,
+        DVec2::new(0.0, 50.0)
+    );
     // A broken sidecar.
     std::fs::write(dir.path().join("dem.json"), "{ not json").expect("sidecar");
     let m = format_message(read_dem(&path, &opts()));

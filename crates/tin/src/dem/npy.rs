@@ -8,9 +8,10 @@
 //! Sidecar: `NAME.json` next to `NAME.npy`, as written for the project's data sets:
 //! `spacing_x_m`, `spacing_y_m` (metres), optional `nodata` (null or a number: samples equal to it become voids),
 //! optional `rows`/`cols` (checked against the array), optional `easting_min` and `northing_max` (or `northing_min`)
-//! giving the world position of the western column and northern (southern) row of sample centres. Other keys are
-//! ignored. [`DemOptions::spacing`] wins over the sidecar's spacing; with neither, reading fails. Without an
-//! easting/northing, the south-west sample is put at (0, 0).
+//! giving the world position of the western column and northern (southern) row of sample centres (both northings
+//! must agree with the rows and the sidecar's y spacing, to 1% of a row). Other keys are ignored. [`DemOptions::spacing`] wins
+//! over the sidecar's spacing; with neither, reading fails. Without an easting the western column is at x = 0,
+//! without a northing the southern row at y = 0.
 
 use std::path::{Path, PathBuf};
 
@@ -177,13 +178,24 @@ fn placement(path: &Path, rows: usize, cols: usize, opts: &DemOptions) -> Result
             },
         )
     })?;
-    let north = side
-        .northing_max
-        .or_else(|| side.northing_min.map(|s| s + (rows as f64 - 1.0) * spacing.1));
-    let origin = match (side.easting_min, north) {
-        (Some(e), Some(n)) => DVec2::new(e, n),
-        _ => DVec2::new(0.0, (rows as f64 - 1.0) * spacing.1),
-    };
+    let span = (rows as f64 - 1.0) * spacing.1;
+    // Both northings are checked against the sidecar's own spacing when it has one (a `--spacing` given to correct
+    // it moves the southern row, not the northern one).
+    let dy = side.spacing.map_or(spacing.1, |s| s.1);
+    if let (Some(n), Some(s)) = (side.northing_max, side.northing_min)
+        && (n - s - (rows as f64 - 1.0) * dy).abs() > 0.01 * dy + 1e-9 * (n.abs() + s.abs())
+    {
+        return Err(TinError::format(
+            &sidecar_path,
+            format!(
+                "northing_max {n} and northing_min {s} are {} m apart, but {rows} rows at a spacing of {dy} m span {} m",
+                n - s,
+                (rows as f64 - 1.0) * dy
+            ),
+        ));
+    }
+    let north = side.northing_max.or_else(|| side.northing_min.map(|s| s + span));
+    let origin = DVec2::new(side.easting_min.unwrap_or(0.0), north.unwrap_or(span));
     let shape = GridShape {
         rows,
         cols,
