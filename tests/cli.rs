@@ -170,6 +170,49 @@ fn a_y_up_mesh_gets_a_hint() {
     );
 }
 
+/// A GeoTIFF in US survey feet without a vertical unit: every command that reads it says the heights were taken to
+/// be feet and how to undo that; `info` reports the conversion; x, y and heights come out in metres.
+#[test]
+fn a_geotiff_in_feet_is_read_in_metres_with_a_warning() {
+    use tiff::encoder::{TiffEncoder, colortype};
+    use tiff::tags::Tag;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tif = dir.path().join("ft.tif");
+    let (w, h) = (6u32, 5u32);
+    let data: Vec<f32> = (0..w * h)
+        .map(|i| 1000.0 + (i % 7) as f32 * 10.0 + (i / 3) as f32)
+        .collect();
+    {
+        let file = std::fs::File::create(&tif).expect("create");
+        let mut enc = TiffEncoder::new(file).expect("encoder");
+        let mut img = enc.new_image::<colortype::Gray32Float>(w, h).expect("image");
+        let d = img.encoder();
+        // Projected, US survey feet (3076 = 9003), no VerticalUnitsGeoKey.
+        let keys: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9003];
+        d.write_tag(Tag::GeoKeyDirectoryTag, &keys[..]).expect("tag");
+        d.write_tag(Tag::ModelPixelScaleTag, &[10.0f64, 10.0, 0.0][..])
+            .expect("tag");
+        d.write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 1000.0, 2000.0, 0.0][..])
+            .expect("tag");
+        img.write_data(&data).expect("data");
+    }
+    let out = ok(&["info", s(&tif), "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("taken to be in the same feet") && err.contains("--z-scale 3.28083333"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let bbox = v["bbox"]["max"].as_array().expect("bbox");
+    let survey = 1200.0 / 3937.0;
+    let top = bbox[2].as_f64().expect("z");
+    let highest = data.iter().fold(f32::MIN, |a, &b| a.max(b)) as f64;
+    assert!((top - highest * survey).abs() < 1e-9, "{top}");
+    let obj = dir.path().join("ft.obj");
+    let out = ok(&["tin", s(&tif), "--vertices", "12", "-o", s(&obj)]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--z-scale"));
+}
+
 /// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and
 /// an eye off the terrain is an error naming it.
 #[test]

@@ -215,6 +215,30 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
     }
 }
 
+/// Warns when a GeoTIFF's heights were taken to be in its projected CRS's feet without the file saying so
+/// ([`tin::dem::geotiff::GeoTiffInfo::heights_unit_assumed`]); nothing for other files, or one whose tags cannot be
+/// read (the reader names that error).
+pub fn warn_if_height_unit_assumed(path: &std::path::Path, opts: &tin::DemOptions, out: Output) {
+    let tif = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
+    if !tif {
+        return;
+    }
+    if let Ok(info) = tin::dem::geotiff::read_geotiff_tags(path, opts)
+        && info.heights_unit_assumed
+    {
+        out.warn(format!(
+            "{}: {}; the file does not say the heights' unit (no VerticalUnitsGeoKey), so they were taken to be in \
+             the same feet; if they are metres, give --z-scale {} to undo that",
+            path.display(),
+            info.conversion,
+            1.0 / info.height_unit_m
+        ));
+    }
+}
+
 /// Warns when a mesh looks modelled with y up ([`y_up_hint`]).
 pub fn warn_if_y_up(tin: &Tin, path: &std::path::Path, out: Output) {
     if let Some(hint) = y_up_hint(tin::mesh_stats(tin).bbox.size().to_array(), path) {
@@ -359,6 +383,7 @@ impl MeshArgs {
         };
         spinner.finish_and_clear();
         warn_if_degrees(&grid, &self.mesh, out);
+        warn_if_height_unit_assumed(&self.mesh, &opts, out);
         let bar = out.progress(self.dem_vertices as u64, "simplifying DEM");
         let progress = |v: usize| bar.set_position(v as u64);
         let simplify = tin::SimplifyOptions {

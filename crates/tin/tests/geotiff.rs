@@ -428,6 +428,72 @@ fn geographic_arc_seconds_snap_to_whole_fractions() {
     assert!(msg.contains("-90..90"), "{msg}");
 }
 
+/// A projected CRS in feet (as US state-plane rasters are) is put into metres: x, y by the CRS's foot, heights by
+/// `VerticalUnitsGeoKey`'s unit, or without one by the CRS's foot too (said in the conversion); a vertical unit in
+/// feet on a metric CRS converts the heights alone.
+#[test]
+fn feet_are_put_into_metres() {
+    let data: Vec<f32> = vec![100.0, 200.0, 300.0, 400.0, 500.0, -9999.0];
+    let survey = 1200.0 / 3937.0;
+    let tie = Some(vec![0.0, 0.0, 0.0, 2_000_000.0, 500_000.0, 0.0]);
+    let read = |keys: &[u16]| {
+        let spec = Spec {
+            keys: Some(keys),
+            scale: Some([10.0, 20.0, 0.0]),
+            tie: tie.clone(),
+            nodata: Some("-9999"),
+            ..Spec::default()
+        };
+        parse(&write_tif!(colortype::Gray32Float, 3, 2, &data, &spec)).expect("reads")
+    };
+    // US survey feet, heights unstated: both in US survey feet.
+    let (g, i) = read(&[1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9003]);
+    assert_eq!((g.dx, g.dy), (10.0 * survey, 20.0 * survey));
+    assert_eq!(g.origin, DVec2::new(2_000_005.0 * survey, 499_990.0 * survey));
+    assert_eq!(
+        g.z[..5],
+        [
+            100.0 * survey,
+            200.0 * survey,
+            300.0 * survey,
+            400.0 * survey,
+            500.0 * survey
+        ]
+    );
+    assert!(g.z[5].is_nan(), "nodata is judged on the raw sample");
+    assert!(i.crs.contains("US survey feet"), "{}", i.crs);
+    assert!(
+        i.conversion.contains("x, y in US survey feet") && i.conversion.contains("assumed"),
+        "{}",
+        i.conversion
+    );
+    assert_eq!(i.native_spacing, (10.0, 20.0));
+    assert!(i.heights_unit_assumed && i.height_unit_m == survey);
+    // International feet across, heights said to be metres.
+    let (g, i) = read(&[1, 1, 0, 3, 1024, 0, 1, 1, 3076, 0, 1, 9002, 4099, 0, 1, 9001]);
+    assert_eq!((g.dx, g.dy), (10.0 * 0.3048, 20.0 * 0.3048));
+    assert_eq!(g.z[..5], [100.0, 200.0, 300.0, 400.0, 500.0]);
+    assert!(
+        i.conversion.contains("international feet") && !i.conversion.contains("heights"),
+        "{}",
+        i.conversion
+    );
+    // Metres across, heights in international feet.
+    let (g, i) = read(&[1, 1, 0, 3, 1024, 0, 1, 1, 3076, 0, 1, 9001, 4099, 0, 1, 9002]);
+    assert_eq!((g.dx, g.dy), (10.0, 20.0));
+    assert_eq!(g.origin, DVec2::new(2_000_005.0, 499_990.0));
+    assert_eq!(g.z[0], 100.0 * 0.3048);
+    assert_eq!(
+        i.conversion,
+        "heights in international feet times 0.3048 m (VerticalUnitsGeoKey)"
+    );
+    assert!(!i.heights_unit_assumed && i.height_unit_m == 0.3048);
+    // Metres throughout: nothing converted.
+    let (g, i) = read(&[1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9001]);
+    assert_eq!((g.dx, g.z[0]), (10.0, 100.0));
+    assert!(i.conversion.is_empty());
+}
+
 #[test]
 fn clear_errors() {
     let data = vec![1i16; 6];
@@ -440,13 +506,23 @@ fn clear_errors() {
     };
     let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &no_keys)));
     assert!(msg.contains("GeoKeyDirectory") && msg.contains("--spacing"), "{msg}");
-    let feet: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9002];
+    let yards: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9096];
     let spec = Spec {
-        keys: Some(&feet),
+        keys: Some(&yards),
         ..Spec::default()
     };
     let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &spec)));
-    assert!(msg.contains("ProjLinearUnitsGeoKey") && msg.contains("foot"), "{msg}");
+    assert!(
+        msg.contains("ProjLinearUnitsGeoKey (3076) = 9096") && msg.contains("US survey feet"),
+        "{msg}"
+    );
+    let fathoms: [u16; 16] = [1, 1, 0, 3, 1024, 0, 1, 1, 3076, 0, 1, 9001, 4099, 0, 1, 9014];
+    let spec = Spec {
+        keys: Some(&fathoms),
+        ..Spec::default()
+    };
+    let msg = message(parse(&write_tif!(colortype::GrayI16, 3, 2, &data, &spec)));
+    assert!(msg.contains("VerticalUnitsGeoKey (4099) = 9014"), "{msg}");
     let unknown: [u16; 8] = [1, 1, 0, 1, 1024, 0, 1, 1];
     let spec = Spec {
         keys: Some(&unknown),

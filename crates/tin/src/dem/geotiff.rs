@@ -21,7 +21,11 @@
 //! Coordinate reference systems (`GeoKeyDirectory`, tag 34735):
 //! - **Projected** (`GTModelTypeGeoKey` = 1) in metres (`ProjLinearUnitsGeoKey` = 9001, or absent with a UTM
 //!   `ProjectedCSTypeGeoKey`: EPSG 326xx/327xx, 269xx, 267xx, 258xx, 322xx/323xx): coordinates are used as they are.
-//!   Other linear units (feet, …) are an error.
+//!   In international feet (9002, 0.3048 m) or US survey feet (9003, 1200/3937 m), as US state-plane rasters are:
+//!   coordinates and spacing are multiplied into metres. Other linear units are an error.
+//! - Heights are in the unit of `VerticalUnitsGeoKey` (4099: metres, international or US survey feet; others are an
+//!   error) and put into metres; without it, in metres, except under a projected CRS in feet, where they are taken
+//!   to be in the same feet ([`GeoTiffInfo::heights_unit_assumed`]; `--z-scale` corrects them).
 //! - **Geographic** (`GTModelTypeGeoKey` = 2; EPSG:4326 and any datum) in degrees (`GeogAngularUnitsGeoKey` 9102 or
 //!   9122, or absent), arc-minutes (9103) or arc-seconds (9104): converted to metres in the same local frame as
 //!   SRTM `.hgt` tiles ([`super::hgt`]): 1° of latitude is 111,320 m, 1° of longitude is `111,320 · cos(φc)` m with
@@ -63,6 +67,7 @@ mod key {
     pub const PROJECTED_CS_TYPE: u16 = 3072;
     pub const PCS_CITATION: u16 = 3073;
     pub const PROJ_LINEAR_UNITS: u16 = 3076;
+    pub const VERTICAL_UNITS: u16 = 4099;
 }
 
 /// The most decoded sample bytes a GeoTIFF may have (1 GiB); larger images are refused, not read.
@@ -104,8 +109,15 @@ pub struct GeoTiffInfo {
     pub epsg: Option<u16>,
     /// The CRS in words, e.g. `EPSG:26910 (projected, metres)`, with the file's citation when it has one.
     pub crs: String,
-    /// How the native coordinates became metres (empty for projected CRSs).
+    /// How the native coordinates and heights became metres (empty when they were metres).
     pub conversion: String,
+    /// Whether the heights were taken to be in the projected CRS's feet without the file saying so (no
+    /// `VerticalUnitsGeoKey`): `--z-scale` corrects them when they are not.
+    #[serde(default)]
+    pub heights_unit_assumed: bool,
+    /// Metres per unit of the file's heights (1 unless they are feet).
+    #[serde(default = "one")]
+    pub height_unit_m: f64,
     /// Pixel-is-area or pixel-is-point.
     pub raster_type: RasterType,
     /// Native bounding box of the sample centres: (west, south, east, north), in the CRS's units (degrees for
@@ -127,6 +139,11 @@ pub struct GeoTiffInfo {
     /// `sample · scale + offset`. `None` when the file gives neither.
     #[serde(default)]
     pub scale_offset: Option<(f64, f64)>,
+}
+
+/// 1, the default of [`GeoTiffInfo::height_unit_m`] in files written before it.
+fn one() -> f64 {
+    1.0
 }
 
 /// Reads a GeoTIFF DEM (see the module documentation).
@@ -177,6 +194,13 @@ pub fn read_geotiff_header(path: &Path, opts: &DemOptions) -> Result<GridShape> 
     opts.check()?;
     let file = std::io::BufReader::new(open(path)?);
     Ok(open_tiff(file, path, opts)?.1.shape)
+}
+
+/// What the tags of a GeoTIFF say ([`GeoTiffInfo`], without the sample type), without decoding its samples.
+pub fn read_geotiff_tags(path: &Path, opts: &DemOptions) -> Result<GeoTiffInfo> {
+    opts.check()?;
+    let file = std::io::BufReader::new(open(path)?);
+    Ok(open_tiff(file, path, opts)?.1.info)
 }
 
 /// The samples of a window of a GeoTIFF (voids NaN, not scaled) and its whole grid: only the strips or tiles
@@ -291,6 +315,8 @@ struct Meta {
     chunk_ends: Vec<u64>,
     /// GDAL's scale and offset of the band read.
     scale_offset: Option<(f64, f64)>,
+    /// Metres per unit of the heights (1 unless the file's units are feet).
+    height_unit: f64,
     nodata: Option<f64>,
     /// What the tags say, but the sample type (known once samples are decoded).
     info: GeoTiffInfo,
@@ -313,8 +339,8 @@ impl Meta {
             || (sample_type == "float32" && self.nodata.is_some_and(|nd| v as f32 == single(nd)));
         match (void, self.scale_offset) {
             (true, _) => f64::NAN,
-            (false, Some((scale, offset))) => v * scale + offset,
-            (false, None) => v,
+            (false, Some((scale, offset))) => (v * scale + offset) * self.height_unit,
+            (false, None) => v * self.height_unit,
         }
     }
 }
@@ -476,10 +502,25 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         )));
     }
 
-    let (shape, conversion) = match georef.kind {
+    // Heights: in the unit `VerticalUnitsGeoKey` gives; without it, in the projected CRS's linear unit (metres for
+    // every other CRS).
+    let (height_unit, height_note) = match georef.height_unit {
+        Some(u) => (u, "VerticalUnitsGeoKey"),
+        None => (
+            georef.linear_unit,
+            "assumed: no VerticalUnitsGeoKey; --z-scale corrects them",
+        ),
+    };
+    let (shape, mut conversion) = match georef.kind {
         CrsKind::Projected => {
-            let (dx, dy) = opts.spacing.unwrap_or((sx, sy));
-            let origin = DVec2::new(x0, y0);
+            let m = georef.linear_unit.0;
+            let (dx, dy) = opts.spacing.unwrap_or((sx * m, sy * m));
+            let origin = DVec2::new(x0 * m, y0 * m);
+            let conversion = if m == 1.0 {
+                String::new()
+            } else {
+                format!("x, y in {} times {m} m", georef.linear_unit.1)
+            };
             (
                 GridShape {
                     rows,
@@ -488,7 +529,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
                     dy,
                     origin,
                 },
-                String::new(),
+                conversion,
             )
         }
         CrsKind::Geographic => {
@@ -497,11 +538,20 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
                 .map_err(|m| err(format!("the GeoKeys say geographic, but {m}")))?
         }
     };
+    if height_unit.0 != 1.0 {
+        let sep = if conversion.is_empty() { "" } else { "; " };
+        conversion = format!(
+            "{conversion}{sep}heights in {} times {} m ({height_note})",
+            height_unit.1, height_unit.0
+        );
+    }
     let info = GeoTiffInfo {
         crs_kind: georef.kind,
         epsg: georef.epsg,
         crs: georef.description,
         conversion,
+        heights_unit_assumed: georef.height_unit.is_none() && height_unit.0 != 1.0,
+        height_unit_m: height_unit.0,
         raster_type: georef.raster_type,
         native_bbox,
         native_spacing: (sx, sy),
@@ -519,6 +569,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         sample_bytes,
         chunk_ends,
         scale_offset,
+        height_unit: height_unit.0,
         nodata,
         info,
     };
@@ -657,12 +708,31 @@ struct Georef {
     raster_type: RasterType,
     /// Degrees per native angular unit (geographic only).
     angular_unit_deg: f64,
+    /// Metres per native linear unit (projected only; 1 for metres) and its name.
+    linear_unit: (f64, &'static str),
+    /// Metres per unit of the heights, when `VerticalUnitsGeoKey` gives it, and its name.
+    height_unit: Option<(f64, &'static str)>,
     /// Native spacing (x east, y south), both positive.
     scale: (f64, f64),
     /// Raster coordinates (column, row) of the tie point.
     tie_raster: (f64, f64),
     /// Native coordinates (x, y) of the tie point.
     tie_world: (f64, f64),
+}
+
+/// The metre, as a linear unit: metres per unit and the unit's name.
+const METRE: (f64, &str) = (1.0, "metres");
+
+/// The linear unit of EPSG unit code `code` (GeoTIFF's `ProjLinearUnitsGeoKey` and `VerticalUnitsGeoKey`): metres
+/// per unit and its name, for the metre (9001), the international foot (9002, 0.3048 m) and the US survey foot (9003,
+/// 1200/3937 m); None for any other.
+fn linear_unit_of(code: u16) -> Option<(f64, &'static str)> {
+    match code {
+        9001 => Some(METRE),
+        9002 => Some((0.3048, "international feet")),
+        9003 => Some((1200.0 / 3937.0, "US survey feet")),
+        _ => None,
+    }
 }
 
 /// Reads the GeoKeys, the pixel scale and tie point (or the transformation). Without a GeoKeyDirectory, a pixel scale
@@ -690,6 +760,8 @@ fn read_georef<R: Read + Seek>(
                         .into(),
                     raster_type: RasterType::PixelIsArea,
                     angular_unit_deg: 1.0,
+                    linear_unit: METRE,
+                    height_unit: None,
                     scale,
                     tie_raster,
                     tie_world,
@@ -708,6 +780,8 @@ fn read_georef<R: Read + Seek>(
                 description: "none (a plain TIFF: the given spacing, the south-western sample at (0, 0))".into(),
                 raster_type: RasterType::PixelIsPoint,
                 angular_unit_deg: 1.0,
+                linear_unit: METRE,
+                height_unit: None,
                 scale: (dx, dy),
                 tie_raster: (0.0, 0.0),
                 tie_world: (0.0, rows.saturating_sub(1) as f64 * dy),
@@ -752,7 +826,7 @@ fn read_georef<R: Read + Seek>(
         Some(c) => format!("{s}, \"{c}\""),
         None => s,
     };
-    let (kind, epsg, description, angular_unit_deg) = match short(key::MODEL_TYPE) {
+    let (kind, epsg, description, angular_unit_deg, linear_unit) = match short(key::MODEL_TYPE) {
         Some(1) => {
             let pcs = short(key::PROJECTED_CS_TYPE).filter(|&c| c != 32767 && c != 0);
             let metric_pcs = pcs.is_some_and(|c| {
@@ -764,9 +838,9 @@ fn read_georef<R: Read + Seek>(
                     || (32201..=32260).contains(&c)
                     || (32301..=32360).contains(&c)
             });
-            match short(key::PROJ_LINEAR_UNITS) {
-                Some(9001) => {}
-                None if metric_pcs => {}
+            let linear_unit = match short(key::PROJ_LINEAR_UNITS).map(|u| (u, linear_unit_of(u))) {
+                Some((_, Some(unit))) => unit,
+                None if metric_pcs => METRE,
                 None => {
                     return Err(err(format!(
                         "GeoKey ProjLinearUnitsGeoKey (3076) is missing and the projected CRS {} is not one known \
@@ -774,22 +848,18 @@ fn read_georef<R: Read + Seek>(
                         pcs.map_or("(user-defined)".to_string(), |c| format!("EPSG:{c}"))
                     )));
                 }
-                Some(u) => {
+                Some((u, None)) => {
                     return Err(err(format!(
-                        "GeoKey ProjLinearUnitsGeoKey (3076) = {u}: only metres (9001) are supported{}",
-                        match u {
-                            9002 => " (this is the international foot)",
-                            9003 => " (this is the US survey foot)",
-                            _ => "",
-                        }
+                        "GeoKey ProjLinearUnitsGeoKey (3076) = {u}: only metres (9001), international feet (9002) \
+                         and US survey feet (9003) are supported"
                     )));
                 }
-            }
+            };
             let d = cite(match pcs {
-                Some(c) => format!("EPSG:{c} (projected, metres)"),
-                None => "user-defined projected CRS (metres)".to_string(),
+                Some(c) => format!("EPSG:{c} (projected, {})", linear_unit.1),
+                None => format!("user-defined projected CRS ({})", linear_unit.1),
             });
-            (CrsKind::Projected, pcs, d, 1.0)
+            (CrsKind::Projected, pcs, d, 1.0, linear_unit)
         }
         Some(2) => {
             let gcs = short(key::GEOGRAPHIC_TYPE).filter(|&c| c != 32767 && c != 0);
@@ -808,7 +878,7 @@ fn read_georef<R: Read + Seek>(
                 Some(c) => format!("EPSG:{c} (geographic, {unit_name})"),
                 None => format!("user-defined geographic CRS ({unit_name})"),
             });
-            (CrsKind::Geographic, gcs, d, unit)
+            (CrsKind::Geographic, gcs, d, unit, METRE)
         }
         Some(3) => {
             return Err(err(
@@ -832,12 +902,23 @@ fn read_georef<R: Read + Seek>(
             "no ModelPixelScale (33550) and no ModelTransformation (34264): the raster has no georeference".into(),
         ));
     };
+    let height_unit = match short(key::VERTICAL_UNITS) {
+        None => None,
+        Some(u) => Some(linear_unit_of(u).ok_or_else(|| {
+            err(format!(
+                "GeoKey VerticalUnitsGeoKey (4099) = {u}: only metres (9001), international feet (9002) and US survey \
+                 feet (9003) are supported"
+            ))
+        })?),
+    };
     Ok(Georef {
         kind,
         epsg,
         description,
         raster_type,
         angular_unit_deg,
+        linear_unit,
+        height_unit,
         scale,
         tie_raster,
         tie_world,
