@@ -170,10 +170,10 @@ fn a_y_up_mesh_gets_a_hint() {
     );
 }
 
-/// A GeoTIFF in US survey feet without a vertical unit: every command that reads it says the heights were taken to
-/// be feet and how to undo that; `info` reports the conversion; x, y and heights come out in metres.
+/// A GeoTIFF in US survey feet without a vertical unit, and an `.asc` whose `.prj` is in feet: every command that reads
+/// them says the heights were taken to be feet and how to undo that; x, y and heights come out in metres.
 #[test]
-fn a_geotiff_in_feet_is_read_in_metres_with_a_warning() {
+fn dems_in_feet_are_read_in_metres_with_a_warning() {
     use tiff::encoder::{TiffEncoder, colortype};
     use tiff::tags::Tag;
     let dir = tempfile::tempdir().expect("tempdir");
@@ -211,6 +211,23 @@ fn a_geotiff_in_feet_is_read_in_metres_with_a_warning() {
     let obj = dir.path().join("ft.obj");
     let out = ok(&["tin", s(&tif), "--vertices", "12", "-o", s(&obj)]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("--z-scale"));
+    // An ESRI grid whose .prj is a state plane in US survey feet: the same warning.
+    let asc = dir.path().join("ft.asc");
+    std::fs::write(
+        &asc,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 100\n1 2 3\n4 9 6\n7 8 5\n",
+    )
+    .expect("asc");
+    std::fs::write(
+        dir.path().join("ft.prj"),
+        "PROJCS[\"NAD_1983_StatePlane_Texas_North_Central_FIPS_4202_Feet\",GEOGCS[\"GCS_North_American_1983\",\
+         DATUM[\"D_North_American_1983\",SPHEROID[\"GRS_1980\",6378137.0,298.257222101]],PRIMEM[\"Greenwich\",0.0],\
+         UNIT[\"Degree\",0.0174532925199433]],PROJECTION[\"Lambert_Conformal_Conic\"],UNIT[\"Foot_US\",0.3048006096012192]]",
+    )
+    .expect("prj");
+    let out = ok(&["info", s(&asc)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("Foot_US") && err.contains("--z-scale 3.28083333"), "{err}");
 }
 
 /// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and

@@ -215,26 +215,40 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
     }
 }
 
-/// Warns when a GeoTIFF's heights were taken to be in its projected CRS's feet without the file saying so
-/// ([`tin::dem::geotiff::GeoTiffInfo::heights_unit_assumed`]); nothing for other files, or one whose tags cannot be
-/// read (the reader names that error).
+/// Warns when a DEM's heights were taken to be in its projected CRS's feet without the file saying so (a GeoTIFF
+/// without `VerticalUnitsGeoKey`, [`tin::dem::geotiff::GeoTiffInfo::heights_unit_assumed`]; an `.asc` whose `.prj` is
+/// in feet); nothing for other files, or one whose header cannot be read (the reader names that error).
 pub fn warn_if_height_unit_assumed(path: &std::path::Path, opts: &tin::DemOptions, out: Output) {
-    let tif = path
+    let ext = path
         .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
-    if !tif {
-        return;
-    }
-    if let Ok(info) = tin::dem::geotiff::read_geotiff_tags(path, opts)
-        && info.heights_unit_assumed
-    {
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let assumed = match ext.as_str() {
+        "tif" | "tiff" => tin::dem::geotiff::read_geotiff_tags(path, opts)
+            .ok()
+            .filter(|i| i.heights_unit_assumed)
+            .map(|i| (i.conversion, i.height_unit_m)),
+        "asc" => tin::dem::asc::read_asc_height_unit(path, opts)
+            .ok()
+            .filter(|&u| u != 1.0)
+            .map(|u| {
+                (
+                    tin::dem::asc::read_asc_conversion(path, opts)
+                        .ok()
+                        .flatten()
+                        .unwrap_or_default(),
+                    u,
+                )
+            }),
+        _ => None,
+    };
+    if let Some((conversion, unit)) = assumed {
         out.warn(format!(
-            "{}: {}; the file does not say the heights' unit (no VerticalUnitsGeoKey), so they were taken to be in \
-             the same feet; if they are metres, give --z-scale {} to undo that",
+            "{}: {conversion}; the file does not say the heights' unit, so they were taken to be in the same feet; if \
+             they are metres, give --z-scale {} to undo that",
             path.display(),
-            info.conversion,
-            1.0 / info.height_unit_m
+            1.0 / unit
         ));
     }
 }

@@ -369,6 +369,102 @@ fn geographic_asc_is_put_into_metres_like_an_hgt_tile() {
     assert!((s.sample(n - 1, 0).expect("not void").y - 43.0 * METRES_PER_DEGREE).abs() < 1e-6);
 }
 
+/// A projected `.prj` in feet (US state-plane grids): coordinates, spacing and heights are put into metres, whole,
+/// in windows and in strips alike; the unit is found in each WKT form and never taken from the base geographic CRS.
+#[test]
+fn asc_in_feet_is_put_into_metres() {
+    use tin::dem::asc::prj_linear_unit;
+    let survey = 1200.0 / 3937.0;
+    let esri = format!(
+        "PROJCS[\"NAD_1983_StatePlane_Texas_North_Central_FIPS_4202_Feet\",{WGS84_PRJ},PROJECTION[\"Lambert\"],\
+         PARAMETER[\"False_Easting\",1968500.0],UNIT[\"Foot_US\",0.3048006096012192]]"
+    );
+    let epsg = format!(
+        "PROJCS[\"NAD83 / Texas North Central (ftUS)\",{WGS84_PRJ},PROJECTION[\"Lambert_Conformal_Conic_2SP\"],\
+         UNIT[\"US survey foot\",0.3048006096012192,AUTHORITY[\"EPSG\",\"9003\"]],AXIS[\"Easting\",EAST]]"
+    );
+    let wkt2 = "PROJCRS[\"NAD83 / Texas North Central (ftUS)\",BASEGEOGCRS[\"NAD83\",DATUM[\"North American Datum 1983\",\
+                ELLIPSOID[\"GRS 1980\",6378137,298.257222101,LENGTHUNIT[\"metre\",1]]],\
+                ANGLEUNIT[\"degree\",0.0174532925199433]],CONVERSION[\"x\",METHOD[\"Lambert\"],PARAMETER[\"False easting\",600000,LENGTHUNIT[\"metre\",1]]],\
+                CS[Cartesian,2],AXIS[\"easting (X)\",east,LENGTHUNIT[\"US survey foot\",0.304800609601219]]]";
+    assert_eq!(
+        prj_linear_unit(&esri),
+        Some((0.3048006096012192, "Foot_US".to_string()))
+    );
+    assert_eq!(prj_linear_unit(&epsg).map(|u| u.0), Some(0.3048006096012192));
+    assert_eq!(prj_linear_unit(wkt2).map(|u| u.0), Some(0.304800609601219));
+    assert_eq!(
+        prj_linear_unit(&format!("PROJCS[\"UTM\",{WGS84_PRJ},UNIT[\"Meter\",1.0]]")),
+        None
+    );
+    assert_eq!(prj_linear_unit(WGS84_PRJ), None, "a geographic CRS has no linear unit");
+    assert_eq!(prj_linear_unit("PROJCS[\"x\",UNIT[\"foot\",-1]]"), None);
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("ft.asc");
+    let (n, m) = (4usize, 5usize);
+    let mut text = format!("ncols {m}\nnrows {n}\nxllcorner 1000\nyllcorner 2000\ncellsize 10\nNODATA_value -9999\n");
+    for r in 0..n {
+        let row: Vec<String> = (0..m)
+            .map(|c| {
+                if (r, c) == (1, 1) {
+                    "-9999".into()
+                } else {
+                    (100 + r * 10 + c).to_string()
+                }
+            })
+            .collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&path, &text).expect("write");
+    let metres = read_dem(&path, &opts()).expect("no .prj: metres");
+    std::fs::write(dir.path().join("ft.prj"), &esri).expect("write");
+    let unit = 0.3048006096012192;
+    let g = read_dem(&path, &opts()).expect("feet");
+    assert_eq!((g.dx, g.dy), (10.0 * unit, 10.0 * unit));
+    assert_eq!(
+        g.origin,
+        DVec2::new(
+            1000.0 * unit + 5.0 * unit,
+            2000.0 * unit + 5.0 * unit + 3.0 * 10.0 * unit
+        )
+    );
+    assert!((unit - survey).abs() < 1e-15);
+    for (h, hm) in g.z.iter().zip(&metres.z) {
+        assert!(
+            h.to_bits() == (hm * unit).to_bits() || (h.is_nan() && hm.is_nan()),
+            "{h} {hm}"
+        );
+    }
+    assert_eq!(g.voids(), 1, "nodata is judged on the value as written");
+    let conversion = tin::dem::asc::read_asc_conversion(&path, &opts())
+        .expect("reads")
+        .expect("converted");
+    assert!(
+        conversion.contains("Foot_US") && conversion.contains("assumed"),
+        "{conversion}"
+    );
+    assert_eq!(
+        tin::dem::asc::read_asc_height_unit(&path, &opts()).expect("reads"),
+        unit
+    );
+    let w = tin::read_dem_window(&path, &opts(), [1, 3], [2, 4]).expect("window");
+    assert_eq!((w.dx, w.z[0]), (g.dx, g.z[m + 2]));
+    let mut strips = Vec::new();
+    tin::dem::read_dem_strips(&path, &opts(), 3, |_, z| {
+        strips.extend_from_slice(z);
+        Ok(())
+    })
+    .expect("strips");
+    assert!(
+        strips
+            .iter()
+            .zip(&g.z)
+            .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()))
+    );
+}
+
 #[test]
 fn asc_prj_forms_and_units() {
     let dir = tempfile::tempdir().expect("tempdir");

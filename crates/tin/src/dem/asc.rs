@@ -12,7 +12,10 @@
 //! The header has no CRS; a `.prj` beside the grid (same stem, as GDAL and ArcGIS write it) does. When its root is a
 //! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
 //! the corners and cell sizes are degrees (or the WKT's angular unit) and are put into metres as GeoTIFFs in degrees
-//! are (the frame of [`super::hgt`]); any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
+//! are (the frame of [`super::hgt`]). When its root is a projected CRS in feet ([`prj_linear_unit`]: WKT
+//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are), coordinates, cell sizes and heights (a `.prj` does not
+//! say the heights' unit; they are taken to be in the same feet) are multiplied into metres. Any other `.prj`, or
+//! none, means metres. An unreadable `.prj` is an error.
 //!
 //! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
 //! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values
@@ -46,6 +49,12 @@ pub fn read_asc_conversion(path: &Path, opts: &DemOptions) -> Result<Option<Stri
     Ok(read_header(path, opts)?.grid(path, opts)?.2)
 }
 
+/// Metres per unit of an ESRI ASCII grid's heights: 1, or the foot of a projected `.prj` in feet (a `.prj` does not
+/// say the heights' unit: they are taken to be in the same one).
+pub fn read_asc_height_unit(path: &Path, opts: &DemOptions) -> Result<f64> {
+    Ok(read_header(path, opts)?.grid(path, opts)?.1.unit)
+}
+
 /// The header of an ESRI ASCII grid, read up to its first line of values.
 fn read_header(path: &Path, opts: &DemOptions) -> Result<Header> {
     opts.check()?;
@@ -71,7 +80,7 @@ pub(super) fn read_asc_window(
     let mut lines = Lines::open(path)?;
     let file_len = lines.len;
     let mut h = Header::default();
-    let mut window: Option<(GridShape, Option<f64>)> = None;
+    let mut window: Option<(GridShape, Values)> = None;
     // Checked against the grid below, once the header is read: never underflows before that.
     let nc = cols[1].saturating_sub(cols[0]).saturating_add(1);
     let mut z = Vec::new();
@@ -174,7 +183,7 @@ pub(super) fn read_asc_strips(
     let err = |m: String| TinError::format(path, m);
     let mut lines = Lines::open(path)?;
     let mut h = Header::default();
-    let mut nodata = None;
+    let mut values = Values::default();
     let mut in_header = true;
     let (rows, cols) = (shape.rows, shape.cols);
     let expected = rows * cols;
@@ -189,7 +198,7 @@ pub(super) fn read_asc_strips(
                 continue;
             }
             in_header = false;
-            nodata = std::mem::take(&mut h).shape(path, opts)?.1;
+            values = std::mem::take(&mut h).shape(path, opts)?.1;
         }
         let before = k;
         for word in line.split_whitespace() {
@@ -199,7 +208,7 @@ pub(super) fn read_asc_strips(
                     counts.hint(cols, true)
                 )));
             }
-            z.push(sample(word, n, k, cols, nodata, path)?);
+            z.push(sample(word, n, k, cols, values, path)?);
             k += 1;
             if z.len() == strip {
                 each(first, &mut z)?;
@@ -222,13 +231,30 @@ pub(super) fn read_asc_strips(
 }
 
 /// The lines of a text file, read one at a time (1-based numbers), naming the file and line in errors.
-/// The height of the value `word` at index `k` of the grid (row-major, `cols` wide) on line `n`: NaN for a void (the
-/// nodata value, or NaN); an error naming the line and the 1-based row and column for anything else that is not a
+/// How a grid's values become heights: its nodata value, and metres per unit of the values (1, or the foot of a
+/// projected `.prj` in feet).
+#[derive(Clone, Copy, Debug)]
+struct Values {
+    nodata: Option<f64>,
+    unit: f64,
+}
+
+impl Default for Values {
+    fn default() -> Self {
+        Values {
+            nodata: None,
+            unit: 1.0,
+        }
+    }
+}
+
+/// The height of the value `word` at index `k` of the grid (row-major, `cols` wide) on line `n`, in metres: NaN for a
+/// void (the nodata value, or NaN); an error naming the line and the 1-based row and column for anything else that is not a
 /// finite number.
-fn sample(word: &str, n: usize, k: usize, cols: usize, nodata: Option<f64>, path: &Path) -> Result<f64> {
+fn sample(word: &str, n: usize, k: usize, cols: usize, values: Values, path: &Path) -> Result<f64> {
     match word.parse::<f64>() {
-        Ok(v) if nodata == Some(v) || v.is_nan() => Ok(f64::NAN),
-        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) if values.nodata == Some(v) || v.is_nan() => Ok(f64::NAN),
+        Ok(v) if v.is_finite() => Ok(v * values.unit),
         _ => Err(TinError::format(
             path,
             format!(
@@ -406,13 +432,14 @@ impl Header {
         Ok(true)
     }
 
-    /// The grid the header describes (with [`DemOptions::spacing`] applied) and its nodata value.
-    fn shape(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Option<f64>)> {
-        self.grid(path, opts).map(|(shape, nodata, _)| (shape, nodata))
+    /// The grid the header describes (with [`DemOptions::spacing`] applied) and how its values become heights.
+    fn shape(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Values)> {
+        self.grid(path, opts).map(|(shape, values, _)| (shape, values))
     }
 
-    /// [`Header::shape`], and how degrees were put into metres when the `.prj` says geographic.
-    fn grid(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Option<f64>, Option<String>)> {
+    /// [`Header::shape`], and how the coordinates (and heights) were put into metres when the `.prj` says geographic
+    /// or feet.
+    fn grid(self, path: &Path, opts: &DemOptions) -> Result<(GridShape, Values, Option<String>)> {
         let err = |m: String| TinError::format(path, m);
         let h = self;
         let missing = |key: &str| err(format!("the header has no {key} (not an ESRI ASCII grid?)"));
@@ -437,7 +464,12 @@ impl Header {
         rows.checked_mul(cols)
             .filter(|&n| n <= (1 << 31))
             .ok_or_else(|| err(format!("{rows} x {cols} samples is too many")))?;
-        let (shape, conversion) = if let Some((deg, prj)) = geographic_prj(path)? {
+        let prj = read_prj(path)?;
+        let mut unit = 1.0;
+        let (shape, conversion) = if let Some((deg, prj)) = prj
+            .as_ref()
+            .and_then(|(text, prj)| prj_geographic_unit(text).map(|deg| (deg, prj)))
+        {
             // The header's numbers are angles: the sample (0, 0) and spacing in degrees, then metres.
             let (dx, dy) = (header_spacing.0 * deg, header_spacing.1 * deg);
             let west = xll * deg + if x_corner { 0.5 * dx } else { 0.0 };
@@ -447,7 +479,15 @@ impl Header {
                 .map_err(|m| err(format!("{} says geographic, but {m}", prj.display())))?;
             (shape, Some(format!("{} (CRS from {})", conversion, prj.display())))
         } else {
-            let (dx, dy) = opts.spacing.unwrap_or(header_spacing);
+            // A projected CRS in feet: every coordinate (and, the `.prj` saying nothing of heights, every height) is
+            // multiplied into metres.
+            let feet = prj
+                .as_ref()
+                .and_then(|(text, prj)| prj_linear_unit(text).map(|u| (u, prj)));
+            let m = feet.as_ref().map_or(1.0, |((m, _), _)| *m);
+            unit = m;
+            let (dx, dy) = opts.spacing.unwrap_or((header_spacing.0 * m, header_spacing.1 * m));
+            let (xll, yll) = (xll * m, yll * m);
             let x0 = if x_corner { xll + 0.5 * dx } else { xll };
             let y_south = if y_corner { yll + 0.5 * dy } else { yll };
             let origin = DVec2::new(x0, y_south + (rows as f64 - 1.0) * dy);
@@ -458,9 +498,16 @@ impl Header {
                 dy,
                 origin,
             };
-            (shape, None)
+            let conversion = feet.map(|((m, name), prj)| {
+                format!(
+                    "x, y and heights in {name} times {m} m (CRS from {}; heights assumed in the same unit: a .prj does \
+                     not say theirs)",
+                    prj.display()
+                )
+            });
+            (shape, conversion)
         };
-        Ok((shape, h.nodata, conversion))
+        Ok((shape, Values { nodata: h.nodata, unit }, conversion))
     }
 }
 
@@ -506,16 +553,77 @@ pub fn prj_geographic_unit(text: &str) -> Option<f64> {
         .then_some(1.0)
 }
 
-/// The degrees per unit and path of the geographic `.prj` beside `grid`; None when there is none or it is not
-/// geographic.
-fn geographic_prj(grid: &Path) -> Result<Option<(f64, std::path::PathBuf)>> {
+/// The text and path of the `.prj` beside `grid`; None when there is none.
+fn read_prj(grid: &Path) -> Result<Option<(String, std::path::PathBuf)>> {
     let Some(prj) = prj_of(grid) else {
         return Ok(None);
     };
     let bytes = read_bytes(&prj)?;
-    let text = std::str::from_utf8(&bytes)
+    let text = String::from_utf8(bytes)
         .map_err(|_| TinError::format(&prj, String::from("not text: a .prj holds a CRS in WKT")))?;
-    Ok(prj_geographic_unit(text).map(|deg| (deg, prj)))
+    Ok(Some((text, prj)))
+}
+
+/// The linear unit of a projected CRS in WKT (root `PROJCS`, `PROJCRS` or `PROJECTEDCRS`) when it is not the metre:
+/// metres per unit and the unit's name, from the first `UNIT[name, factor]` or `LENGTHUNIT[…]` that is neither inside
+/// the base geographic CRS (its datum, ellipsoid or angular unit) nor a parameter's of the map projection (WKT 2's
+/// `CONVERSION`): the unit of the coordinates. None for metres, for any other CRS, and for a
+/// unit without a positive factor.
+pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
+    let t = text.trim_start_matches('\u{feff}').trim_start();
+    let upper = t.to_ascii_uppercase();
+    let root: String = upper.chars().take_while(|c| c.is_ascii_alphabetic()).collect();
+    if !matches!(root.as_str(), "PROJCS" | "PROJCRS" | "PROJECTEDCRS") {
+        return None;
+    }
+    // The keywords of the elements open at each bracket, outermost first.
+    let mut open: Vec<&str> = Vec::new();
+    let mut word_start = 0;
+    let mut quoted = false;
+    for (i, c) in upper.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            _ if quoted => {}
+            '[' | '(' => {
+                let word = upper[word_start..i].trim();
+                let inside_base = open.iter().any(|w| {
+                    matches!(
+                        *w,
+                        "GEOGCS"
+                            | "BASEGEOGCRS"
+                            | "BASEGEODCRS"
+                            | "GEOGCRS"
+                            | "GEODCRS"
+                            | "DATUM"
+                            | "SPHEROID"
+                            | "ELLIPSOID"
+                            | "CONVERSION"
+                            | "PARAMETER"
+                    )
+                });
+                if matches!(word, "UNIT" | "LENGTHUNIT") && !open.is_empty() && !inside_base {
+                    let mut parts = t[i + 1..].split([',', ']', ')']);
+                    let name = parts.next()?.trim().trim_matches('"').to_string();
+                    let factor = parts
+                        .next()?
+                        .trim()
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|f| f.is_finite() && *f > 0.0)?;
+                    return ((factor - 1.0).abs() > 1e-12).then_some((factor, name));
+                }
+                open.push(word);
+                word_start = i + 1;
+            }
+            ']' | ')' => {
+                open.pop();
+                word_start = i + 1;
+            }
+            ',' => word_start = i + 1,
+            _ => {}
+        }
+    }
+    None
 }
 
 /// Parses an ESRI ASCII grid held in memory; `path` names it in errors and locates its `.prj` (if any).
