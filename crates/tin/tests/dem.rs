@@ -874,3 +874,18 @@ fn real_srtm_tiles() {
     // Voids never become vertices.
     assert_eq!(g.points().len(), 1201 * 1201 - 50);
 }
+
+proptest::proptest! {
+    /// The `.prj` readers take any text, brackets and quotes unbalanced, non-ASCII included, without panicking; a
+    /// unit they return is positive and finite.
+    #[test]
+    fn prj_readers_take_any_text(body in "[A-Za-z\"\\[\\](),. 0-9é_-]{0,80}", root in 0usize..4) {
+        let text = format!("{}{body}", ["", "PROJCS[", "PROJCRS[\"x\",", "GEOGCS["][root]);
+        if let Some((m, _)) = tin::dem::asc::prj_linear_unit(&text) {
+            proptest::prop_assert!(m.is_finite() && m > 0.0);
+        }
+        if let Some(d) = tin::dem::asc::prj_geographic_unit(&text) {
+            proptest::prop_assert!(d.is_finite() && d > 0.0);
+        }
+    }
+}
