@@ -222,6 +222,20 @@ fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
     assert_eq!(m["triangles"], info["triangles"]);
     std::fs::remove_file(dir.path().join("mesh.tiles/part-00003.bin")).expect("remove");
     fails_with(&["tiles", "build", s(&plan), "--tile", "3"], "part-00003.bin");
+    // Unset sizes are a DEM's in mean vertex spacings (about 690 m here): 512 of them hold this 30 km mesh in one
+    // tile, with a 16-spacing halo, as a DEM of 2,000 samples would be planned.
+    let out = ok(&[
+        "tiles",
+        "plan",
+        s(&mesh("jacksboro-2k.obj")),
+        "-o",
+        s(&dir.path().join("d.json")),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("1 tiles (of a 1 x 1 grid of 353792 m squares), halo 11056 m"),
+        "{text}"
+    );
 }
 
 /// `tiles plan MESH` resolves vertices that share x,y as every command that reads a mesh: refused by default with an

@@ -34,6 +34,13 @@ pub enum TilesCommand {
     Merge(MergeArgs),
 }
 
+/// Default tile side of a DEM's plan, in sample intervals (a mesh's: in mean vertex spacings).
+const DEFAULT_TILE: usize = 512;
+/// Default halo of a DEM's plan, in samples (a mesh's: in mean vertex spacings).
+const DEFAULT_HALO: usize = 16;
+/// Default far-field block of a DEM's plan, in samples (a mesh's: in mean vertex spacings).
+const DEFAULT_FAR_BLOCK: usize = 16;
+
 /// Arguments of `tincull tiles plan`.
 #[derive(Debug, Args)]
 pub struct PlanArgs {
@@ -52,17 +59,18 @@ pub struct PlanArgs {
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
     #[arg(short, long)]
     pub out: PathBuf,
-    /// Largest tile side, in sample intervals (a mesh: metres).
-    #[arg(long, default_value_t = 512)]
-    pub tile: usize,
+    /// Largest tile side, in sample intervals (a mesh: metres) [default: 512 samples; a mesh: 512 times its mean
+    /// vertex spacing, the side of a square of its area over its vertices]
+    #[arg(long)]
+    pub tile: Option<usize>,
     /// Width of the full-resolution halo around each tile whose samples its horizons see, in samples (a mesh:
-    /// metres, its vertices).
-    #[arg(long, default_value_t = 16)]
-    pub halo: usize,
+    /// metres, its vertices) [default: 16 samples; a mesh: 16 mean vertex spacings]
+    #[arg(long)]
+    pub halo: Option<usize>,
     /// Side of the far field's blocks in samples: each contributes its lowest sample, lowered by --max-error (a
-    /// mesh: metres, its lowest vertex).
-    #[arg(long, default_value_t = 16)]
-    pub far_block: usize,
+    /// mesh: metres, its lowest vertex) [default: 16 samples; a mesh: 16 mean vertex spacings]
+    #[arg(long)]
+    pub far_block: Option<usize>,
     /// Far-field blocks double in size with distance, keeping each within about 1/R radian seen from the tile, so
     /// a tile's far field grows with the logarithm of the terrain, not its area; 0 keeps every block at
     /// --far-block.
@@ -136,10 +144,11 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }
     files.check(&args.out)?;
     let params = args.params.resolve(args.config.as_deref())?;
+    // In samples for a DEM; a mesh's plan scales them by its vertex spacing (`plan_mesh`).
     let options = PlanOptions {
-        tile: args.tile,
-        halo: args.halo,
-        far_block: args.far_block,
+        tile: args.tile.unwrap_or(DEFAULT_TILE),
+        halo: args.halo.unwrap_or(DEFAULT_HALO),
+        far_block: args.far_block.unwrap_or(DEFAULT_FAR_BLOCK),
         far_ratio: args.far_ratio,
         max_error: args.max_error,
         params,
@@ -158,7 +167,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let dem = args.read.options();
     super::mesh_input::warn_if_height_unit_assumed(&args.dem, &dem, out);
     let bar = out.progress(0, "reading DEM rows");
-    let (mut plan, field) = tiles::make_plan(&source, dem, options, &tiles_dir, |done, rows| {
+    let (mut plan, field) = tiles::make_plan(&source, dem, options.clone(), &tiles_dir, |done, rows| {
         bar.set_length(rows as u64);
         bar.set_position(done as u64);
     })?;
@@ -191,8 +200,8 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         grid.cols,
         args.out.display(),
         plan.tiles.len(),
-        args.tile,
-        args.halo,
+        options.tile,
+        options.halo,
         field.finest(),
         far_points,
         dir.display()
@@ -226,7 +235,21 @@ fn plan_mesh(
         dem: DemArgs::default(),
     };
     let (tin, _) = mesh.load(out)?;
-    let (mut plan, parts) = tiles::make_mesh_plan(&tin, source, options, tiles_dir)?;
+    // Unset sizes as a DEM's in samples, a sample being the mesh's mean vertex spacing: the side of a square of its
+    // footprint's area over its vertices (whole metres, at least 1).
+    let size = tin.bbox().size();
+    let spacing = (size.x * size.y / tin.num_vertices().max(1) as f64)
+        .sqrt()
+        .ceil()
+        .max(1.0);
+    let scaled = |given: Option<usize>, samples: usize| given.unwrap_or((samples as f64 * spacing) as usize);
+    let options = PlanOptions {
+        tile: scaled(args.tile, DEFAULT_TILE),
+        halo: scaled(args.halo, DEFAULT_HALO),
+        far_block: scaled(args.far_block, DEFAULT_FAR_BLOCK),
+        ..options
+    };
+    let (mut plan, parts) = tiles::make_mesh_plan(&tin, source, options.clone(), tiles_dir)?;
     let dir = Plan::resolve(&args.out, tiles_dir);
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let paths: Vec<PathBuf> = plan
@@ -258,9 +281,9 @@ fn plan_mesh(
         tin.num_triangles(),
         args.out.display(),
         plan.tiles.len(),
-        args.tile,
-        args.halo,
-        args.far_block,
+        options.tile,
+        options.halo,
+        options.far_block,
         dir.display()
     ));
     out.json(&json!({
