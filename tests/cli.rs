@@ -230,6 +230,46 @@ fn dems_in_feet_are_read_in_metres_with_a_warning() {
     assert!(err.contains("Foot_US") && err.contains("--z-scale 3.28083333"), "{err}");
 }
 
+/// A GeoTIFF with GDAL's internal nodata mask (an image tagged as a mask after the samples): the commands that read
+/// it say that the mask is not applied.
+#[test]
+fn a_geotiff_mask_is_named() {
+    use tiff::encoder::{TiffEncoder, colortype};
+    use tiff::tags::Tag;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tif = dir.path().join("masked.tif");
+    {
+        let mut enc = TiffEncoder::new(std::fs::File::create(&tif).expect("create")).expect("encoder");
+        let mut img = enc.new_image::<colortype::Gray32Float>(4, 3).expect("image");
+        let keys: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3076, 0, 1, 9001];
+        img.encoder()
+            .write_tag(Tag::GeoKeyDirectoryTag, &keys[..])
+            .expect("tag");
+        img.encoder()
+            .write_tag(Tag::ModelPixelScaleTag, &[30.0f64, 30.0, 0.0][..])
+            .expect("tag");
+        img.encoder()
+            .write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 0.0, 90.0, 0.0][..])
+            .expect("tag");
+        let z: Vec<f32> = (0..12).map(|i| 100.0 + (i * 7 % 5) as f32).collect();
+        img.write_data(&z).expect("data");
+        let mut mask = enc.new_image::<colortype::Gray8>(4, 3).expect("mask");
+        mask.encoder().write_tag(Tag::NewSubfileType, 4u32).expect("tag");
+        mask.write_data(&[255u8; 12]).expect("data");
+    }
+    for args in [
+        vec!["info", s(&tif)],
+        vec!["tin", s(&tif), "--vertices", "6", "-o", "-"],
+    ] {
+        let out = ok(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("an internal mask (image 2 of the file), which tincull does not apply"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
 /// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and
 /// an eye off the terrain is an error naming it.
 #[test]

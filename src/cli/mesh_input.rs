@@ -217,8 +217,9 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
 
 /// Warns when a DEM's heights were taken to be in its projected CRS's feet without the file saying so (a GeoTIFF
 /// without `VerticalUnitsGeoKey`, [`tin::dem::geotiff::GeoTiffInfo::heights_unit_assumed`]; an `.asc` whose `.prj` is
-/// in feet); nothing for other files, or one whose header cannot be read (the reader names that error).
-pub fn warn_if_height_unit_assumed(path: &std::path::Path, opts: &tin::DemOptions, out: Output) {
+/// in feet), and when a GeoTIFF has a nodata mask that is not applied ([`tin::dem::geotiff::nodata_mask`]); nothing
+/// for other files, or one whose header cannot be read (the reader names that error).
+pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: Output) {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -243,6 +244,15 @@ pub fn warn_if_height_unit_assumed(path: &std::path::Path, opts: &tin::DemOption
             }),
         _ => None,
     };
+    if matches!(ext.as_str(), "tif" | "tiff")
+        && let Some(mask) = tin::dem::geotiff::nodata_mask(path)
+    {
+        out.warn(format!(
+            "{}: has {mask}, which tincull does not apply: samples under it are read as heights; give the file a \
+             nodata value instead (e.g. gdal_translate -a_nodata -9999 after filling the masked samples with it)",
+            path.display()
+        ));
+    }
     if let Some((conversion, unit)) = assumed {
         out.warn(format!(
             "{}: {conversion}; the file does not say the heights' unit, so they were taken to be in the same feet; if \
@@ -397,7 +407,7 @@ impl MeshArgs {
         };
         spinner.finish_and_clear();
         warn_if_degrees(&grid, &self.mesh, out);
-        warn_if_height_unit_assumed(&self.mesh, &opts, out);
+        warn_about_dem_file(&self.mesh, &opts, out);
         let bar = out.progress(self.dem_vertices as u64, "simplifying DEM");
         let progress = |v: usize| bar.set_position(v as u64);
         let simplify = tin::SimplifyOptions {

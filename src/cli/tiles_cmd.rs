@@ -165,7 +165,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }
     args.up.check_dem(&args.dem)?;
     let dem = args.read.options();
-    super::mesh_input::warn_if_height_unit_assumed(&args.dem, &dem, out);
+    super::mesh_input::warn_about_dem_file(&args.dem, &dem, out);
     let bar = out.progress(0, "reading DEM rows");
     let (mut plan, field) = tiles::make_plan(&source, dem, options.clone(), &tiles_dir, |done, rows| {
         bar.set_length(rows as u64);

@@ -51,7 +51,7 @@ pub fn run(args: &TinArgs, mut out: Output) -> Result<()> {
     let grid = tin::read_dem(&args.dem, &dem_opts)?;
     spinner.finish_and_clear();
     super::mesh_input::warn_if_degrees(&grid, &args.dem, out);
-    super::mesh_input::warn_if_height_unit_assumed(&args.dem, &dem_opts, out);
+    super::mesh_input::warn_about_dem_file(&args.dem, &dem_opts, out);
     if args.keep_grid {
         return keep_grid(args, &grid, files, start, out);
     }

@@ -494,6 +494,58 @@ fn feet_are_put_into_metres() {
     assert!(i.conversion.is_empty());
 }
 
+/// GDAL's nodata masks are found (not applied): an image tagged as a transparency mask after the samples, or a
+/// `.msk` file beside the GeoTIFF.
+#[test]
+fn nodata_masks_are_found() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("m.tif");
+    let write = |mask: bool| {
+        let mut buf = Cursor::new(Vec::new());
+        {
+            let mut enc = TiffEncoder::new(&mut buf).expect("encoder");
+            let mut img = enc.new_image::<colortype::GrayI16>(3, 2).expect("image");
+            img.encoder()
+                .write_tag(Tag::GeoKeyDirectoryTag, &KEYS_UTM[..])
+                .expect("tag");
+            img.encoder()
+                .write_tag(Tag::ModelPixelScaleTag, &[10.0f64, 10.0, 0.0][..])
+                .expect("tag");
+            img.encoder()
+                .write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 5e5, 4e6, 0.0][..])
+                .expect("tag");
+            img.write_data(&[1i16, 2, 3, 4, 5, 6]).expect("data");
+            let mut second = enc.new_image::<colortype::Gray8>(3, 2).expect("image");
+            if mask {
+                second.encoder().write_tag(Tag::NewSubfileType, 4u32).expect("tag");
+            }
+            second.write_data(&[255u8, 0, 255, 255, 255, 255]).expect("data");
+        }
+        std::fs::write(&path, buf.into_inner()).expect("write");
+    };
+    write(false);
+    assert_eq!(tin::dem::geotiff::nodata_mask(&path), None);
+    assert_eq!(
+        read_geotiff_info(&path, &DemOptions::default()).expect("reads").0.z[1],
+        2.0
+    );
+    write(true);
+    let found = tin::dem::geotiff::nodata_mask(&path).expect("internal mask");
+    assert!(found.contains("internal mask (image 2"), "{found}");
+    assert_eq!(
+        read_geotiff_info(&path, &DemOptions::default()).expect("reads").0.z[1],
+        2.0,
+        "the samples as before"
+    );
+    write(false);
+    std::fs::write(dir.path().join("m.tif.msk"), b"II*\0").expect("msk");
+    assert!(
+        tin::dem::geotiff::nodata_mask(&path)
+            .expect("external")
+            .contains("m.tif.msk")
+    );
+}
+
 #[test]
 fn clear_errors() {
     let data = vec![1i16; 6];

@@ -40,7 +40,9 @@
 //! - A geocentric or user-defined model, radians or grads, a rotated or sheared transformation,
 //!   several tie points, or a south-up raster are errors naming the file and the tag.
 //!
-//! [`DemOptions::spacing`] overrides the spacing (the origin stays where the georeference puts it).
+//! [`DemOptions::spacing`] overrides the spacing (the origin stays where the georeference puts it). GDAL's nodata
+//! masks (an internal mask image, or a `.msk` file) are not applied: [`nodata_mask`] finds them, and tincull warns
+//! that the samples under them are read as heights.
 //! [`read_geotiff_info`] also returns what was found ([`GeoTiffInfo`]: the CRS, units, raster type, the native
 //! bounding box), which `tincull info` prints.
 
@@ -201,6 +203,32 @@ pub fn read_geotiff_tags(path: &Path, opts: &DemOptions) -> Result<GeoTiffInfo> 
     opts.check()?;
     let file = std::io::BufReader::new(open(path)?);
     Ok(open_tiff(file, path, opts)?.1.info)
+}
+
+/// The nodata mask GDAL may keep beside a GeoTIFF's samples, which this reader does not apply: an image of the file
+/// marked as a transparency mask (`NewSubfileType` bit 2, as `GDAL_TIFF_INTERNAL_MASK` writes it; the first 64 images
+/// are looked at), or a `.msk` file beside it (`dem.tif.msk`). Described in words, or None when there is none or the
+/// file cannot be read (the reader names that error).
+pub fn nodata_mask(path: &Path) -> Option<String> {
+    let external = std::path::PathBuf::from(format!("{}.msk", path.display()));
+    if external.is_file() {
+        return Some(format!("the mask file {}", external.display()));
+    }
+    let mut dec = Decoder::new(std::io::BufReader::new(open(path).ok()?)).ok()?;
+    for image in 1..64 {
+        if !dec.more_images() || dec.next_image().is_err() {
+            break;
+        }
+        if dec
+            .find_tag_unsigned::<u32>(Tag::NewSubfileType)
+            .ok()
+            .flatten()
+            .is_some_and(|t| t & 4 != 0)
+        {
+            return Some(format!("an internal mask (image {} of the file)", image + 1));
+        }
+    }
+    None
 }
 
 /// The samples of a window of a GeoTIFF (voids NaN, not scaled) and its whole grid: only the strips or tiles
