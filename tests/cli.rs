@@ -168,6 +168,27 @@ fn a_y_up_mesh_gets_a_hint() {
         ],
         "applies to OBJ",
     );
+    // The other mesh-only flags are refused for a DEM too, by every command, rather than ignored.
+    fails_with(
+        &["build", s(&grid), "--keep-faces", "-o", s(&dir.path().join("g.tch"))],
+        "--keep-faces applies to OBJ meshes",
+    );
+    fails_with(
+        &["info", s(&grid), "--dedupe", "keep-highest"],
+        "--dedupe keep-highest applies to OBJ meshes",
+    );
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&grid),
+            "--keep-faces",
+            "-o",
+            s(&dir.path().join("p.json")),
+        ],
+        "--keep-faces applies to OBJ meshes",
+    );
+    assert!(!dir.path().join("g.tch").exists() && !dir.path().join("p.json").exists());
 }
 
 /// A GeoTIFF in US survey feet without a vertical unit, and an `.asc` whose `.prj` is in feet: every command that reads

@@ -13,7 +13,7 @@ use tin::{DedupePolicy, ObjImportOptions, ObjImportReport, Tin};
 use super::Output;
 
 /// How to resolve input points that share x,y but differ in z.
-#[derive(Clone, Copy, Debug, Default, ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum DedupeArg {
     /// Reject the input with an error naming both points.
     #[default]
@@ -40,19 +40,25 @@ impl UpArg {
             UpArg::Y => tin::UpAxis::Y,
         }
     }
+}
 
-    /// An error when an up axis other than z is given for the DEM grid `path` (its samples are heights).
-    pub fn check_dem(self, path: &std::path::Path) -> Result<()> {
-        if self != UpArg::Z {
-            bail!(
-                "{}: --up {} applies to OBJ meshes; a DEM grid's samples are heights",
-                path.display(),
-                self.to_possible_value()
-                    .map_or_else(String::new, |v| v.get_name().to_string())
-            );
-        }
-        Ok(())
-    }
+/// An error when a flag that applies to OBJ meshes only (`--keep-faces`, `--dedupe keep-highest`, `--up y`) is given
+/// for the DEM grid `path`, rather than ignoring it: a DEM's samples are heights on a grid, triangulated by tincull.
+pub fn refuse_mesh_flags_for_dem(path: &std::path::Path, keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Result<()> {
+    let name = |v: Option<clap::builder::PossibleValue>| v.map_or_else(String::new, |v| v.get_name().to_string());
+    let flag = if keep_faces {
+        String::from("--keep-faces")
+    } else if dedupe != DedupeArg::Reject {
+        format!("--dedupe {}", name(dedupe.to_possible_value()))
+    } else if up != UpArg::Z {
+        format!("--up {}", name(up.to_possible_value()))
+    } else {
+        return Ok(());
+    };
+    bail!(
+        "{}: {flag} applies to OBJ meshes; a DEM grid's samples are heights on a grid, triangulated by tincull",
+        path.display()
+    )
 }
 
 /// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
@@ -344,7 +350,7 @@ impl MeshArgs {
             );
         }
         if is_dem(&self.mesh) {
-            self.up.check_dem(&self.mesh)?;
+            refuse_mesh_flags_for_dem(&self.mesh, self.keep_faces, self.dedupe, self.up)?;
             return self.load_dem(out);
         }
         let opts = ObjImportOptions {

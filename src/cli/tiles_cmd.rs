@@ -163,7 +163,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     if !is_dem(&args.dem) {
         return plan_mesh(args, out, files, options, &source, &tiles_dir);
     }
-    args.up.check_dem(&args.dem)?;
+    super::mesh_input::refuse_mesh_flags_for_dem(&args.dem, args.keep_faces, args.dedupe, args.up)?;
     let dem = args.read.options();
     super::mesh_input::warn_about_dem_file(&args.dem, &dem, out);
     let bar = out.progress(0, "reading DEM rows");

@@ -399,6 +399,21 @@ fn asc_in_feet_is_put_into_metres() {
     );
     assert_eq!(prj_linear_unit(WGS84_PRJ), None, "a geographic CRS has no linear unit");
     assert_eq!(prj_linear_unit("PROJCS[\"x\",UNIT[\"foot\",-1]]"), None);
+    // The old ESRI text form: `Units FEET` is the US survey foot, metres and geographic grids are not feet.
+    let esri_text = "Projection    STATEPLANE\nFipszone      4202\nDatum         NAD83\nZunits        NO\nUnits         FEET\n\
+                Spheroid      GRS1980\nXshift        0.0\nYshift        0.0\nParameters\n";
+    assert_eq!(prj_linear_unit(esri_text).map(|u| u.0), Some(survey));
+    assert_eq!(
+        prj_linear_unit(&esri_text.replace("FEET", "INTERNATIONAL FEET")).map(|u| u.0),
+        Some(0.3048)
+    );
+    assert_eq!(prj_linear_unit(&esri_text.replace("FEET", "METERS")), None);
+    assert_eq!(prj_linear_unit("Projection GEOGRAPHIC\nUnits DD\n"), None);
+    assert_eq!(
+        prj_linear_unit("Projection UTM\nZone 10\n"),
+        None,
+        "no Units line: metres"
+    );
 
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("ft.asc");
@@ -463,6 +478,19 @@ fn asc_in_feet_is_put_into_metres() {
             .zip(&g.z)
             .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()))
     );
+    // The same grid beside a `.prj` in the old ESRI text form: the same metres.
+    std::fs::write(dir.path().join("ft.prj"), esri_text).expect("write");
+    let e = read_dem(&path, &opts()).expect("feet, ESRI text form");
+    assert_eq!((e.dx, e.origin), (g.dx, g.origin));
+    assert!(
+        e.z.iter()
+            .zip(&g.z)
+            .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()))
+    );
+    let conversion = tin::dem::asc::read_asc_conversion(&path, &opts())
+        .expect("reads")
+        .expect("converted");
+    assert!(conversion.contains("Units FEET"), "{conversion}");
 }
 
 #[test]

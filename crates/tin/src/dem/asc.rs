@@ -13,7 +13,7 @@
 //! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
 //! the corners and cell sizes are degrees (or the WKT's angular unit) and are put into metres as GeoTIFFs in degrees
 //! are (the frame of [`super::hgt`]). When its root is a projected CRS in feet ([`prj_linear_unit`]: WKT
-//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are), coordinates, cell sizes and heights (a `.prj` does not
+//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are, or the old ESRI text form's `Units FEET`), coordinates, cell sizes and heights (a `.prj` does not
 //! say the heights' unit; they are taken to be in the same feet) are multiplied into metres. Any other `.prj`, or
 //! none, means metres. An unreadable `.prj` is an error.
 //!
@@ -567,12 +567,15 @@ fn read_prj(grid: &Path) -> Result<Option<(String, std::path::PathBuf)>> {
 /// The linear unit of a projected CRS in WKT (root `PROJCS`, `PROJCRS` or `PROJECTEDCRS`) when it is not the metre:
 /// metres per unit and the unit's name, from the first `UNIT[name, factor]` or `LENGTHUNIT[…]` that is neither inside
 /// the base geographic CRS (its datum, ellipsoid or angular unit) nor a parameter's of the map projection (WKT 2's
-/// `CONVERSION`): the unit of the coordinates. None for metres, for any other CRS, and for a
-/// unit without a positive factor.
+/// `CONVERSION`): the unit of the coordinates. The old ESRI text form (`Projection …` then `Units FEET`) is read too.
+/// None for metres, for any other CRS, and for a unit without a positive factor.
 pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
     let t = text.trim_start_matches('\u{feff}').trim_start();
     let upper = t.to_ascii_uppercase();
     let root: String = upper.chars().take_while(|c| c.is_ascii_alphabetic()).collect();
+    if root == "PROJECTION" {
+        return esri_text_linear_unit(t);
+    }
     if !matches!(root.as_str(), "PROJCS" | "PROJCRS" | "PROJECTEDCRS") {
         return None;
     }
@@ -624,6 +627,31 @@ pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
         }
     }
     None
+}
+
+/// The linear unit of the old ESRI text form of a `.prj` (`Projection UTM`, `Units FEET`, …) when it is not the
+/// metre: `Units FEET` is the US survey foot, as ArcInfo and GDAL read it, and `Units INTERNATIONAL_FEET` (or any
+/// unit naming both "INT" and "FEET") the international foot. None for `Projection GEOGRAPHIC`, for metres and for a
+/// unit it does not know.
+fn esri_text_linear_unit(t: &str) -> Option<(f64, String)> {
+    let field = |key: &str| {
+        t.lines().find_map(|l| {
+            let mut w = l.split_whitespace();
+            (w.next()?.eq_ignore_ascii_case(key)).then(|| w.collect::<Vec<_>>().join("_").to_ascii_uppercase())
+        })
+    };
+    if field("projection")? == "GEOGRAPHIC" {
+        return None;
+    }
+    let units = field("units")?;
+    if !units.contains("FEET") && !units.contains("FOOT") {
+        return None;
+    }
+    Some(if units.contains("INT") {
+        (0.3048, format!("international feet (Units {units})"))
+    } else {
+        (1200.0 / 3937.0, format!("US survey feet (Units {units})"))
+    })
 }
 
 /// Parses an ESRI ASCII grid held in memory; `path` names it in errors and locates its `.prj` (if any).
