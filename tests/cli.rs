@@ -251,10 +251,10 @@ fn dems_in_feet_are_read_in_metres_with_a_warning() {
     assert!(err.contains("Foot_US") && err.contains("--z-scale 3.28083333"), "{err}");
 }
 
-/// A GeoTIFF with GDAL's internal nodata mask (an image tagged as a mask after the samples): the commands that read
-/// it say that the mask is not applied.
+/// A GeoTIFF with GDAL's internal nodata mask (an image tagged as a mask after the samples): the samples it marks
+/// invalid are voids, and `info` says so.
 #[test]
-fn a_geotiff_mask_is_named() {
+fn a_geotiff_mask_is_applied() {
     use tiff::encoder::{TiffEncoder, colortype};
     use tiff::tags::Tag;
     let dir = tempfile::tempdir().expect("tempdir");
@@ -276,19 +276,20 @@ fn a_geotiff_mask_is_named() {
         img.write_data(&z).expect("data");
         let mut mask = enc.new_image::<colortype::Gray8>(4, 3).expect("mask");
         mask.encoder().write_tag(Tag::NewSubfileType, 4u32).expect("tag");
-        mask.write_data(&[255u8; 12]).expect("data");
+        let mut valid = [255u8; 12];
+        valid[5] = 0;
+        mask.write_data(&valid).expect("data");
     }
-    for args in [
-        vec!["info", s(&tif)],
-        vec!["tin", s(&tif), "--vertices", "6", "-o", "-"],
-    ] {
-        let out = ok(&args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains("an internal mask (image 2 of the file), which tincull does not apply"),
-            "{args:?}: {err}"
-        );
-    }
+    let out = ok(&["info", s(&tif)]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("(1 voids)")
+            && said.contains("nodata mask   an internal nodata mask (image 2 of the file): 1 samples voided"),
+        "{said}"
+    );
+    let out = ok(&["info", s(&tif), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(v["dem"]["voids"], 1, "{v}");
 }
 
 /// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and

@@ -57,6 +57,9 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
                     "  heights       sample x {scale} + {offset} (GDAL scale and offset)"
                 ));
             }
+            if let Some(mask) = &g.nodata_mask {
+                out.say(format!("  nodata mask   {mask}"));
+            }
         }
         out.say(format!(
             "  simplified    to {} vertices (max error {:.3} m; --dem-vertices)",

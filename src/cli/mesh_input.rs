@@ -223,8 +223,7 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
 
 /// Warns when a DEM's heights were taken to be in its projected CRS's feet without the file saying so (a GeoTIFF
 /// without `VerticalUnitsGeoKey`, [`tin::dem::geotiff::GeoTiffInfo::heights_unit_assumed`]; an `.asc` whose `.prj` is
-/// in feet), and when a GeoTIFF has a nodata mask that is not applied ([`tin::dem::geotiff::nodata_mask`]); nothing
-/// for other files, or one whose header cannot be read (the reader names that error).
+/// in feet); nothing for other files, or one whose header cannot be read (the reader names that error).
 pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: Output) {
     let ext = path
         .extension()
@@ -250,15 +249,6 @@ pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: 
             }),
         _ => None,
     };
-    if matches!(ext.as_str(), "tif" | "tiff")
-        && let Some(mask) = tin::dem::geotiff::nodata_mask(path)
-    {
-        out.warn(format!(
-            "{}: has {mask}, which tincull does not apply: samples under it are read as heights; give the file a \
-             nodata value instead (e.g. gdal_translate -a_nodata -9999 after filling the masked samples with it)",
-            path.display()
-        ));
-    }
     if let Some((conversion, unit)) = assumed {
         out.warn(format!(
             "{}: {conversion}; the file does not say the heights' unit, so they were taken to be in the same feet; if \

@@ -494,13 +494,61 @@ fn feet_are_put_into_metres() {
     assert!(i.conversion.is_empty());
 }
 
-/// GDAL's nodata masks are found (not applied): an image tagged as a transparency mask after the samples, or a
-/// `.msk` file beside the GeoTIFF.
+/// Appends to the little-endian classic TIFF `tiff` an uncompressed 1-bit image of `w` × `h` samples as GDAL writes
+/// a nodata mask (`PhotometricInterpretation` 4, `NewSubfileType` `subfile`), rows of whole bytes, most significant
+/// bit first; the last image's next-IFD pointer is set to it.
+fn append_bit_mask(tiff: &mut Vec<u8>, w: u32, h: u32, rows: &[u8], subfile: u32) {
+    let u16_at = |b: &[u8], o: usize| usize::from(u16::from_le_bytes([b[o], b[o + 1]]));
+    let u32_at = |b: &[u8], o: usize| u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]) as usize;
+    let mut ifd = u32_at(tiff, 4);
+    let next_at = loop {
+        let next_at = ifd + 2 + 12 * u16_at(tiff, ifd);
+        match u32_at(tiff, next_at) {
+            0 => break next_at,
+            next => ifd = next,
+        }
+    };
+    let data_at = tiff.len() as u32;
+    tiff.extend_from_slice(rows);
+    if tiff.len() % 2 == 1 {
+        tiff.push(0);
+    }
+    let ifd_at = tiff.len() as u32;
+    tiff[next_at..next_at + 4].copy_from_slice(&ifd_at.to_le_bytes());
+    let (short, long) = (3u16, 4u16);
+    let entries: [(u16, u16, u32); 11] = [
+        (254, long, subfile),
+        (256, short, w),
+        (257, short, h),
+        (258, short, 1),
+        (259, short, 1),
+        (262, short, 4),
+        (273, long, data_at),
+        (277, short, 1),
+        (278, short, h),
+        (279, long, rows.len() as u32),
+        (284, short, 1),
+    ];
+    tiff.extend_from_slice(&(entries.len() as u16).to_le_bytes());
+    for (tag, ty, value) in entries {
+        tiff.extend_from_slice(&tag.to_le_bytes());
+        tiff.extend_from_slice(&ty.to_le_bytes());
+        tiff.extend_from_slice(&1u32.to_le_bytes());
+        // A SHORT is left-justified in the value field: its little-endian bytes, then zeros, as a LONG's.
+        tiff.extend_from_slice(&value.to_le_bytes());
+    }
+    tiff.extend_from_slice(&0u32.to_le_bytes());
+}
+
+/// GDAL's nodata masks are applied, whole and in windows: an 8-bit mask image, a 1-bit transparency mask as GDAL
+/// writes it (which the `tiff` crate alone refuses to decode), and a `.msk` file beside the GeoTIFF; an overview's
+/// mask is not the image's; a `.msk` of another size is an error naming it.
 #[test]
-fn nodata_masks_are_found() {
+fn nodata_masks_are_applied() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("m.tif");
-    let write = |mask: bool| {
+    // The samples, with an 8-bit mask image after them when `mask` (0 at sample 1).
+    let encode = |mask: Option<u32>| {
         let mut buf = Cursor::new(Vec::new());
         {
             let mut enc = TiffEncoder::new(&mut buf).expect("encoder");
@@ -515,35 +563,77 @@ fn nodata_masks_are_found() {
                 .write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 5e5, 4e6, 0.0][..])
                 .expect("tag");
             img.write_data(&[1i16, 2, 3, 4, 5, 6]).expect("data");
-            let mut second = enc.new_image::<colortype::Gray8>(3, 2).expect("image");
-            if mask {
-                second.encoder().write_tag(Tag::NewSubfileType, 4u32).expect("tag");
+            if let Some(kind) = mask {
+                let mut second = enc.new_image::<colortype::Gray8>(3, 2).expect("image");
+                second.encoder().write_tag(Tag::NewSubfileType, kind).expect("tag");
+                second.write_data(&[255u8, 0, 255, 255, 255, 255]).expect("data");
             }
-            second.write_data(&[255u8, 0, 255, 255, 255, 255]).expect("data");
         }
-        std::fs::write(&path, buf.into_inner()).expect("write");
+        buf.into_inner()
     };
-    write(false);
-    assert_eq!(tin::dem::geotiff::nodata_mask(&path), None);
-    assert_eq!(
-        read_geotiff_info(&path, &DemOptions::default()).expect("reads").0.z[1],
-        2.0
-    );
-    write(true);
-    let found = tin::dem::geotiff::nodata_mask(&path).expect("internal mask");
-    assert!(found.contains("internal mask (image 2"), "{found}");
-    assert_eq!(
-        read_geotiff_info(&path, &DemOptions::default()).expect("reads").0.z[1],
-        2.0,
-        "the samples as before"
-    );
-    write(false);
-    std::fs::write(dir.path().join("m.tif.msk"), b"II*\0").expect("msk");
+    let opts = DemOptions::default();
+    let heights = |path: &Path| {
+        let (g, info) = read_geotiff_info(path, &opts).expect("reads");
+        let (_, w) = tin::dem::read_dem_window_heights(path, &opts, [1, 1], [1, 2]).expect("window");
+        // The window (row 1, columns 1 and 2) as the whole read has it.
+        assert!(
+            w.iter()
+                .zip(&g.z[4..6])
+                .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())),
+            "{w:?} {:?}",
+            g.z
+        );
+        (g.z.iter().map(|z| z.is_nan()).collect::<Vec<_>>(), info.nodata_mask)
+    };
+    std::fs::write(&path, encode(None)).expect("write");
+    assert_eq!(heights(&path), (vec![false; 6], None));
+    // An image that is not a mask, and an overview's mask (NewSubfileType 5), are not applied.
+    for kind in [0, 5] {
+        std::fs::write(&path, encode(Some(kind))).expect("write");
+        assert_eq!(heights(&path).0, vec![false; 6], "NewSubfileType {kind}");
+    }
+    // The 8-bit mask: the grid's north-west sample is row 0, so sample 1 of the file is grid sample 1.
+    std::fs::write(&path, encode(Some(4))).expect("write");
+    let (voids, said) = heights(&path);
+    assert_eq!(voids, [false, true, false, false, false, false]);
+    let said = said.expect("described");
     assert!(
-        tin::dem::geotiff::nodata_mask(&path)
-            .expect("external")
-            .contains("m.tif.msk")
+        said.contains("image 2 of the file") && said.contains("1 samples voided"),
+        "{said}"
     );
+    // A 1-bit transparency mask as GDAL writes it: rows 101 and 110.
+    let mut bits = encode(None);
+    append_bit_mask(&mut bits, 3, 2, &[0b1010_0000, 0b1100_0000], 4);
+    std::fs::write(&path, &bits).expect("write");
+    assert_eq!(heights(&path).0, [false, true, false, false, false, true]);
+    // The same bytes in memory.
+    let (g, _) = parse_geotiff(&bits, &path, &opts).expect("parses");
+    assert!(g.z[1].is_nan() && g.z[5].is_nan() && g.z[0] == 1.0);
+    // A `.msk` file beside the GeoTIFF: its first image is the mask (the 8-bit one here).
+    std::fs::write(&path, encode(None)).expect("write");
+    let msk = dir.path().join("m.tif.msk");
+    let mut mask_file = Cursor::new(Vec::new());
+    {
+        let mut enc = TiffEncoder::new(&mut mask_file).expect("encoder");
+        enc.write_image::<colortype::Gray8>(3, 2, &[0, 255, 255, 255, 255, 0])
+            .expect("mask");
+    }
+    std::fs::write(&msk, mask_file.into_inner()).expect("write");
+    let (voids, said) = heights(&path);
+    assert_eq!(voids, [true, false, false, false, false, true]);
+    assert!(said.expect("described").contains("m.tif.msk"));
+    // A `.msk` of another size, or not a TIFF: an error naming it.
+    let mut wrong = Cursor::new(Vec::new());
+    {
+        let mut enc = TiffEncoder::new(&mut wrong).expect("encoder");
+        enc.write_image::<colortype::Gray8>(2, 2, &[255; 4]).expect("mask");
+    }
+    std::fs::write(&msk, wrong.into_inner()).expect("write");
+    let e = read_geotiff_info(&path, &opts).expect_err("wrong size").to_string();
+    assert!(e.contains("m.tif.msk") && e.contains("2 x 2 samples"), "{e}");
+    std::fs::write(&msk, b"II*\0").expect("write");
+    let e = read_geotiff_info(&path, &opts).expect_err("not a TIFF").to_string();
+    assert!(e.contains("m.tif.msk"), "{e}");
 }
 
 #[test]

@@ -41,8 +41,8 @@
 //!   several tie points, or a south-up raster are errors naming the file and the tag.
 //!
 //! [`DemOptions::spacing`] overrides the spacing (the origin stays where the georeference puts it). GDAL's nodata
-//! masks (an internal mask image, or a `.msk` file) are not applied: [`nodata_mask`] finds them, and tincull warns
-//! that the samples under them are read as heights.
+//! masks (an internal mask image, or a `.msk` file) are applied, whole and in windows: a sample they mark invalid is
+//! a void ([`super::tiff_mask`]).
 //! [`read_geotiff_info`] also returns what was found ([`GeoTiffInfo`]: the CRS, units, raster type, the native
 //! bounding box), which `tincull info` prints.
 
@@ -53,8 +53,8 @@ use glam::DVec2;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-use super::degrees;
 use super::{DemOptions, GridShape, check_window, finish, open, read_bytes};
+use super::{degrees, tiff_mask};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -141,6 +141,10 @@ pub struct GeoTiffInfo {
     /// `sample · scale + offset`. `None` when the file gives neither.
     #[serde(default)]
     pub scale_offset: Option<(f64, f64)>,
+    /// GDAL's nodata mask applied to the samples ([`super::tiff_mask`]), in words with the number of samples it
+    /// voided; `None` when the file has none. Filled by a whole read ([`read_geotiff_info`]).
+    #[serde(default)]
+    pub nodata_mask: Option<String>,
 }
 
 /// 1, the default of [`GeoTiffInfo::height_unit_m`] in files written before it.
@@ -181,9 +185,26 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
     if rows == 0 || cols == 0 {
         return Err(err(format!("the image has {cols} x {rows} samples")));
     }
-    let (sample_type, z) = decode_window(&mut dec, &meta, [0, rows - 1], [0, cols - 1], bytes.len() as u64, path)?;
+    let (sample_type, mut z) = decode_window(&mut dec, &meta, [0, rows - 1], [0, cols - 1], bytes.len() as u64, path)?;
+    let nodata_mask = match tiff_mask::find_mask(path, Cursor::new(bytes)) {
+        Some(mask) => {
+            let shape = (rows, cols);
+            let voided = tiff_mask::apply_mask(
+                &mask,
+                || Ok(Cursor::new(bytes)),
+                path,
+                shape,
+                [0, rows - 1],
+                [0, cols - 1],
+                &mut z,
+            )?;
+            Some(format!("{}: {voided} samples voided", mask.describe()))
+        }
+        None => None,
+    };
     let info = GeoTiffInfo {
         sample_type: sample_type.to_string(),
+        nodata_mask,
         ..meta.info
     };
     let s = meta.shape;
@@ -205,32 +226,6 @@ pub fn read_geotiff_tags(path: &Path, opts: &DemOptions) -> Result<GeoTiffInfo> 
     Ok(open_tiff(file, path, opts)?.1.info)
 }
 
-/// The nodata mask GDAL may keep beside a GeoTIFF's samples, which this reader does not apply: an image of the file
-/// marked as a transparency mask (`NewSubfileType` bit 2, as `GDAL_TIFF_INTERNAL_MASK` writes it; the first 64 images
-/// are looked at), or a `.msk` file beside it (`dem.tif.msk`). Described in words, or None when there is none or the
-/// file cannot be read (the reader names that error).
-pub fn nodata_mask(path: &Path) -> Option<String> {
-    let external = std::path::PathBuf::from(format!("{}.msk", path.display()));
-    if external.is_file() {
-        return Some(format!("the mask file {}", external.display()));
-    }
-    let mut dec = Decoder::new(std::io::BufReader::new(open(path).ok()?)).ok()?;
-    for image in 1..64 {
-        if !dec.more_images() || dec.next_image().is_err() {
-            break;
-        }
-        if dec
-            .find_tag_unsigned::<u32>(Tag::NewSubfileType)
-            .ok()
-            .flatten()
-            .is_some_and(|t| t & 4 != 0)
-        {
-            return Some(format!("an internal mask (image {} of the file)", image + 1));
-        }
-    }
-    None
-}
-
 /// The samples of a window of a GeoTIFF (voids NaN, not scaled) and its whole grid: only the strips or tiles
 /// (of the first plane) that meet the window are decoded.
 pub(super) fn read_geotiff_window(
@@ -244,7 +239,11 @@ pub(super) fn read_geotiff_window(
     let (mut dec, meta) = open_tiff(std::io::BufReader::new(file), path, opts)?;
     let shape = meta.shape;
     check_window(&shape, rows, cols, path)?;
-    let (_, z) = decode_window(&mut dec, &meta, rows, cols, len, path)?;
+    let (_, mut z) = decode_window(&mut dec, &meta, rows, cols, len, path)?;
+    if let Some(mask) = tiff_mask::find_mask(path, std::io::BufReader::new(open(path)?)) {
+        let reopen = || open(path).map(std::io::BufReader::new);
+        tiff_mask::apply_mask(&mask, reopen, path, (shape.rows, shape.cols), rows, cols, &mut z)?;
+    }
     Ok((shape, z))
 }
 
@@ -589,6 +588,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         layout: layout.to_string(),
         bands: (spp, band),
         scale_offset,
+        nodata_mask: None,
     };
     let meta = Meta {
         shape,

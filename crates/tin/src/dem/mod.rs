@@ -34,6 +34,8 @@ pub mod hgt;
 pub mod npy;
 #[cfg(feature = "png")]
 pub mod png;
+#[cfg(feature = "geotiff")]
+pub mod tiff_mask;
 
 use std::path::Path;
 
