@@ -540,6 +540,32 @@ fn append_bit_mask(tiff: &mut Vec<u8>, w: u32, h: u32, rows: &[u8], subfile: u32
     tiff.extend_from_slice(&0u32.to_le_bytes());
 }
 
+/// A GeoTIFF of 3 × 2 int16 samples, with an 8-bit image after them when `mask` is given (its `NewSubfileType`; 0 at
+/// sample 1, 255 elsewhere).
+fn samples_3x2(mask: Option<u32>) -> Vec<u8> {
+    let mut buf = Cursor::new(Vec::new());
+    {
+        let mut enc = TiffEncoder::new(&mut buf).expect("encoder");
+        let mut img = enc.new_image::<colortype::GrayI16>(3, 2).expect("image");
+        img.encoder()
+            .write_tag(Tag::GeoKeyDirectoryTag, &KEYS_UTM[..])
+            .expect("tag");
+        img.encoder()
+            .write_tag(Tag::ModelPixelScaleTag, &[10.0f64, 10.0, 0.0][..])
+            .expect("tag");
+        img.encoder()
+            .write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 5e5, 4e6, 0.0][..])
+            .expect("tag");
+        img.write_data(&[1i16, 2, 3, 4, 5, 6]).expect("data");
+        if let Some(kind) = mask {
+            let mut second = enc.new_image::<colortype::Gray8>(3, 2).expect("image");
+            second.encoder().write_tag(Tag::NewSubfileType, kind).expect("tag");
+            second.write_data(&[255u8, 0, 255, 255, 255, 255]).expect("data");
+        }
+    }
+    buf.into_inner()
+}
+
 /// GDAL's nodata masks are applied, whole and in windows: an 8-bit mask image, a 1-bit transparency mask as GDAL
 /// writes it (which the `tiff` crate alone refuses to decode), and a `.msk` file beside the GeoTIFF; an overview's
 /// mask is not the image's; a `.msk` of another size is an error naming it.
@@ -547,30 +573,6 @@ fn append_bit_mask(tiff: &mut Vec<u8>, w: u32, h: u32, rows: &[u8], subfile: u32
 fn nodata_masks_are_applied() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("m.tif");
-    // The samples, with an 8-bit mask image after them when `mask` (0 at sample 1).
-    let encode = |mask: Option<u32>| {
-        let mut buf = Cursor::new(Vec::new());
-        {
-            let mut enc = TiffEncoder::new(&mut buf).expect("encoder");
-            let mut img = enc.new_image::<colortype::GrayI16>(3, 2).expect("image");
-            img.encoder()
-                .write_tag(Tag::GeoKeyDirectoryTag, &KEYS_UTM[..])
-                .expect("tag");
-            img.encoder()
-                .write_tag(Tag::ModelPixelScaleTag, &[10.0f64, 10.0, 0.0][..])
-                .expect("tag");
-            img.encoder()
-                .write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 5e5, 4e6, 0.0][..])
-                .expect("tag");
-            img.write_data(&[1i16, 2, 3, 4, 5, 6]).expect("data");
-            if let Some(kind) = mask {
-                let mut second = enc.new_image::<colortype::Gray8>(3, 2).expect("image");
-                second.encoder().write_tag(Tag::NewSubfileType, kind).expect("tag");
-                second.write_data(&[255u8, 0, 255, 255, 255, 255]).expect("data");
-            }
-        }
-        buf.into_inner()
-    };
     let opts = DemOptions::default();
     let heights = |path: &Path| {
         let (g, info) = read_geotiff_info(path, &opts).expect("reads");
@@ -585,15 +587,15 @@ fn nodata_masks_are_applied() {
         );
         (g.z.iter().map(|z| z.is_nan()).collect::<Vec<_>>(), info.nodata_mask)
     };
-    std::fs::write(&path, encode(None)).expect("write");
+    std::fs::write(&path, samples_3x2(None)).expect("write");
     assert_eq!(heights(&path), (vec![false; 6], None));
     // An image that is not a mask, and an overview's mask (NewSubfileType 5), are not applied.
     for kind in [0, 5] {
-        std::fs::write(&path, encode(Some(kind))).expect("write");
+        std::fs::write(&path, samples_3x2(Some(kind))).expect("write");
         assert_eq!(heights(&path).0, vec![false; 6], "NewSubfileType {kind}");
     }
     // The 8-bit mask: the grid's north-west sample is row 0, so sample 1 of the file is grid sample 1.
-    std::fs::write(&path, encode(Some(4))).expect("write");
+    std::fs::write(&path, samples_3x2(Some(4))).expect("write");
     let (voids, said) = heights(&path);
     assert_eq!(voids, [false, true, false, false, false, false]);
     let said = said.expect("described");
@@ -602,15 +604,14 @@ fn nodata_masks_are_applied() {
         "{said}"
     );
     // A 1-bit transparency mask as GDAL writes it: rows 101 and 110.
-    let mut bits = encode(None);
-    append_bit_mask(&mut bits, 3, 2, &[0b1010_0000, 0b1100_0000], 4);
+    let bits = masked_geotiff();
     std::fs::write(&path, &bits).expect("write");
     assert_eq!(heights(&path).0, [false, true, false, false, false, true]);
     // The same bytes in memory.
     let (g, _) = parse_geotiff(&bits, &path, &opts).expect("parses");
     assert!(g.z[1].is_nan() && g.z[5].is_nan() && g.z[0] == 1.0);
     // A `.msk` file beside the GeoTIFF: its first image is the mask (the 8-bit one here).
-    std::fs::write(&path, encode(None)).expect("write");
+    std::fs::write(&path, samples_3x2(None)).expect("write");
     let msk = dir.path().join("m.tif.msk");
     let mut mask_file = Cursor::new(Vec::new());
     {
@@ -634,6 +635,29 @@ fn nodata_masks_are_applied() {
     std::fs::write(&msk, b"II*\0").expect("write");
     let e = read_geotiff_info(&path, &opts).expect_err("not a TIFF").to_string();
     assert!(e.contains("m.tif.msk"), "{e}");
+}
+
+/// [`samples_3x2`] with a 1-bit nodata mask as GDAL writes it (rows 101 and 110).
+fn masked_geotiff() -> Vec<u8> {
+    let mut bytes = samples_3x2(None);
+    append_bit_mask(&mut bytes, 3, 2, &[0b1010_0000, 0b1100_0000], 4);
+    bytes
+}
+
+proptest::proptest! {
+    /// A masked GeoTIFF with any few bytes changed (the mask's tags and data included) is read or refused with an
+    /// error, never a panic.
+    #[test]
+    fn mutated_masked_geotiffs_never_panic(
+        edits in proptest::collection::vec((proptest::num::usize::ANY, proptest::num::u8::ANY), 1..4),
+    ) {
+        let mut bytes = masked_geotiff();
+        let n = bytes.len();
+        for (at, b) in edits {
+            bytes[at % n] = b;
+        }
+        let _ = parse_geotiff(&bytes, Path::new("mutated.tif"), &DemOptions::default());
+    }
 }
 
 #[test]
