@@ -623,6 +623,10 @@ fn nodata_masks_are_applied() {
     let (voids, said) = heights(&path);
     assert_eq!(voids, [true, false, false, false, false, true]);
     assert!(said.expect("described").contains("m.tif.msk"));
+    // An internal mask is used before a `.msk` file (GDAL's order).
+    std::fs::write(&path, samples_3x2(Some(4))).expect("write");
+    assert_eq!(heights(&path).0, [false, true, false, false, false, false]);
+    std::fs::write(&path, samples_3x2(None)).expect("write");
     // A `.msk` of another size, or not a TIFF: an error naming it.
     let mut wrong = Cursor::new(Vec::new());
     {

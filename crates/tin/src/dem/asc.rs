@@ -13,9 +13,9 @@
 //! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
 //! the corners and cell sizes are degrees (or the WKT's angular unit) and are put into metres as GeoTIFFs in degrees
 //! are (the frame of [`super::hgt`]). When its root is a projected CRS in feet ([`prj_linear_unit`]: WKT
-//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are, or the old ESRI text form's `Units FEET`), coordinates, cell sizes and heights (a `.prj` does not
-//! say the heights' unit; they are taken to be in the same feet) are multiplied into metres. Any other `.prj`, or
-//! none, means metres. An unreadable `.prj` is an error.
+//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are, or the old ESRI text form's `Units FEET`), coordinates,
+//! cell sizes and heights (a `.prj` does not say the heights' unit; they are taken to be in the same feet) are
+//! multiplied into metres. Any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
 //!
 //! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
 //! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values

@@ -2,7 +2,7 @@
 //!
 //! GDAL keeps a mask beside the samples in one of two places: an image of the same file whose `NewSubfileType` has
 //! bit 2 (a transparency mask) and not bit 0 (a reduced-resolution image: the masks of overviews), as
-//! `GDAL_TIFF_INTERNAL_MASK` writes it; or the first image of a `.msk` file beside the GeoTIFF (`dem.tif.msk`). Its
+//! `GDAL_TIFF_INTERNAL_MASK` writes it; else the first image of a `.msk` file beside the GeoTIFF (`dem.tif.msk`). Its
 //! samples are 1-bit (as GDAL writes them) or 8-bit gray, 0 meaning nodata and anything else a valid sample; it has
 //! the image's size. The first 64 images of the file are searched for it.
 //!
@@ -47,25 +47,23 @@ fn external(path: &Path) -> PathBuf {
     PathBuf::from(format!("{}.msk", path.display()))
 }
 
-/// The nodata mask of the GeoTIFF at `path`, whose bytes `reader` reads: a `.msk` file beside it first (as GDAL
-/// prefers it), else the first full-resolution mask image among its first 64. None when there is none, or when the
-/// file's images cannot be listed (the reader of its samples names that error).
+/// The nodata mask of the GeoTIFF at `path`, whose bytes `reader` reads: the first full-resolution mask image among
+/// its first 64, else a `.msk` file beside it (GDAL's order). None when there is neither; a file whose images cannot
+/// be listed is looked at no further (the reader of its samples names that error).
 pub fn find_mask<R: Read + Seek>(path: &Path, reader: R) -> Option<MaskSource> {
+    if let Ok(mut dec) = Decoder::new(reader) {
+        for image in 1..MAX_IMAGES {
+            if !dec.more_images() || dec.next_image().is_err() {
+                break;
+            }
+            let kind = dec.find_tag_unsigned::<u32>(Tag::NewSubfileType).ok().flatten();
+            if kind.is_some_and(|t| t & 4 != 0 && t & 1 == 0) {
+                return Some(MaskSource::Internal(image));
+            }
+        }
+    }
     let msk = external(path);
-    if msk.is_file() {
-        return Some(MaskSource::External(msk));
-    }
-    let mut dec = Decoder::new(reader).ok()?;
-    for image in 1..MAX_IMAGES {
-        if !dec.more_images() || dec.next_image().is_err() {
-            break;
-        }
-        let kind = dec.find_tag_unsigned::<u32>(Tag::NewSubfileType).ok().flatten();
-        if kind.is_some_and(|t| t & 4 != 0 && t & 1 == 0) {
-            return Some(MaskSource::Internal(image));
-        }
-    }
-    None
+    msk.is_file().then_some(MaskSource::External(msk))
 }
 
 /// A reader of a TIFF file that reads the two bytes at `at` as `value` (the inline value of one
