@@ -496,8 +496,9 @@ fn feet_are_put_into_metres() {
 
 /// Appends to the little-endian classic TIFF `tiff` an uncompressed 1-bit image of `w` × `h` samples as GDAL writes
 /// a nodata mask (`PhotometricInterpretation` 4, `NewSubfileType` `subfile`), rows of whole bytes, most significant
-/// bit first; the last image's next-IFD pointer is set to it.
-fn append_bit_mask(tiff: &mut Vec<u8>, w: u32, h: u32, rows: &[u8], subfile: u32) {
+/// bit first: one strip, or with `tile` one tile of that side (rows of `tile / 8` bytes); the last image's next-IFD
+/// pointer is set to it.
+fn append_bit_mask(tiff: &mut Vec<u8>, w: u32, h: u32, rows: &[u8], subfile: u32, tile: Option<u32>) {
     let u16_at = |b: &[u8], o: usize| usize::from(u16::from_le_bytes([b[o], b[o + 1]]));
     let u32_at = |b: &[u8], o: usize| u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]) as usize;
     let mut ifd = u32_at(tiff, 4);
@@ -516,19 +517,22 @@ fn append_bit_mask(tiff: &mut Vec<u8>, w: u32, h: u32, rows: &[u8], subfile: u32
     let ifd_at = tiff.len() as u32;
     tiff[next_at..next_at + 4].copy_from_slice(&ifd_at.to_le_bytes());
     let (short, long) = (3u16, 4u16);
-    let entries: [(u16, u16, u32); 11] = [
+    let mut entries: Vec<(u16, u16, u32)> = vec![
         (254, long, subfile),
         (256, short, w),
         (257, short, h),
         (258, short, 1),
         (259, short, 1),
         (262, short, 4),
-        (273, long, data_at),
         (277, short, 1),
-        (278, short, h),
-        (279, long, rows.len() as u32),
         (284, short, 1),
     ];
+    let n = rows.len() as u32;
+    match tile {
+        None => entries.extend([(273, long, data_at), (278, short, h), (279, long, n)]),
+        Some(t) => entries.extend([(322, short, t), (323, short, t), (324, long, data_at), (325, long, n)]),
+    }
+    entries.sort_unstable();
     tiff.extend_from_slice(&(entries.len() as u16).to_le_bytes());
     for (tag, ty, value) in entries {
         tiff.extend_from_slice(&tag.to_le_bytes());
@@ -607,6 +611,14 @@ fn nodata_masks_are_applied() {
     let bits = masked_geotiff();
     std::fs::write(&path, &bits).expect("write");
     assert_eq!(heights(&path).0, [false, true, false, false, false, true]);
+    // The same mask in one 16 × 16 tile (GDAL tiles the mask of a tiled GeoTIFF): the samples right of and below the
+    // image are padding.
+    let mut tiled = samples_3x2(None);
+    let mut tile = vec![0xffu8; 32];
+    tile[..4].copy_from_slice(&[0b1010_0000, 0xff, 0b1100_0000, 0xff]);
+    append_bit_mask(&mut tiled, 3, 2, &tile, 4, Some(16));
+    std::fs::write(&path, &tiled).expect("write");
+    assert_eq!(heights(&path).0, [false, true, false, false, false, true]);
     // The same bytes in memory.
     let (g, _) = parse_geotiff(&bits, &path, &opts).expect("parses");
     assert!(g.z[1].is_nan() && g.z[5].is_nan() && g.z[0] == 1.0);
@@ -644,7 +656,7 @@ fn nodata_masks_are_applied() {
 /// [`samples_3x2`] with a 1-bit nodata mask as GDAL writes it (rows 101 and 110).
 fn masked_geotiff() -> Vec<u8> {
     let mut bytes = samples_3x2(None);
-    append_bit_mask(&mut bytes, 3, 2, &[0b1010_0000, 0b1100_0000], 4);
+    append_bit_mask(&mut bytes, 3, 2, &[0b1010_0000, 0b1100_0000], 4, None);
     bytes
 }
 

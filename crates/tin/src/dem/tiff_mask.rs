@@ -213,12 +213,15 @@ fn decode<R: Read + Seek>(
             let index = u32::try_from(ty * across + tx).map_err(|_| err("too many strips or tiles".into()))?;
             let (dw, dh) = dec.chunk_data_dimensions(index);
             let (dw, dh) = (dw as usize, dh as usize);
-            let DecodingResult::U8(bytes) = dec.read_chunk(index).map_err(tiff_err)? else {
+            // Decoded at the padded chunk width, as the samples are (see `geotiff`'s `decode_window`): rows of whole
+            // bytes, 1-bit rows padded to a byte.
+            let row = (cw * bits).div_ceil(8);
+            let mut chunk = DecodingResult::U8(Vec::new());
+            dec.read_chunk_to_buffer(&mut chunk, index, row).map_err(tiff_err)?;
+            let DecodingResult::U8(bytes) = chunk else {
                 return Err(err(format!("strip or tile {index} is not decoded as bytes")));
             };
-            // Rows of whole bytes (1-bit rows padded to a byte), perhaps at the padded tile width.
-            let row = bytes.len() / dh.max(1);
-            if dh == 0 || row * 8 < dw * bits {
+            if dh == 0 || dw > cw || bytes.len() < (dh - 1) * row + (dw * bits).div_ceil(8) {
                 return Err(err(format!(
                     "strip or tile {index}: {} bytes for {dw} x {dh} samples",
                     bytes.len()
@@ -226,7 +229,7 @@ fn decode<R: Read + Seek>(
             }
             let (y0, x0) = (ty * ch, tx * cw);
             for r in rows[0].max(y0)..=rows[1].min(y0 + dh - 1) {
-                let line = &bytes[(r - y0) * row..(r - y0 + 1) * row];
+                let line = &bytes[(r - y0) * row..];
                 for c in cols[0].max(x0)..=cols[1].min(x0 + dw - 1) {
                     let k = c - x0;
                     let valid = if bits == 1 {
