@@ -117,7 +117,8 @@ fn a_geographic_asc_is_converted_or_warned_about() {
     );
 }
 
-/// A terrain exported y-up (height in y) is named as such, whether it fails as vertical walls or reads.
+/// A terrain exported y-up (height in y) is named as such, whether it fails as vertical walls or reads; mesh-only
+/// flags given for a DEM grid, and DEM-only flags given for a mesh, are errors naming the flag, not ignored.
 #[test]
 fn a_y_up_mesh_gets_a_hint() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -187,6 +188,31 @@ fn a_y_up_mesh_gets_a_hint() {
             s(&dir.path().join("p.json")),
         ],
         "--keep-faces applies to OBJ meshes",
+    );
+    assert!(!dir.path().join("g.tch").exists() && !dir.path().join("p.json").exists());
+    // And the DEM-only flags for a mesh.
+    let obj = mesh("jacksboro-2k.obj");
+    fails_with(&["info", s(&obj), "--z-scale", "3"], "--z-scale 3 applies to DEM grids");
+    fails_with(&["info", s(&obj), "--band", "2"], "--band 2 applies to DEM grids");
+    fails_with(
+        &["build", s(&obj), "--spacing", "1,1", "-o", s(&dir.path().join("g.tch"))],
+        "--spacing 1,1 applies to DEM grids",
+    );
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&obj),
+            "--z-scale",
+            "2",
+            "-o",
+            s(&dir.path().join("p.json")),
+        ],
+        "--z-scale 2 applies to DEM grids",
+    );
+    fails_with(
+        &["info", s(&obj), "--dem-vertices", "500"],
+        "--dem-vertices 500 applies to DEM grids",
     );
     assert!(!dir.path().join("g.tch").exists() && !dir.path().join("p.json").exists());
 }

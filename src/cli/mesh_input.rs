@@ -61,6 +61,27 @@ pub fn refuse_mesh_flags_for_dem(path: &std::path::Path, keep_faces: bool, dedup
     )
 }
 
+/// An error when a flag that applies to DEM grids only (`--z-scale`, `--spacing`, `--band`, `--dem-vertices` other
+/// than its default) is given for the OBJ mesh `path`, rather than ignoring it: a mesh's vertices are used as they
+/// are.
+pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vertices: usize) -> Result<()> {
+    let flag = if dem.z_scale != 1.0 {
+        format!("--z-scale {}", dem.z_scale)
+    } else if let Some((dx, dy)) = dem.spacing {
+        format!("--spacing {dx},{dy}")
+    } else if let Some(b) = dem.band {
+        format!("--band {b}")
+    } else if dem_vertices != DEFAULT_DEM_VERTICES {
+        format!("--dem-vertices {dem_vertices}")
+    } else {
+        return Ok(());
+    };
+    bail!(
+        "{}: {flag} applies to DEM grids (.npy, .asc, .hgt, .png, .tif); a mesh's vertices are used as they are",
+        path.display()
+    )
+}
+
 /// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
 /// `--keep-faces` and `--dedupe` as every command that reads a mesh.
 #[derive(Clone, Copy, Debug, Args)]
@@ -113,10 +134,11 @@ impl ImportArgs {
 /// that takes a mesh or a DEM).
 #[derive(Clone, Copy, Debug, Args)]
 pub struct DemArgs {
-    /// Sample spacing `dx,dy` in metres (overrides a .npy sidecar or a GeoTIFF's georeference; required for .png and a plain TIFF).
+    /// A DEM grid's sample spacing `dx,dy` in metres (overrides a .npy sidecar or a GeoTIFF's georeference; required
+    /// for .png and a plain TIFF).
     #[arg(long, value_parser = parse_spacing)]
     pub spacing: Option<(f64, f64)>,
-    /// Multiply heights by this (for .png: metres per grey level).
+    /// Multiply a DEM grid's heights by this (for .png: metres per grey level).
     #[arg(long, default_value_t = 1.0)]
     pub z_scale: f64,
     /// The elevation band (1-based) of a multi-band GeoTIFF.
@@ -343,6 +365,7 @@ impl MeshArgs {
             refuse_mesh_flags_for_dem(&self.mesh, self.keep_faces, self.dedupe, self.up)?;
             return self.load_dem(out);
         }
+        refuse_dem_flags_for_mesh(&self.mesh, &self.dem, self.dem_vertices)?;
         let opts = ObjImportOptions {
             keep_faces: self.keep_faces,
             dedupe: match self.dedupe {

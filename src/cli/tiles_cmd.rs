@@ -161,6 +161,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let tiles_dir = PathBuf::from(format!("{stem}.tiles"));
     let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
     if !is_dem(&args.dem) {
+        super::mesh_input::refuse_dem_flags_for_mesh(&args.dem, &args.read, DEFAULT_DEM_VERTICES)?;
         return plan_mesh(args, out, files, options, &source, &tiles_dir);
     }
     super::mesh_input::refuse_mesh_flags_for_dem(&args.dem, args.keep_faces, args.dedupe, args.up)?;
