@@ -118,7 +118,8 @@ fn a_geographic_asc_is_converted_or_warned_about() {
 }
 
 /// A terrain exported y-up (height in y) is named as such, whether it fails as vertical walls or reads; mesh-only
-/// flags given for a DEM grid, and DEM-only flags given for a mesh, are errors naming the flag, not ignored.
+/// flags given for a DEM grid, DEM-only flags given for a mesh, and either given for a hierarchy are errors naming
+/// the flag, not ignored.
 #[test]
 fn a_y_up_mesh_gets_a_hint() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -215,6 +216,19 @@ fn a_y_up_mesh_gets_a_hint() {
         "--dem-vertices 500 applies to DEM grids",
     );
     assert!(!dir.path().join("g.tch").exists() && !dir.path().join("p.json").exists());
+    // And both for a hierarchy, which holds its mesh.
+    let tch = dir.path().join("j.tch");
+    ok(&["build", s(&obj), "-o", s(&tch), "-q"]);
+    fails_with(
+        &["info", s(&tch), "--keep-faces"],
+        "--keep-faces applies to a mesh or DEM grid input",
+    );
+    let png = dir.path().join("r.png");
+    fails_with(
+        &["render", s(&tch), "--z-scale", "2", "-o", s(&png)],
+        "--z-scale 2 applies to a mesh or DEM grid input",
+    );
+    assert!(!png.exists());
 }
 
 /// A GeoTIFF in US survey feet without a vertical unit, and an `.asc` whose `.prj` is in feet: every command that reads

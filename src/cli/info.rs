@@ -21,6 +21,7 @@ pub struct InfoArgs {
 /// Runs `tincull info`.
 pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
     if super::mesh_input::is_hierarchy(&args.mesh.mesh) {
+        args.mesh.refuse_for_hierarchy()?;
         return hierarchy(&args.mesh.mesh, out);
     }
     let (tin, import, dem) = args.mesh.load_with_source(out)?;

@@ -42,44 +42,59 @@ impl UpArg {
     }
 }
 
-/// An error when a flag that applies to OBJ meshes only (`--keep-faces`, `--dedupe keep-highest`, `--up y`) is given
-/// for the DEM grid `path`, rather than ignoring it: a DEM's samples are heights on a grid, triangulated by tincull.
-pub fn refuse_mesh_flags_for_dem(path: &std::path::Path, keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Result<()> {
+/// The first flag given of those that apply to OBJ meshes only (`--keep-faces`, `--dedupe keep-highest`, `--up y`),
+/// as written on the command line.
+fn mesh_flag(keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Option<String> {
     let name = |v: Option<clap::builder::PossibleValue>| v.map_or_else(String::new, |v| v.get_name().to_string());
-    let flag = if keep_faces {
-        String::from("--keep-faces")
+    if keep_faces {
+        Some(String::from("--keep-faces"))
     } else if dedupe != DedupeArg::Reject {
-        format!("--dedupe {}", name(dedupe.to_possible_value()))
+        Some(format!("--dedupe {}", name(dedupe.to_possible_value())))
     } else if up != UpArg::Z {
-        format!("--up {}", name(up.to_possible_value()))
+        Some(format!("--up {}", name(up.to_possible_value())))
     } else {
-        return Ok(());
-    };
-    bail!(
-        "{}: {flag} applies to OBJ meshes; a DEM grid's samples are heights on a grid, triangulated by tincull",
-        path.display()
-    )
+        None
+    }
 }
 
-/// An error when a flag that applies to DEM grids only (`--z-scale`, `--spacing`, `--band`, `--dem-vertices` other
-/// than its default) is given for the OBJ mesh `path`, rather than ignoring it: a mesh's vertices are used as they
-/// are.
-pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vertices: usize) -> Result<()> {
-    let flag = if dem.z_scale != 1.0 {
-        format!("--z-scale {}", dem.z_scale)
+/// The first flag given of those that apply to DEM grids only (`--z-scale`, `--spacing`, `--band`, `--dem-vertices`
+/// other than its default), as written on the command line.
+fn dem_flag(dem: &DemArgs, dem_vertices: usize) -> Option<String> {
+    if dem.z_scale != 1.0 {
+        Some(format!("--z-scale {}", dem.z_scale))
     } else if let Some((dx, dy)) = dem.spacing {
-        format!("--spacing {dx},{dy}")
+        Some(format!("--spacing {dx},{dy}"))
     } else if let Some(b) = dem.band {
-        format!("--band {b}")
+        Some(format!("--band {b}"))
     } else if dem_vertices != DEFAULT_DEM_VERTICES {
-        format!("--dem-vertices {dem_vertices}")
+        Some(format!("--dem-vertices {dem_vertices}"))
     } else {
-        return Ok(());
-    };
-    bail!(
-        "{}: {flag} applies to DEM grids (.npy, .asc, .hgt, .png, .tif); a mesh's vertices are used as they are",
-        path.display()
-    )
+        None
+    }
+}
+
+/// An error when a flag that applies to OBJ meshes only ([`mesh_flag`]) is given for the DEM grid `path`, rather
+/// than ignoring it: a DEM's samples are heights on a grid, triangulated by tincull.
+pub fn refuse_mesh_flags_for_dem(path: &std::path::Path, keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Result<()> {
+    if let Some(flag) = mesh_flag(keep_faces, dedupe, up) {
+        bail!(
+            "{}: {flag} applies to OBJ meshes; a DEM grid's samples are heights on a grid, triangulated by tincull",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// An error when a flag that applies to DEM grids only ([`dem_flag`]) is given for the OBJ mesh `path`, rather than
+/// ignoring it: a mesh's vertices are used as they are.
+pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vertices: usize) -> Result<()> {
+    if let Some(flag) = dem_flag(dem, dem_vertices) {
+        bail!(
+            "{}: {flag} applies to DEM grids (.npy, .asc, .hgt, .png, .tif); a mesh's vertices are used as they are",
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 /// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
@@ -347,6 +362,20 @@ pub fn is_hierarchy(path: &std::path::Path) -> bool {
 }
 
 impl MeshArgs {
+    /// An error when a flag of how to import a mesh or a DEM grid is given while the input is a hierarchy, rather
+    /// than ignoring it: a `.tch` holds its mesh as it was built.
+    pub fn refuse_for_hierarchy(&self) -> Result<()> {
+        if let Some(flag) =
+            mesh_flag(self.keep_faces, self.dedupe, self.up).or_else(|| dem_flag(&self.dem, self.dem_vertices))
+        {
+            bail!(
+                "{}: {flag} applies to a mesh or DEM grid input; a hierarchy (.tch) holds its mesh as it was built",
+                self.mesh.display()
+            );
+        }
+        Ok(())
+    }
+
     /// Reads the mesh, reporting what the import did (merged duplicates, re-triangulation) as warnings.
     pub fn load(&self, out: Output) -> Result<(Tin, ObjImportReport)> {
         self.load_with_source(out).map(|(t, r, _)| (t, r))

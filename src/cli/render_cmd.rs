@@ -104,6 +104,7 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
 /// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`].
 pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Terrain> {
     if super::mesh_input::is_hierarchy(path) {
+        import.mesh(path).refuse_for_hierarchy()?;
         let h = cull::Hierarchy::load(path)?;
         Ok(Terrain::from_hierarchy(h)?)
     } else {

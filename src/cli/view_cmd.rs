@@ -61,6 +61,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     let is_tch = super::mesh_input::is_hierarchy(&args.input);
     let mut params = args.params.resolve(None)?;
     let source = if is_tch {
+        args.import.mesh(&args.input).refuse_for_hierarchy()?;
         let h = cull::Hierarchy::load(&args.input)?;
         let b = &h.build;
         let p = &args.params;
