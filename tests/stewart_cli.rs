@@ -166,4 +166,56 @@ fn quadtree_build_eval_and_cull() {
     );
     // Lloyd & Egbert takes a crystal hierarchy too (a grid of about as many cells as leaf groups).
     ok(&["cull", s(&crystal), "--method", "lloyd-egbert", "--eye", eye]);
+    // A parameter the method does not use is an error naming it, not ignored.
+    fails_with(
+        &[
+            "cull",
+            s(&crystal),
+            "--method",
+            "lloyd-egbert",
+            "--patch",
+            "4",
+            "--eye",
+            eye,
+        ],
+        "--patch 4 is a parameter of the `safe` culler; method `lloyd-egbert` does not use it",
+    );
+    fails_with(
+        &[
+            "cull",
+            s(&crystal),
+            "--method",
+            "thesis",
+            "--columns",
+            "512",
+            "--eye",
+            eye,
+        ],
+        "--columns 512 is a parameter of the `safe` and `lloyd-egbert` cullers",
+    );
+    fails_with(
+        &[
+            "cull",
+            s(&crystal),
+            "--method",
+            "thesis",
+            "--work-budget",
+            "100",
+            "--eye",
+            eye,
+        ],
+        "method `thesis` does not use it",
+    );
+    ok(&[
+        "cull",
+        s(&crystal),
+        "--method",
+        "safe",
+        "--patch",
+        "4",
+        "--coarse-columns",
+        "2",
+        "--eye",
+        eye,
+    ]);
 }

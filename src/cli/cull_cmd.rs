@@ -79,6 +79,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !args.yaw.is_finite() {
         bail!("--yaw must be finite, got {}", args.yaw);
     }
+    args.safe.check_method(args.method)?;
     let h = Hierarchy::load(&args.hierarchy)?;
     args.method
         .check(&h)

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use cull::SafeParams;
+use cull::{CullMethod, SafeParams};
 
 use super::cull_cmd::parse_point;
 
@@ -41,6 +41,33 @@ pub struct SafeArgs {
 }
 
 impl SafeArgs {
+    /// An error when a parameter is given that `method` does not use (`--columns` by `thesis` and `stewart`, the
+    /// others by every method but `safe`), rather than ignoring it; a parameter at its default counts as not given.
+    pub fn check_method(&self, method: CullMethod) -> Result<()> {
+        let d = SafeParams::default();
+        let columns = (self.columns != d.columns_per_face).then(|| format!("--columns {}", self.columns));
+        let safe_only = [
+            (self.patch != d.patch).then(|| format!("--patch {}", self.patch)),
+            self.occluder_budget.map(|n| format!("--occluder-budget {n}")),
+            (self.work_budget != d.work_budget).then(|| format!("--work-budget {}", self.work_budget)),
+            (self.coarse_columns != d.coarse_columns).then(|| format!("--coarse-columns {}", self.coarse_columns)),
+        ];
+        let unused = match method {
+            CullMethod::Safe => None,
+            CullMethod::LloydEgbert => safe_only.into_iter().flatten().next().map(|f| (f, "the `safe` culler")),
+            CullMethod::Thesis | CullMethod::Stewart => columns
+                .map(|f| (f, "the `safe` and `lloyd-egbert` cullers"))
+                .or_else(|| safe_only.into_iter().flatten().next().map(|f| (f, "the `safe` culler"))),
+        };
+        if let Some((flag, whose)) = unused {
+            anyhow::bail!(
+                "{flag} is a parameter of {whose}; method `{}` does not use it",
+                method.name()
+            );
+        }
+        Ok(())
+    }
+
     /// The parameters, checked.
     pub fn params(&self) -> Result<SafeParams> {
         anyhow::ensure!(
