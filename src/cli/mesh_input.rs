@@ -97,8 +97,8 @@ pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vert
     Ok(())
 }
 
-/// How to import a mesh, for commands whose input may be a mesh or a hierarchy (`render`, `view`): the same
-/// `--keep-faces` and `--dedupe` as every command that reads a mesh.
+/// How to import a mesh or a DEM grid: part of [`MeshArgs`], and on its own for the commands whose input may also be
+/// a hierarchy (`render`, `view`).
 #[derive(Clone, Copy, Debug, Args)]
 pub struct ImportArgs {
     /// For a mesh input: use the file's own triangles (checked to form a height field) instead of
@@ -136,11 +136,7 @@ impl ImportArgs {
     pub fn mesh(&self, path: &std::path::Path) -> MeshArgs {
         MeshArgs {
             mesh: path.to_path_buf(),
-            keep_faces: self.keep_faces,
-            dedupe: self.dedupe,
-            up: self.up,
-            dem_vertices: self.dem_vertices,
-            dem: self.dem,
+            import: *self,
         }
     }
 }
@@ -198,21 +194,9 @@ fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
 pub struct MeshArgs {
     /// The terrain mesh (OBJ), or a DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to --dem-vertices.
     pub mesh: PathBuf,
-    /// Use the file's own triangles (checked to form a height field) instead of re-triangulating its vertices.
-    #[arg(long)]
-    pub keep_faces: bool,
-    /// What to do with vertices that share x,y but differ in z.
-    #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
-    pub dedupe: DedupeArg,
-    /// The mesh's up axis: y for a y-up OBJ (as many 3-D tools write), rotated to z up on import.
-    #[arg(long, value_enum, default_value_t = UpArg::Z)]
-    pub up: UpArg,
-    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
-    #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
-    pub dem_vertices: usize,
-    /// For a DEM grid: how to read it.
+    /// How to import it.
     #[command(flatten)]
-    pub dem: DemArgs,
+    pub import: ImportArgs,
 }
 
 /// Default vertex budget when a command is given a DEM grid instead of a mesh.
@@ -365,8 +349,8 @@ impl MeshArgs {
     /// An error when a flag of how to import a mesh or a DEM grid is given while the input is a hierarchy, rather
     /// than ignoring it: a `.tch` holds its mesh as it was built.
     pub fn refuse_for_hierarchy(&self) -> Result<()> {
-        if let Some(flag) =
-            mesh_flag(self.keep_faces, self.dedupe, self.up).or_else(|| dem_flag(&self.dem, self.dem_vertices))
+        if let Some(flag) = mesh_flag(self.import.keep_faces, self.import.dedupe, self.import.up)
+            .or_else(|| dem_flag(&self.import.dem, self.import.dem_vertices))
         {
             bail!(
                 "{}: {flag} applies to a mesh or DEM grid input; a hierarchy (.tch) holds its mesh as it was built",
@@ -391,17 +375,17 @@ impl MeshArgs {
             );
         }
         if is_dem(&self.mesh) {
-            refuse_mesh_flags_for_dem(&self.mesh, self.keep_faces, self.dedupe, self.up)?;
+            refuse_mesh_flags_for_dem(&self.mesh, self.import.keep_faces, self.import.dedupe, self.import.up)?;
             return self.load_dem(out);
         }
-        refuse_dem_flags_for_mesh(&self.mesh, &self.dem, self.dem_vertices)?;
+        refuse_dem_flags_for_mesh(&self.mesh, &self.import.dem, self.import.dem_vertices)?;
         let opts = ObjImportOptions {
-            keep_faces: self.keep_faces,
-            dedupe: match self.dedupe {
+            keep_faces: self.import.keep_faces,
+            dedupe: match self.import.dedupe {
                 DedupeArg::Reject => DedupePolicy::Reject,
                 DedupeArg::KeepHighest => DedupePolicy::KeepHighest,
             },
-            up: self.up.axis(),
+            up: self.import.up.axis(),
         };
         let spinner = out.spinner("reading mesh");
         let (tin, report) = tin::read_obj(&self.mesh, &opts).map_err(|e| {
@@ -430,10 +414,10 @@ impl MeshArgs {
 
     /// Reads a DEM grid and simplifies it to `dem_vertices` vertices.
     fn load_dem(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
-        if self.dem_vertices < 3 {
-            bail!("--dem-vertices must be at least 3, got {}", self.dem_vertices);
+        if self.import.dem_vertices < 3 {
+            bail!("--dem-vertices must be at least 3, got {}", self.import.dem_vertices);
         }
-        let opts = self.dem.options();
+        let opts = self.import.dem.options();
         let spinner = out.spinner("reading DEM");
         let ext = self
             .mesh
@@ -456,10 +440,10 @@ impl MeshArgs {
         spinner.finish_and_clear();
         warn_if_degrees(&grid, &self.mesh, out);
         warn_about_dem_file(&self.mesh, &opts, out);
-        let bar = out.progress(self.dem_vertices as u64, "simplifying DEM");
+        let bar = out.progress(self.import.dem_vertices as u64, "simplifying DEM");
         let progress = |v: usize| bar.set_position(v as u64);
         let simplify = tin::SimplifyOptions {
-            max_vertices: Some(self.dem_vertices),
+            max_vertices: Some(self.import.dem_vertices),
             max_error: None,
         };
         let (tin, simplified) =

@@ -60,7 +60,7 @@ pub enum Command {
     /// Describe a terrain mesh (counts, bounding box, relief, height-field check, triangle quality) or a hierarchy
     /// (.tch: its mesh, nodes, visibility data and build parameters).
     Info(info::InfoArgs),
-    /// Turn a DEM grid (.npy, .asc, .hgt, .png) into a simplified TIN by greedy insertion, written as OBJ.
+    /// Turn a DEM grid (.npy, .asc, .hgt, .png, .tif) into a simplified TIN by greedy insertion, written as OBJ.
     Tin(tin_cmd::TinArgs),
     /// Write a seeded synthetic terrain (ridged fractal with valleys) as OBJ, or as a height grid (.npy).
     Synth(synth::SynthArgs),

@@ -11,7 +11,7 @@ use tiles::{Plan, PlanOptions, TileReport, TilesError};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::{Outputs, write_one};
-use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, MeshArgs, UpArg, is_dem};
+use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, ImportArgs, MeshArgs, UpArg, is_dem};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tiles`.
@@ -229,11 +229,12 @@ fn plan_mesh(
 ) -> Result<()> {
     let mesh = MeshArgs {
         mesh: args.dem.clone(),
-        keep_faces: args.keep_faces,
-        dedupe: args.dedupe,
-        up: args.up,
-        dem_vertices: DEFAULT_DEM_VERTICES,
-        dem: DemArgs::default(),
+        import: ImportArgs {
+            keep_faces: args.keep_faces,
+            dedupe: args.dedupe,
+            up: args.up,
+            ..ImportArgs::default()
+        },
     };
     let (tin, _) = mesh.load(out)?;
     // Unset sizes as a DEM's in samples, a sample being the mesh's mean vertex spacing: the side of a square of its
