@@ -1,5 +1,6 @@
 //! The `tincull` command-line tool.
 
+use std::io::Write;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -13,13 +14,16 @@ fn main() -> ExitCode {
         Err(e)
             if e.chain().any(|c| {
                 c.downcast_ref::<std::io::Error>()
-                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+                    .map(std::io::Error::kind)
+                    .or_else(|| c.downcast_ref::<outfile::Error>().and_then(outfile::Error::io_kind))
+                    == Some(std::io::ErrorKind::BrokenPipe)
             }) =>
         {
             ExitCode::from(141)
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // A closed stderr cannot take the message; the status still tells.
+            let _ = writeln!(std::io::stderr(), "error: {e:#}");
             ExitCode::FAILURE
         }
     }

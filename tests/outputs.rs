@@ -262,3 +262,33 @@ fn text_to_a_reader_that_goes_away_ends_quietly_too() {
     assert_eq!(out.status.code(), Some(141), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(String::from_utf8_lossy(&out.stderr), "", "nothing to say");
 }
+
+#[test]
+fn a_closed_stderr_is_not_a_failure() {
+    use std::process::Stdio;
+    // Like `tincull info m.obj 2>&1 >/dev/null | true`: the reader of stderr is gone before the first warning (the
+    // mesh has slivers, so `info` warns). The warning cannot be read by anyone; the command still succeeds.
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["info", p(&mesh(SMALL))])
+        .stdout(Stdio::null())
+        .stderr(Stdio::from(writer))
+        .output()
+        .expect("the binary runs");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "a warning nobody can read is no reason to fail"
+    );
+    // An error that nobody can read still gives the error status.
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["info", "no-such-mesh.obj"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::from(writer))
+        .output()
+        .expect("the binary runs");
+    assert_eq!(out.status.code(), Some(1));
+}

@@ -273,3 +273,50 @@ fn a_mesh_plan_takes_dedupe() {
     let info = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
     assert_eq!(m["vertices"], info["vertices"], "the lower duplicate is dropped");
 }
+
+#[test]
+#[cfg(unix)]
+fn a_plan_of_many_tiles_needs_few_open_files() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("t.npy");
+    ok(&["synth", "--vertices", "3600", "--rng-seed", "2", "-o", s(&npy), "-q"]);
+    let plan = dir.path().join("plan.json");
+    // 144 tiles (each with its far-field file) under a limit of 32 open files: every file is written, synced and
+    // closed before the next one, and all are renamed together at the end.
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_tincull"));
+    cmd.args([
+        "tiles",
+        "plan",
+        s(&npy),
+        "-o",
+        s(&plan),
+        "--tile",
+        "5",
+        "--halo",
+        "2",
+        "--json",
+    ]);
+    // SAFETY: setrlimit(2) is async-signal-safe; it only lowers this child's own limit before exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 32,
+                rlim_max: 32,
+            };
+            if libc::setrlimit(libc::RLIMIT_NOFILE, &limit) == 0 {
+                Ok(())
+            } else {
+                Err(std::io::Error::last_os_error())
+            }
+        });
+    }
+    let out = cmd.output().expect("the binary runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["tiles"].as_u64(), Some(144));
+    let far = std::fs::read_dir(dir.path().join("plan.tiles"))
+        .expect("tiles folder")
+        .count();
+    assert_eq!(far, 144, "one far-field file per tile");
+}

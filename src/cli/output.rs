@@ -50,15 +50,17 @@ impl Output {
                 if e.kind() == std::io::ErrorKind::BrokenPipe {
                     std::process::exit(141);
                 }
-                eprintln!("error: cannot write to standard output: {e}");
+                let _ = writeln!(std::io::stderr(), "error: cannot write to standard output: {e}");
                 std::process::exit(1);
             }
         }
     }
 
-    /// Prints a warning on stderr, also with `--quiet` and `--json` (which keep stdout for the JSON).
+    /// Prints a warning on stderr, also with `--quiet` and `--json` (which keep stdout for the JSON). A stderr that
+    /// cannot take it (closed: `tincull info m.obj 2>&1 >/dev/null | true`) is ignored: nobody is there to read it,
+    /// and the command's work and status do not depend on it.
     pub fn warn(&self, text: impl AsRef<str>) {
-        eprintln!("warning: {}", text.as_ref());
+        let _ = writeln!(std::io::stderr(), "warning: {}", text.as_ref());
     }
 
     /// Prints `value` as one JSON object on stdout when `--json` is set.

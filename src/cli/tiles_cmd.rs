@@ -175,20 +175,22 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     bar.finish_and_clear();
     let grid = plan.grid.clone().context("a DEM's plan has its grid")?;
     let dir = Plan::resolve(&args.out, &plan.tiles_dir);
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut far_points = 0;
-    let mut digests = Vec::with_capacity(plan.tiles.len());
-    for spec in &plan.tiles {
-        if let Some(far) = &spec.far {
-            let (bytes, count) = plan.far_file(&field, spec)?;
-            files.add_bytes(&Plan::resolve(&args.out, far), &bytes)?;
-            digests.push(tiles::plan::file_digest(&bytes));
-            far_points = far_points.max(count);
+    let far_points = in_new_dir(&dir, || {
+        let mut far_points = 0;
+        let mut digests = Vec::with_capacity(plan.tiles.len());
+        for spec in &plan.tiles {
+            if let Some(far) = &spec.far {
+                let (bytes, count) = plan.far_file(&field, spec)?;
+                files.add_bytes(&Plan::resolve(&args.out, far), &bytes)?;
+                digests.push(tiles::plan::file_digest(&bytes));
+                far_points = far_points.max(count);
+            }
         }
-    }
-    plan.seal(&digests)?;
-    files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
-    files.commit()?;
+        plan.seal(&digests)?;
+        files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
+        files.commit()?;
+        Ok(far_points)
+    })?;
     let (rows, cols) = plan
         .tiles
         .iter()
@@ -216,6 +218,19 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "far_points": far_points,
         "tiles_dir": dir,
     }))
+}
+
+/// Creates the folder `dir` of a plan's tile files, then runs `work`, which writes into it: when `work` fails and the
+/// folder was new, it is removed again (it is then empty, the files being all or nothing), so a failed plan leaves
+/// nothing behind.
+fn in_new_dir<T>(dir: &Path, work: impl FnOnce() -> Result<T>) -> Result<T> {
+    let existed = dir.is_dir();
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let result = work();
+    if result.is_err() && !existed {
+        let _ = std::fs::remove_dir(dir);
+    }
+    result
 }
 
 /// `tiles plan MESH`: the whole mesh is read once and cut; each tile's part is written beside the plan.
@@ -253,24 +268,25 @@ fn plan_mesh(
     };
     let (mut plan, parts) = tiles::make_mesh_plan(&tin, source, options.clone(), tiles_dir)?;
     let dir = Plan::resolve(&args.out, tiles_dir);
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let paths: Vec<PathBuf> = plan
-        .tiles
-        .iter()
-        .filter_map(|t| t.part.as_ref().map(|p| Plan::resolve(&args.out, p)))
-        .collect();
-    for p in &paths {
-        files.check(p)?;
-    }
-    let mut digests = Vec::with_capacity(parts.len());
-    for (p, part) in paths.iter().zip(&parts) {
-        let bytes = part.to_bytes()?;
-        files.add_bytes(p, &bytes)?;
-        digests.push(tiles::plan::file_digest(&bytes));
-    }
-    plan.seal(&digests)?;
-    files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
-    files.commit()?;
+    in_new_dir(&dir, || {
+        let paths: Vec<PathBuf> = plan
+            .tiles
+            .iter()
+            .filter_map(|t| t.part.as_ref().map(|p| Plan::resolve(&args.out, p)))
+            .collect();
+        for p in &paths {
+            files.check(p)?;
+        }
+        let mut digests = Vec::with_capacity(parts.len());
+        for (p, part) in paths.iter().zip(&parts) {
+            let bytes = part.to_bytes()?;
+            files.add_bytes(p, &bytes)?;
+            digests.push(tiles::plan::file_digest(&bytes));
+        }
+        plan.seal(&digests)?;
+        files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
+        files.commit()
+    })?;
     let (rows, cols) = plan
         .tiles
         .iter()
@@ -440,4 +456,24 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
         "seconds": seconds,
         "peak_memory_bytes": peak,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::in_new_dir;
+
+    #[test]
+    fn a_failed_plan_removes_the_folder_it_created_and_keeps_one_that_was_there() {
+        let root = tempfile::tempdir().expect("tempdir");
+        let new = root.path().join("p.tiles");
+        let failed: anyhow::Result<()> = in_new_dir(&new, || anyhow::bail!("the work failed"));
+        assert!(failed.is_err());
+        assert!(!new.exists(), "a folder the failed plan created is removed");
+        let done = in_new_dir(&new, || Ok(7)).expect("the work succeeds");
+        assert_eq!(done, 7);
+        assert!(new.is_dir(), "a successful plan keeps its folder");
+        let failed: anyhow::Result<()> = in_new_dir(&new, || anyhow::bail!("the work failed"));
+        assert!(failed.is_err());
+        assert!(new.is_dir(), "a folder that was there before is left as it was");
+    }
 }

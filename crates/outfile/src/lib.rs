@@ -39,7 +39,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-use tempfile::NamedTempFile;
+use tempfile::{NamedTempFile, TempPath};
 
 /// The temporary files that exist now (written, or waiting to be renamed): see [`remove_temporaries`].
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -142,10 +142,15 @@ impl fmt::Display for Error {
     }
 }
 
-impl std::error::Error for Error {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+/// No source: the message already ends with the I/O error's own (a source too would print it twice in a chain).
+/// [`Error::io_kind`] gives its kind.
+impl std::error::Error for Error {}
+
+impl Error {
+    /// The kind of the I/O error behind this one (a reader of standard output that went away: `BrokenPipe`).
+    pub fn io_kind(&self) -> Option<io::ErrorKind> {
         match &self.kind {
-            ErrorKind::Io(e) => Some(e),
+            ErrorKind::Io(e) => Some(e.kind()),
             _ => None,
         }
     }
@@ -296,7 +301,8 @@ pub fn check_file(path: &Path) -> Result<Target> {
 /// A content written to its temporary file, waiting to be renamed over its target.
 struct Staged {
     target: Target,
-    temp: Option<NamedTempFile>,
+    /// Written, synced and closed: a batch of thousands of files holds no file descriptor per file.
+    temp: Option<TempPath>,
     /// Listed for [`remove_temporaries`] until renamed or dropped (declared after `temp`: dropped after it).
     _registered: Option<Registered>,
 }
@@ -341,7 +347,7 @@ fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
             temp.as_file().sync_all().map_err(io)?;
             Ok(Staged {
                 target,
-                temp: Some(temp),
+                temp: Some(temp.into_temp_path()),
                 _registered: Some(registered),
             })
         }
