@@ -113,6 +113,20 @@ fn all_tiles_or_one_by_one_merge_to_the_same_file() {
             "-q",
         ]);
     }
+    // More jobs than tiles: one thread per tile to build, whatever was asked (not 100,000 idle threads).
+    let v = json(&[
+        "tiles",
+        "build",
+        s(&plan),
+        "--tile",
+        "0",
+        "--tile",
+        "1",
+        "--jobs",
+        "100000",
+        "--json",
+    ]);
+    assert_eq!(v["threads"].as_u64(), Some(2));
     let b = dir.path().join("b.tch");
     ok(&["tiles", "merge", s(&plan), "-o", s(&b), "-q"]);
     assert_eq!(std::fs::read(&a).expect("a"), std::fs::read(&b).expect("b"));

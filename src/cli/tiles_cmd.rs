@@ -106,7 +106,8 @@ pub struct TileBuildArgs {
     /// Build every tile of the plan.
     #[arg(long)]
     pub all: bool,
-    /// Threads, shared by the tiles built at once [default: all cores].
+    /// Threads, shared by the tiles built at once [default: all cores]; at most one per tile to build (more would
+    /// only wait), with a warning above the machine's cores (each running tile holds its own memory).
     #[arg(long)]
     pub jobs: Option<usize>,
     /// Output flags.
@@ -344,7 +345,14 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
         if j == 0 {
             bail!("--jobs must be at least 1");
         }
-        builder = builder.num_threads(j);
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if j > cores {
+            out.warn(format!(
+                "--jobs {j} is more than the {cores} cores of this machine: the tiles built at once share them, and \
+                 each holds its own memory"
+            ));
+        }
+        builder = builder.num_threads(j.min(indices.len()));
     }
     let pool = builder.build()?;
     let reports: Vec<TileReport> = if indices.len() == 1 {
