@@ -75,6 +75,34 @@ fn quadtree_build_eval_and_cull() {
         &["build", s(&m), "-o", s(&small), "--depth", "3"],
         "--grouping quadtree",
     );
+    // The crystal grouping's parameters are refused for a quadtree rather than ignored.
+    for flag in [
+        "--seeds",
+        "--orphan-passes",
+        "--min-group",
+        "--max-expanse",
+        "--rng-seed",
+    ] {
+        let value = if flag == "--max-expanse" { "0.5" } else { "5" };
+        fails_with(
+            &["build", s(&m), "-o", s(&small), "--grouping", "quadtree", flag, value],
+            &format!("{flag} applies to the crystal grouping"),
+        );
+    }
+    // `info` reports what a quadtree was built with: its depths, not the crystal parameters it has not used.
+    let info = ok(&["info", s(&quad)]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        text.contains("built with    quadtree depth 3, depth 3 stored"),
+        "{text}"
+    );
+    assert!(!text.contains("seeds"), "{text}");
+    let info = ok(&["info", s(&small)]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        text.contains("built with    quadtree depth 3, depth 2 stored"),
+        "{text}"
+    );
 
     let csv = dir.path().join("e.csv");
     ok(&[

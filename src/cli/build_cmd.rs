@@ -109,6 +109,20 @@ impl ParamArgs {
                 }
             }
             Some("quadtree") => {
+                // The crystal grouping's parameters mean nothing to a quadtree: refused rather than ignored.
+                let crystal_only = [
+                    ("--seeds", self.seeds.or(from_file.seeds).is_some()),
+                    (
+                        "--orphan-passes",
+                        self.orphan_passes.or(from_file.orphan_passes).is_some(),
+                    ),
+                    ("--min-group", self.min_group.or(from_file.min_group).is_some()),
+                    ("--max-expanse", self.max_expanse.or(from_file.max_expanse).is_some()),
+                    ("--rng-seed", self.rng_seed.or(from_file.rng_seed).is_some()),
+                ];
+                if let Some((flag, _)) = crystal_only.iter().find(|(_, given)| *given) {
+                    anyhow::bail!("{flag} applies to the crystal grouping; --grouping quadtree has no seeds to grow");
+                }
                 quadtree.validate()?;
                 p.grouping = Grouping::Quadtree(quadtree);
             }

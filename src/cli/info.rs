@@ -169,17 +169,19 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
          triangle)",
         h.sectors, b_info.subsectors
     ));
-    out.say(format!(
-        "  built with    seeds {}, orphan passes {}, min group {}, max expanse {}, rng seed {}{}",
-        b_info.seeds,
-        b_info.orphan_passes,
-        b_info.min_group,
-        b_info.max_expanse,
-        b_info.rng_seed,
-        b_info
-            .undersampling
-            .map_or(String::new(), |u| format!(", undersampling {u} m"))
-    ));
+    let undersampling = b_info
+        .undersampling
+        .map_or(String::new(), |u| format!(", undersampling {u} m"));
+    out.say(match b_info.grouping {
+        cull::Grouping::Crystal => format!(
+            "  built with    seeds {}, orphan passes {}, min group {}, max expanse {}, rng seed {}{undersampling}",
+            b_info.seeds, b_info.orphan_passes, b_info.min_group, b_info.max_expanse, b_info.rng_seed,
+        ),
+        cull::Grouping::Quadtree {
+            built_depth,
+            stored_depth,
+        } => format!("  built with    quadtree depth {built_depth}, depth {stored_depth} stored{undersampling}"),
+    });
     out.json(&json!({
         "hierarchy": path,
         "file_bytes": file_bytes,
