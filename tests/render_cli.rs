@@ -167,6 +167,54 @@ fn render_rejects_bad_options_with_clear_messages() {
     assert!(!png.exists(), "no image is written on error");
 }
 
+/// Culling parameters that a render does not use are refused, as `cull` refuses them, before anything is drawn.
+#[test]
+fn render_refuses_culling_flags_it_does_not_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    ok(&tincull(&["synth", "-o", p(&obj), "--vertices", "300", "-q"]));
+    let tch = dir.path().join("t.tch");
+    ok(&tincull(&["build", p(&obj), "-o", p(&tch), "-q"]));
+    let png = dir.path().join("x.png");
+    let eye = ["--view", "eye", "--eye", "100,100,500"];
+    let cases: [(&Path, Vec<&str>, &str); 5] = [
+        (
+            &tch,
+            [&eye[..], &["--method", "thesis", "--columns", "8"]].concat(),
+            "--columns 8 is a parameter",
+        ),
+        (
+            &tch,
+            [&eye[..], &["--method", "lloyd-egbert", "--patch", "8"]].concat(),
+            "--patch 8 is a parameter",
+        ),
+        (
+            &obj,
+            [&eye[..], &["--method", "thesis"]].concat(),
+            "--method thesis: this render culls nothing",
+        ),
+        (
+            &tch,
+            vec!["--view", "map", "--patch", "8"],
+            "--patch 8: this render culls nothing",
+        ),
+        (
+            &tch,
+            vec!["--view", "orbit", "--columns", "64"],
+            "--columns 64: this render culls nothing",
+        ),
+    ];
+    for (input, extra, needle) in cases {
+        let mut args = vec!["render", p(input), "--out", p(&png)];
+        args.extend_from_slice(&extra);
+        let out = tincull(&args);
+        assert!(!out.status.success(), "{extra:?} should fail");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{extra:?}: {err}");
+    }
+    assert!(!png.exists(), "no image is written on error");
+}
+
 /// `--pvs-cell` paints a viewcell's PVS: what it holds in the drawn colour, what it excludes in the culled colour,
 /// exactly as many of each as `tincull pvs` reports.
 #[test]

@@ -44,20 +44,13 @@ impl SafeArgs {
     /// An error when a parameter is given that `method` does not use (`--columns` by `thesis` and `stewart`, the
     /// others by every method but `safe`), rather than ignoring it; a parameter at its default counts as not given.
     pub fn check_method(&self, method: CullMethod) -> Result<()> {
-        let d = SafeParams::default();
-        let columns = (self.columns != d.columns_per_face).then(|| format!("--columns {}", self.columns));
-        let safe_only = [
-            (self.patch != d.patch).then(|| format!("--patch {}", self.patch)),
-            self.occluder_budget.map(|n| format!("--occluder-budget {n}")),
-            (self.work_budget != d.work_budget).then(|| format!("--work-budget {}", self.work_budget)),
-            (self.coarse_columns != d.coarse_columns).then(|| format!("--coarse-columns {}", self.coarse_columns)),
-        ];
+        let (columns, safe_only) = self.given();
         let unused = match method {
             CullMethod::Safe => None,
-            CullMethod::LloydEgbert => safe_only.into_iter().flatten().next().map(|f| (f, "the `safe` culler")),
+            CullMethod::LloydEgbert => safe_only.map(|f| (f, "the `safe` culler")),
             CullMethod::Thesis | CullMethod::Stewart => columns
                 .map(|f| (f, "the `safe` and `lloyd-egbert` cullers"))
-                .or_else(|| safe_only.into_iter().flatten().next().map(|f| (f, "the `safe` culler"))),
+                .or_else(|| safe_only.map(|f| (f, "the `safe` culler"))),
         };
         if let Some((flag, whose)) = unused {
             anyhow::bail!(
@@ -66,6 +59,26 @@ impl SafeArgs {
             );
         }
         Ok(())
+    }
+
+    /// The first parameter given (not at its default), as written on the command line: `--columns`, then the safe
+    /// culler's own.
+    pub fn first_given(&self) -> Option<String> {
+        let (columns, safe_only) = self.given();
+        columns.or(safe_only)
+    }
+
+    /// `--columns` when given, and the first of the safe culler's own parameters given.
+    fn given(&self) -> (Option<String>, Option<String>) {
+        let d = SafeParams::default();
+        let columns = (self.columns != d.columns_per_face).then(|| format!("--columns {}", self.columns));
+        let safe_only = [
+            (self.patch != d.patch).then(|| format!("--patch {}", self.patch)),
+            self.occluder_budget.map(|n| format!("--occluder-budget {n}")),
+            (self.work_budget != d.work_budget).then(|| format!("--work-budget {}", self.work_budget)),
+            (self.coarse_columns != d.coarse_columns).then(|| format!("--coarse-columns {}", self.coarse_columns)),
+        ];
+        (columns, safe_only.into_iter().flatten().next())
     }
 
     /// The parameters, checked.
