@@ -138,4 +138,25 @@ fn bad_arguments_give_clear_errors() {
     fails_with(&["pvs", s(&tch), "--cell", &cell, "--patch", "0"], "--patch");
     fails_with(&["pvs", s(&tch), "--check", "1", "--cell-size", "1e6"], "cell-size");
     fails_with(&["pvs", "/no/such.tch", "--cell", &cell], "such.tch");
+    // Cells whose heights make no sense where they lie: off the terrain with heights above the ground, below the
+    // ground (the bundled terrain lies above 200 m), and a grid of more cells than a run could compute.
+    let off = format!("{},{},{},{}", cx + 1e6, cy, cx + 1e6 + 50.0, cy + 50.0);
+    fails_with(&["pvs", s(&tch), "--cell", &off], "lies off the terrain");
+    // An absolute band is fine beside the terrain (an aircraft approaching it).
+    ok(&["pvs", s(&tch), "--cell", &off, "--height-band", "0,3000", "--json"]);
+    fails_with(
+        &["pvs", s(&tch), "--cell", &cell, "--above-ground=-5,-1"],
+        "must be 0 or more",
+    );
+    fails_with(
+        &["pvs", s(&tch), "--cell", &cell, "--height-band", "0,100"],
+        "lies below the terrain",
+    );
+    fails_with(&["pvs", s(&tch), "--grid", "1"], "more than 1000000");
+    let eye = format!("{cx},{cy},-5");
+    fails_with(&["cull", s(&tch), "--eye", &eye, "--above-ground"], "must be 0 or more");
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "5000", "--eye-height=-5", "--json"],
+        "--eye-height",
+    );
 }

@@ -91,6 +91,16 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         (None, None) => bail!("give --eye x,y,z or --eyes FILE"),
     };
     if args.above_ground {
+        if let Some((i, eye)) = eyes.iter().enumerate().find(|(_, e)| e[2] < 0.0) {
+            bail!(
+                "eye {} ({}, {}, {}): with --above-ground, z is a height above the ground and must be 0 or more (an eye \
+                 below the ground sees none of the terrain)",
+                i + 1,
+                eye[0],
+                eye[1],
+                eye[2]
+            );
+        }
         let tin = hierarchy_tin(&h)?;
         let locator = truth::Locator::new(&tin);
         for (i, eye) in eyes.iter_mut().enumerate() {

@@ -48,8 +48,9 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         args.cell_size
     );
     ensure!(
-        args.eye_height.is_finite(),
-        "--eye-height must be finite, got {}",
+        args.eye_height.is_finite() && args.eye_height >= 0.0,
+        "--eye-height must be a finite height above the ground (0 or more; an eye below the ground sees none of the \
+         terrain), got {}",
         args.eye_height
     );
     ensure!(

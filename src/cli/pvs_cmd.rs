@@ -158,7 +158,11 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     let pvs = Pvs::new(&h, params)?;
     let prep_s = prep.elapsed().as_secs_f64();
     let cells = match (args.cell, args.grid) {
-        (Some(rect), _) => vec![ViewCell { rect, height }],
+        (Some(rect), _) => {
+            let cell = ViewCell { rect, height };
+            pvs.check_over_terrain(&cell).context("--cell")?;
+            vec![cell]
+        }
         (None, Some(size)) => pvs.grid(size, height)?,
         (None, None) => bail!("give --cell, --grid or --check"),
     };

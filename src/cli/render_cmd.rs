@@ -147,9 +147,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
                 patch: pvs::PvsParams::default().patch,
             };
             let cell = pvs::ViewCell { rect, height };
-            let result = pvs::Pvs::new(h, params)?
-                .compute(&cell)
-                .with_context(|| format!("--pvs-cell {rect:?}"))?;
+            let pvs = pvs::Pvs::new(h, params)?;
+            pvs.check_over_terrain(&cell).context("--pvs-cell")?;
+            let result = pvs.compute(&cell).with_context(|| format!("--pvs-cell {rect:?}"))?;
             out.say(format!(
                 "PVS of cell {rect:?}: {} of {} triangles ({:.3} s)",
                 result.triangles(),

@@ -51,6 +51,9 @@ pub enum PvsError {
     BadFile(String),
 }
 
+/// Most cells of a [`Pvs::grid`]: a million PVSs take hours on a large terrain, and the file grows with them.
+pub const MAX_GRID_CELLS: usize = 1_000_000;
+
 /// How the viewcell's height is given.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Height {
@@ -131,6 +134,11 @@ impl Height {
         if !(a.is_finite() && b.is_finite() && a <= b) {
             return Err(PvsError::BadCell(format!(
                 "the {what} {a},{b} must be two finite values, the lower first"
+            )));
+        }
+        if matches!(self, Height::AboveGround(_)) && a < 0.0 {
+            return Err(PvsError::BadCell(format!(
+                "the {what} {a},{b} must be 0 or more: an eye below the ground sees none of the terrain"
             )));
         }
         Ok(())
@@ -326,6 +334,47 @@ impl<'a> Pvs<'a> {
         b
     }
 
+    /// The lowest and the highest vertex of the triangles whose x,y boxes meet the rectangle `[x0, y0, x1, y1]`
+    /// (every ground height under it lies between them), and the highest vertex of the whole mesh; `None` for the
+    /// first when no triangle's box meets the rectangle.
+    fn ground_under(&self, [x0, y0, x1, y1]: [f64; 4]) -> (Option<[f64; 2]>, f64) {
+        let pos = &self.h.mesh.positions;
+        let (mut lo, mut hi, mut all) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for t in &self.h.mesh.triangles {
+            let c = t.map(|v| pos[v as usize]);
+            let tz = c[0][2].max(c[1][2]).max(c[2][2]);
+            all = all.max(tz);
+            let (lx, hx) = (c[0][0].min(c[1][0]).min(c[2][0]), c[0][0].max(c[1][0]).max(c[2][0]));
+            let (ly, hy) = (c[0][1].min(c[1][1]).min(c[2][1]), c[0][1].max(c[1][1]).max(c[2][1]));
+            if lx <= x1 && hx >= x0 && ly <= y1 && hy >= y0 {
+                hi = hi.max(tz);
+                lo = lo.min(c[0][2].min(c[1][2]).min(c[2][2]));
+            }
+        }
+        ((lo <= hi).then_some([lo, hi]), all)
+    }
+
+    /// Checks that a viewcell a person gave lies where its heights make sense: a cell given in heights above the
+    /// ground must meet the terrain's footprint (there is no ground elsewhere), and a cell given as an absolute band
+    /// must not lie wholly below the terrain under it (an eye below the ground sees none of the terrain). A grid's
+    /// cells are not checked: they cover the footprint's bounding box, whose corners may hold no terrain.
+    pub fn check_over_terrain(&self, cell: &ViewCell) -> Result<(), PvsError> {
+        cell.validate()?;
+        let [x0, y0, x1, y1] = cell.rect;
+        let (ground, _) = self.ground_under(cell.rect);
+        match (cell.height, ground) {
+            (Height::AboveGround(_), None) => Err(PvsError::BadCell(format!(
+                "the cell {x0},{y0},{x1},{y1} lies off the terrain: heights above the ground need ground under \
+                 the cell (give an absolute band for a cell beside the terrain)"
+            ))),
+            (Height::Band([_, z1]), Some([lo, _])) if z1 < lo => Err(PvsError::BadCell(format!(
+                "the height band up to {z1} m lies below the terrain under the cell {x0},{y0},{x1},{y1} (its \
+                 lowest vertex there is at {lo} m): an eye below the ground sees none of the terrain"
+            ))),
+            _ => Ok(()),
+        }
+    }
+
     /// The box of `cell`: its rectangle, and the top of its band (for heights above ground: the highest vertex of
     /// the triangles whose boxes meet the rectangle, or of the whole mesh when none does, plus `h1`; rounded up).
     pub fn cell_box(&self, cell: &ViewCell) -> Result<Box3, PvsError> {
@@ -334,21 +383,8 @@ impl<'a> Pvs<'a> {
         let ztop = match cell.height {
             Height::Band([_, z1]) => z1,
             Height::AboveGround([_, h1]) => {
-                let pos = &self.h.mesh.positions;
-                let mut ground = f64::NEG_INFINITY;
-                let mut all = f64::NEG_INFINITY;
-                for t in &self.h.mesh.triangles {
-                    let c = t.map(|v| pos[v as usize]);
-                    let tz = c[0][2].max(c[1][2]).max(c[2][2]);
-                    all = all.max(tz);
-                    let (lx, hx) = (c[0][0].min(c[1][0]).min(c[2][0]), c[0][0].max(c[1][0]).max(c[2][0]));
-                    let (ly, hy) = (c[0][1].min(c[1][1]).min(c[2][1]), c[0][1].max(c[1][1]).max(c[2][1]));
-                    if lx <= x1 && hx >= x0 && ly <= y1 && hy >= y0 {
-                        ground = ground.max(tz);
-                    }
-                }
-                let ground = if ground.is_finite() { ground } else { all };
-                (ground + h1).next_up()
+                let (ground, all) = self.ground_under(cell.rect);
+                (ground.map_or(all, |[_, hi]| hi) + h1).next_up()
             }
         };
         if !ztop.is_finite() {
@@ -443,10 +479,10 @@ impl<'a> Pvs<'a> {
         }
         let nx = ((hi[0] - lo[0]) / size).ceil().max(1.0);
         let ny = ((hi[1] - lo[1]) / size).ceil().max(1.0);
-        if nx * ny > 1e7 {
+        if nx * ny > MAX_GRID_CELLS as f64 {
             return Err(PvsError::BadCell(format!(
-                "a grid of {size} m gives {} cells; give a larger size",
-                nx * ny
+                "a grid of {size} m gives {nx} x {ny} cells, more than {MAX_GRID_CELLS} (each cell's PVS takes \
+                 milliseconds or more); give a larger size"
             )));
         }
         let mut cells = Vec::new();
