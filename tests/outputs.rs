@@ -292,3 +292,30 @@ fn a_closed_stderr_is_not_a_failure() {
         .expect("the binary runs");
     assert_eq!(out.status.code(), Some(1));
 }
+
+#[test]
+fn an_output_named_like_another_format_is_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let obj = mesh(SMALL);
+    // An OBJ named .npy, a hierarchy named .obj: each would later be read as the format its name says.
+    fails_with(
+        &[
+            "tin",
+            "../shared/dem/jacksboro_fault.npy",
+            "--vertices",
+            "100",
+            "-o",
+            p(&dir.path().join("t.npy")),
+        ],
+        &["t.npy", "writes an OBJ mesh", "name it .obj"],
+    );
+    fails_with(
+        &["build", p(&obj), "-o", p(&dir.path().join("b.obj"))],
+        &["b.obj", "writes a hierarchy", "name it .tch"],
+    );
+    assert!(names(dir.path()).is_empty(), "nothing written");
+    // Names of no format tincull knows are the user's choice: the content tells a hierarchy.
+    let other = dir.path().join("terrain.hierarchy");
+    ok(&["build", "-q", p(&obj), "-o", p(&other)]);
+    ok(&["info", p(&other)]);
+}

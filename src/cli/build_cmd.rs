@@ -237,6 +237,7 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
         files.input(config)?;
     }
     files.check_or_stdout(&args.out, &mut out)?;
+    super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     if let Some(path) = &args.export_json {
         files.check(path)?;
     }

@@ -104,3 +104,24 @@ pub fn write_one(path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<(
     o.add(path, write)?;
     o.commit()
 }
+
+/// The file formats tincull reads or writes that it tells apart by their name's extension.
+const KNOWN_EXTENSIONS: [&str; 15] = [
+    "obj", "mtl", "npy", "asc", "hgt", "png", "tif", "tiff", "tch", "pvs", "json", "csv", "glb", "gltf", "bin",
+];
+
+/// An error when the output `path` of a command that writes `what` (whose extension is `own`) is named with the
+/// extension of another format that tincull knows (`tin -o t.npy`, `build -o b.obj`): the file would later be read
+/// as that format. Other names (and `-`) are left to the user.
+pub fn refuse_other_format(path: &Path, what: &str, own: &str) -> Result<()> {
+    let Some(ext) = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase) else {
+        return Ok(());
+    };
+    if ext != own && KNOWN_EXTENSIONS.contains(&ext.as_str()) {
+        bail!(
+            "{}: this command writes {what}, which a .{ext} name would make read as another format; name it .{own}",
+            path.display()
+        );
+    }
+    Ok(())
+}

@@ -416,6 +416,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
         files.input(&Plan::resolve(&args.plan, &t.output))?;
     }
     files.check_or_stdout(&args.out, &mut out)?;
+    super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     let start = Instant::now();
     // Every tile must be built before any is read.
     for t in &plan.tiles {
