@@ -280,6 +280,11 @@ fn a_mesh_plan_takes_dedupe() {
     ];
     fails_with(&base, "--dedupe");
     assert!(!plan.exists(), "no plan after an error");
+    // A DEM's simplification bound means nothing to a mesh's tiles: refused, not ignored.
+    fails_with(
+        &[&base[..], &["--dedupe", "keep-highest", "--max-error", "5"]].concat(),
+        "--max-error 5 applies to a DEM",
+    );
     let v = json(&[&base[..], &["--dedupe", "keep-highest", "--json"]].concat());
     assert!(v["tiles"].as_u64().expect("tiles") > 1, "{v}");
     ok(&["tiles", "build", s(&plan), "--all", "-q"]);

@@ -163,6 +163,13 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
     if !is_dem(&args.dem) {
         super::mesh_input::refuse_dem_flags_for_mesh(&args.dem, &args.read, DEFAULT_DEM_VERTICES)?;
+        if args.max_error != 1.0 {
+            bail!(
+                "{}: --max-error {} applies to a DEM's tiles (each simplified to it); a mesh's tiles keep its triangles",
+                args.dem.display(),
+                args.max_error
+            );
+        }
         return plan_mesh(args, out, files, options, &source, &tiles_dir);
     }
     super::mesh_input::refuse_mesh_flags_for_dem(&args.dem, args.keep_faces, args.dedupe, args.up)?;
