@@ -221,14 +221,18 @@ fn a_y_up_mesh_gets_a_hint() {
     ok(&["build", s(&obj), "-o", s(&tch), "-q"]);
     fails_with(
         &["info", s(&tch), "--keep-faces"],
-        "--keep-faces applies to a mesh or DEM grid input",
+        "--keep-faces applies to an OBJ mesh input",
     );
     let png = dir.path().join("r.png");
     fails_with(
         &["render", s(&tch), "--z-scale", "2", "-o", s(&png)],
-        "--z-scale 2 applies to a mesh or DEM grid input",
+        "--z-scale 2 applies to a DEM grid input",
     );
     assert!(!png.exists());
+    fails_with(
+        &["info", s(&tch), "--dem-vertices", "5"],
+        "--dem-vertices 5 applies to a DEM grid input",
+    );
 }
 
 /// A GeoTIFF in US survey feet without a vertical unit, and an `.asc` whose `.prj` is in feet: every command that reads
@@ -481,7 +485,7 @@ fn bad_input_gives_clear_errors() {
     fails_with(&["cull", "/no/such.tch", "--eye", "0,0,0"], "such.tch");
     fails_with(
         &["cull", s(&mesh("jacksboro-2k.obj")), "--eye", "0,0,0"],
-        "jacksboro-2k.obj: not a tincull hierarchy file",
+        "jacksboro-2k.obj is an OBJ mesh, not a tincull hierarchy: build one with `tincull build",
     );
     // Every command that reads a hierarchy names the file of a damaged one.
     let damaged = tempfile::tempdir().expect("tempdir");
@@ -869,4 +873,250 @@ fn messages_name_the_flag_at_fault() {
         assert!(!stderr.contains("-- -"), "{stderr}");
     }
     assert!(!out.exists());
+}
+
+/// Builds the hierarchy of the bundled 2k mesh into `dir` (quietly) and returns its path.
+fn build_2k(dir: &Path) -> PathBuf {
+    let tch = dir.join("j2k.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "-q"]);
+    tch
+}
+
+/// Options that cannot mean what they say are errors naming them: a viewpoint class given twice, `--eyes` with the
+/// seeded viewpoints' options, a failure map none of whose cells lies on the terrain, outputs that standard output
+/// cannot take (saying why).
+#[test]
+fn contradictory_or_empty_options_are_errors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = build_2k(dir.path());
+    fails_with(
+        &["eval", s(&tch), "--viewpoints", "1", "--classes", "ground,ground"],
+        "--classes: `ground` is given twice",
+    );
+    let eyes = dir.path().join("eyes.txt");
+    std::fs::write(&eyes, "1000,1000,900\n").expect("eyes");
+    fails_with(
+        &["eval", s(&tch), "--eyes", s(&eyes), "--classes", "ground"],
+        "--classes",
+    );
+    fails_with(
+        &["eval", s(&tch), "--eyes", s(&eyes), "--viewpoints", "3"],
+        "--viewpoints",
+    );
+    let help = String::from_utf8_lossy(&ok(&["eval", "--help"]).stdout).into_owned();
+    assert!(help.contains("not with --classes or --viewpoints"), "{help}");
+
+    let v = String::from_utf8_lossy(&run(&["failmap", s(&tch), "--cell-size", "1e9", "--json"]).stdout).into_owned();
+    assert!(v.is_empty(), "{v}");
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "1e9", "--json"],
+        "--cell-size 1e9: the centre of none of the 1 x 1 cells lies on the terrain",
+    );
+
+    let obj = dir.path().join("g.obj");
+    fails_with(
+        &["export", s(&tch), "--export-obj", "-"],
+        "--export-obj -: the OBJ is written with its materials (.mtl) beside it",
+    );
+    fails_with(
+        &["export", s(&tch), "--export-gltf", "-"],
+        "--export-gltf -: glTF is written as a binary .glb",
+    );
+    fails_with(
+        &["eval", s(&tch), "--viewpoints", "1", "--export-json", "-"],
+        "--export-json -: standard output carries the evaluation's table",
+    );
+    fails_with(
+        &[
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            s(&tch),
+            "--export-json",
+            "-",
+        ],
+        "--export-json -: standard output carries build's report",
+    );
+    fails_with(
+        &[
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            s(&tch),
+            "--export-obj",
+            "-",
+        ],
+        "give a file name",
+    );
+    assert!(!obj.exists());
+}
+
+/// A file of the wrong kind given to a command is named for what it is, with what to do instead.
+#[test]
+fn files_of_the_wrong_kind_say_what_they_are() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let obj = mesh("jacksboro-2k.obj");
+    for args in [
+        vec!["cull", s(&obj), "--eye", "1,1,1"],
+        vec!["eval", s(&obj)],
+        vec!["export", s(&obj), "--export-json", "-"],
+        vec!["failmap", s(&obj), "--cell-size", "100", "--json"],
+    ] {
+        fails_with(
+            &args,
+            "jacksboro-2k.obj is an OBJ mesh, not a tincull hierarchy: build one with `tincull build",
+        );
+    }
+    // An OBJ named .tch, by its content.
+    let fake = dir.path().join("t.tch");
+    std::fs::copy(&obj, &fake).expect("copy");
+    fails_with(
+        &["info", s(&fake)],
+        "t.tch holds OBJ text (a mesh), not a tincull hierarchy",
+    );
+    fails_with(
+        &["cull", s(&fake), "--eye", "1,1,1"],
+        "rename it to .obj, then build a hierarchy with `tincull build MESH.obj -o MESH.tch`",
+    );
+    // A DEM grid.
+    let npy = dir.path().join("g.npy");
+    ok(&["synth", "-o", s(&npy), "--vertices", "400", "-q"]);
+    fails_with(
+        &["cull", s(&npy), "--eye", "1,1,1"],
+        "g.npy is a DEM grid, not a tincull hierarchy",
+    );
+    // A PVS file (its magic number) to `info`, to a command that reads a hierarchy and to one that reads a mesh.
+    let pvs = dir.path().join("g.pvs");
+    let mut bytes = b"TINCPVS\x1a".to_vec();
+    bytes.extend_from_slice(&[0; 40]);
+    std::fs::write(&pvs, &bytes).expect("pvs");
+    fails_with(
+        &["info", s(&pvs)],
+        "g.pvs is a tincull PVS file (written by `tincull pvs -o`), which `info` does not",
+    );
+    fails_with(
+        &["cull", s(&pvs), "--eye", "1,1,1"],
+        "g.pvs is a tincull PVS file (written by `tincull pvs -o`), not a hierarchy: this command reads the .tch written",
+    );
+    fails_with(&["stress", s(&pvs)], "g.pvs is a tincull PVS file");
+}
+
+/// A `.tch` whose length field is corrupt says that the file is truncated or corrupt and what its header declares.
+#[test]
+fn a_corrupt_length_field_is_named() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = build_2k(dir.path());
+    let mut bytes = std::fs::read(&tch).expect("tch");
+    let len = bytes.len();
+    bytes[12..20].copy_from_slice(&1_095_216_736_226u64.to_le_bytes());
+    let bad = dir.path().join("bad.tch");
+    std::fs::write(&bad, &bytes).expect("bad");
+    fails_with(
+        &["info", s(&bad)],
+        &format!(
+            "bad.tch: truncated or corrupt hierarchy file: its header declares {} bytes, the file has {len}",
+            1_095_216_736_226u64 + 24
+        ),
+    );
+}
+
+/// DEM readers: `--band` refused for every format but GeoTIFF (naming the file and the flag), a sidecar's bad spacing
+/// in plain words, sample positions 1-based "row R, column C" whatever the check, and a bad `--dem-vertices` naming
+/// the file.
+#[test]
+fn dem_messages_name_the_file_flag_and_sample() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("g.npy");
+    ok(&["synth", "-o", s(&npy), "--vertices", "400", "-q"]);
+    let out = dir.path().join("x.obj");
+    for band in ["2", "1", "0"] {
+        fails_with(
+            &["tin", s(&npy), "--vertices", "100", "--band", band, "-o", s(&out)],
+            &format!("g.npy: --band {band}: a .npy grid has one band"),
+        );
+    }
+    fails_with(&["info", s(&npy), "--band", "2"], "g.npy: --band 2");
+    let asc = dir.path().join("g.asc");
+    std::fs::write(
+        &asc,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("asc");
+    fails_with(
+        &["tin", s(&asc), "--keep-grid", "--band", "1", "-o", s(&out)],
+        "g.asc: --band 1: a .asc grid has one band",
+    );
+    fails_with(
+        &["info", s(&npy), "--dem-vertices", "0"],
+        "g.npy: --dem-vertices must be at least 3, got 0",
+    );
+    assert!(!out.exists());
+
+    // The sidecar's spacing in plain words, naming the sidecar.
+    let sidecar = dir.path().join("g.json");
+    let text = std::fs::read_to_string(&sidecar).expect("sidecar");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let (rows, cols) = (v["rows"].as_u64().expect("rows"), v["cols"].as_u64().expect("cols"));
+    v["spacing_x_m"] = serde_json::json!(-1);
+    std::fs::write(&sidecar, v.to_string()).expect("sidecar");
+    fails_with(&["info", s(&npy)], "g.json: spacing_x_m is -1, must be positive");
+    let stderr = String::from_utf8_lossy(&run(&["info", s(&npy)]).stderr).into_owned();
+    assert!(!stderr.contains("Some("), "{stderr}");
+    std::fs::write(&sidecar, &text).expect("sidecar");
+
+    // An infinite last sample and a first one too large: both 1-based, as row R, column C.
+    let good = std::fs::read(&npy).expect("npy");
+    let n = good.len();
+    let mut bytes = good.clone();
+    bytes[n - 8..].copy_from_slice(&f64::INFINITY.to_le_bytes());
+    std::fs::write(&npy, &bytes).expect("npy");
+    fails_with(
+        &["info", s(&npy)],
+        &format!("g.npy: row {rows}, column {cols} (1-based, row 1 north): the height is infinite"),
+    );
+    let mut bytes = good.clone();
+    let first = n - (rows * cols * 8) as usize;
+    bytes[first..first + 8].copy_from_slice(&1e200f64.to_le_bytes());
+    std::fs::write(&npy, &bytes).expect("npy");
+    fails_with(&["info", s(&npy)], "g.npy: row 1, column 1: height 1e200");
+}
+
+/// Huge numbers in messages are short, counts in human text agree with their nouns, and the help says what
+/// combined options mean and which `--config` keys are read.
+#[test]
+fn messages_and_help_read_well() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("s.obj");
+    let o = run(&["synth", "-o", s(&out), "--relief", "1e308"]);
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success() && stderr.contains("got 1e308"), "{stderr}");
+    assert!(stderr.len() < 200, "{stderr}");
+    fails_with(&["cull", "x.tch", "--eye", "1,2,3", "--fov", "1e300"], "got 1e300");
+
+    let tch = build_2k(dir.path());
+    let text = String::from_utf8_lossy(&ok(&["info", s(&tch)]).stdout).into_owned();
+    for wrong in [" 1 roots", " 1 leaves", " 1 nodes", " 1 faces", " 1 ranges"] {
+        assert!(!text.contains(wrong), "{text}");
+    }
+    assert!(text.contains(" roots") || text.contains(" 1 root,"), "{text}");
+
+    let help = String::from_utf8_lossy(&ok(&["tin", "--help"]).stdout).into_owned();
+    assert!(help.contains("at whichever is reached first"), "{help}");
+    let help = String::from_utf8_lossy(&ok(&["build", "--help"]).stdout).into_owned();
+    for key in ["orphan_passes", "max_expanse", "cell_size", "max_bytes", "not read"] {
+        assert!(help.contains(key), "{key}: {help}");
+    }
+    let config = dir.path().join("p.toml");
+    std::fs::write(&config, "keep_faces = true\n").expect("config");
+    fails_with(
+        &[
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            s(&tch),
+            "--config",
+            s(&config),
+        ],
+        "keep_faces",
+    );
 }

@@ -37,21 +37,24 @@ fn sweep(out: &Path, extra: &[&str]) -> serde_json::Value {
 fn sweep_writes_every_combination_and_resumes() {
     let dir = tempfile::tempdir().expect("temp dir");
     let csv = dir.path().join("sweep.csv");
-    // 2 sectors and 64 x 32 subsectors are skipped with notes.
-    let v = sweep(&csv, &["--sectors", "2,64", "--subsectors", "32"]);
-    assert_eq!(v["ran"], 0, "{v}");
-    assert_eq!(v["combinations"], 0, "{v}");
-    let notes: Vec<String> = v["notes"]
-        .as_array()
-        .expect("notes")
-        .iter()
-        .map(|n| n.as_str().expect("text").to_string())
-        .collect();
-    assert!(notes.iter().any(|n| n.contains("sectors 2 x")), "{notes:?}");
-    assert!(
-        notes.iter().any(|n| n.contains("sectors 64 x subsectors 32")),
-        "{notes:?}"
-    );
+    // 2 sectors and 64 x 32 subsectors are invalid: a sweep of nothing else is an error giving both reasons, before
+    // any work, and writes nothing.
+    let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args([
+            "sweep",
+            mesh("jacksboro-2k.obj").to_str().expect("utf-8 path"),
+            "--sectors",
+            "2,64",
+        ])
+        .args(["--subsectors", "32", "--json", "-o", csv.to_str().expect("utf-8 path")])
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("no combination to sweep is valid"), "{stderr}");
+    assert!(stderr.contains("sectors 2 x"), "{stderr}");
+    assert!(stderr.contains("sectors 64 x subsectors 32"), "{stderr}");
+    assert!(o.stdout.is_empty() && !csv.exists());
 
     let small = dir.path().join("small.csv");
     let v = sweep(&small, &["--sectors", "4,8", "--subsectors", "1,2"]);
@@ -275,5 +278,33 @@ fn sweep_reads_its_fixed_parameters_from_a_config() {
         let name = key.split(' ').next().expect("key");
         assert!(err.contains("p.toml") && err.contains(name), "{key}: {err}");
         assert!(!dir.path().join("x.csv").exists());
+    }
+}
+
+/// A sweep whose every combination is invalid, or whose `--classes` name a class twice, is an error naming why, before
+/// the mesh is read; nothing is written.
+#[test]
+fn a_sweep_of_nothing_valid_is_an_error() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("sw.csv");
+    for (extra, needle) in [
+        (["--sectors", "0", "--subsectors", "1"], "sectors 0 x subsectors 1"),
+        (["--sectors", "512", "--subsectors", "4"], "sectors 512 x subsectors 4"),
+        (["--classes", "low,ridge,low", "--sectors", "4"], "`low` is given twice"),
+    ] {
+        // A mesh that does not exist: the checks come first.
+        let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+            .args(["sweep", "no-such-mesh.obj", "-o", csv.to_str().expect("utf-8 path")])
+            .args(extra)
+            .output()
+            .expect("the binary runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{extra:?}: {stderr}");
+        assert!(
+            stderr.contains("error") && stderr.contains(needle),
+            "{extra:?}: {stderr}"
+        );
+        assert!(!stderr.contains("no-such-mesh"), "{extra:?}: {stderr}");
+        assert!(!csv.exists());
     }
 }

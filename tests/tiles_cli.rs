@@ -247,7 +247,7 @@ fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("1 tiles (of a 1 x 1 grid of 353792 m squares), halo 11056 m"),
+        text.contains("1 tile (of a 1 x 1 grid of 353792 m squares), halo 11056 m"),
         "{text}"
     );
 }

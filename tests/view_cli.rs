@@ -58,7 +58,7 @@ fn view_rebuilds_an_obj_and_shows_ground_truth() {
         }
         panic!("tincull view failed ({}):\n{stdout}\n{stderr}", out.status);
     }
-    assert!(stdout.contains("built the hierarchy 1 time(s)"), "{stdout}");
+    assert!(stdout.contains("built the hierarchy 1 time;"), "{stdout}");
     assert!(stdout.contains("ground truth:"), "{stdout}");
     let img = viewer::read_png(&shot).unwrap();
     assert!(img.width >= 500 && img.height >= 350, "{}x{}", img.width, img.height);

@@ -64,7 +64,8 @@ pub struct ParamArgs {
 }
 
 impl ParamArgs {
-    /// The parameters of a `--config` TOML file (keys as the long options, with underscores).
+    /// The parameters of a `--config` TOML file (keys as the long options of these parameters, with underscores;
+    /// any other key is refused).
     pub fn read(path: &Path) -> Result<ParamArgs> {
         let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
         toml::from_str(&text).with_context(|| format!("{}: invalid parameters", path.display()))
@@ -95,7 +96,10 @@ impl ParamArgs {
         if let Some(r) = p.undersampling
             && !(r.is_finite() && r > 0.0)
         {
-            anyhow::bail!("the undersampling radius must be positive and finite, got {r}");
+            anyhow::bail!(
+                "the undersampling radius must be positive and finite, got {}",
+                tin::compact_number(r)
+            );
         }
         let quadtree = QuadtreeParams {
             depth: self.depth.or(from_file.depth),
@@ -144,7 +148,10 @@ pub struct BuildArgs {
     /// Build parameters.
     #[command(flatten)]
     pub params: ParamArgs,
-    /// Read parameters from this TOML file (keys as the long options, with underscores).
+    /// Read the build parameters from this TOML file; its keys are those options written with underscores, and only
+    /// they: sectors, subsectors, seeds, orphan_passes, min_group, max_expanse, rng_seed, undersampling, grouping,
+    /// depth, cell_size (or cell), max_bytes. The command line wins; the import and output options are not read
+    /// from it.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Also write the hierarchy's JSON form here.
@@ -239,10 +246,15 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     files.check_or_stdout(&args.out, &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     if let Some(path) = &args.export_json {
-        files.check(path)?;
+        files.check_file(
+            path,
+            "--export-json",
+            "standard output carries build's report (or the .tch, with `-o -`), and `tincull export FILE.tch \
+             --export-json -` prints a built hierarchy's JSON there",
+        )?;
     }
     if let Some(path) = &args.export_obj {
-        files.check_grouped_obj(path)?;
+        files.check_grouped_obj(path, "--export-obj")?;
     }
     let started = Instant::now();
     let (tin, _) = args.mesh.load(out)?;

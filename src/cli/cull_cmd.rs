@@ -1,10 +1,11 @@
 //! `tincull cull`: the run-time culler on one or many viewpoints.
 
+use super::output::count;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, DrawList};
 use serde_json::json;
 
 use super::culling_args::{SafeArgs, read_eyes};
@@ -74,13 +75,13 @@ pub fn parse_method(s: &str) -> Result<CullMethod, String> {
 /// Runs `tincull cull`.
 pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !(args.fov > 0.0 && args.fov <= 360.0) {
-        bail!("--fov must be in (0, 360], got {}", args.fov);
+        bail!("--fov must be in (0, 360], got {}", tin::compact_number(args.fov));
     }
     if !args.yaw.is_finite() {
-        bail!("--yaw must be finite, got {}", args.yaw);
+        bail!("--yaw must be finite, got {}", tin::compact_number(args.yaw));
     }
     args.safe.check_method(args.method)?;
-    let h = Hierarchy::load(&args.hierarchy)?;
+    let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     args.method
         .check(&h)
         .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
@@ -137,12 +138,12 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
             }))?;
         } else {
             out.say(format!(
-                "eye {:?}: draw {} of {} triangles in {} ranges; {} nodes tested, {} culled by occlusion, {} by frustum; {:.2} µs",
+                "eye {:?}: draw {} of {} in {}; {} tested, {} culled by occlusion, {} by frustum; {:.2} µs",
                 eye,
                 s.triangles_drawn,
-                s.triangles_drawn + s.triangles_culled,
-                list.ranges.len(),
-                s.nodes_tested,
+                count((s.triangles_drawn + s.triangles_culled) as usize, "triangle"),
+                count(list.ranges.len(), "range"),
+                count(s.nodes_tested as usize, "node"),
                 s.culled_by_occlusion,
                 s.culled_by_frustum,
                 ns as f64 / 1000.0

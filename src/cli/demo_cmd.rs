@@ -62,7 +62,7 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     files.input(&mesh)?;
     files.check(&path(".tch"))?;
     files.check(&path(".json"))?;
-    files.check_grouped_obj(&path("-groups.obj"))?;
+    files.check_grouped_obj(&path("-groups.obj"), "--out-dir")?;
     check_outputs(&mut files, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
     // The renders come after the rest (they need a GPU adapter, and are left out without one), but a path that
     // cannot take them is refused before any work as the others are.

@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::{Result, ensure};
 use clap::Args;
-use cull::Hierarchy;
 use truth::ViewpointClass;
 
 use super::culling_args::{SafeArgs, read_eyes};
@@ -17,10 +16,10 @@ use eval::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
 pub struct EvalArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
-    /// Viewpoints per class.
+    /// Viewpoints per class (not with --eyes).
     #[arg(long, default_value_t = 20)]
     pub viewpoints: usize,
-    /// Viewpoint classes, comma-separated: ground, low, high, valley, ridge, sky.
+    /// Viewpoint classes, comma-separated, each once: ground, low, high, valley, ridge, sky (not with --eyes).
     #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
     pub classes: Vec<ViewpointClass>,
     /// Seed of the viewpoint generator (`--view-seed` everywhere; `--rng-seed` seeds the grouping).
@@ -35,9 +34,9 @@ pub struct EvalArgs {
     /// Skip the conservative precomputed regions (method `safe_regions`; computing them takes a few seconds).
     #[arg(long)]
     pub no_safe_regions: bool,
-    /// Score your own camera path: a file of eye positions, one `x,y,z` per line (class `path`; replaces
-    /// `--classes` and `--viewpoints`).
-    #[arg(long, value_name = "FILE")]
+    /// Score your own camera path: a file of eye positions, one `x,y,z` per line (class `path`, instead of the
+    /// seeded viewpoints: not with --classes or --viewpoints).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["classes", "viewpoints"])]
     pub eyes: Option<PathBuf>,
     /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
     #[command(flatten)]
@@ -53,10 +52,27 @@ pub struct EvalArgs {
     pub output: OutputArgs,
 }
 
+/// Refuses a viewpoint class given twice in `--classes` (its rows would be counted twice in `all`), naming it.
+pub fn check_classes(classes: &[ViewpointClass]) -> Result<()> {
+    for (i, c) in classes.iter().enumerate() {
+        ensure!(
+            !classes[..i].contains(c),
+            "--classes: `{}` is given twice; give each class once",
+            c.name()
+        );
+    }
+    Ok(())
+}
+
 /// Checks the evaluation's outputs (before the work).
 pub fn check_outputs(files: &mut Outputs, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
-    for path in json.into_iter().chain(csv) {
-        files.check(path)?;
+    let why = "standard output carries the evaluation's table (or its --json summary)";
+    for (path, flag) in json
+        .map(|p| (p, "--export-json"))
+        .into_iter()
+        .chain(csv.map(|p| (p, "--csv")))
+    {
+        files.check_file(path, flag, why)?;
     }
     Ok(())
 }
@@ -80,6 +96,7 @@ pub fn add_outputs(
 /// Runs `tincull eval`.
 pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    check_classes(&args.classes)?;
     let safe = args.safe.params()?;
     let eyes = args.eyes.as_deref().map(read_eyes).transpose()?;
     let mut files = Outputs::new();
@@ -88,7 +105,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         files.input(eyes)?;
     }
     check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref())?;
-    let h = Hierarchy::load(&args.hierarchy)?;
+    let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
         viewpoints: args.viewpoints,

@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use cull::Hierarchy;
 
 use super::{Output, OutputArgs};
 use pipeline::export::to_json;
@@ -42,15 +41,19 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         files.check_or_stdout(path, &mut out)?;
     }
     if let Some(path) = &args.export_obj {
-        files.check_grouped_obj(path)?;
+        files.check_grouped_obj(path, "--export-obj")?;
     }
     if let Some(path) = &args.export_gltf {
-        files.check(path)?;
+        files.check_file(
+            path,
+            "--export-gltf",
+            "glTF is written as a binary .glb, or as a .gltf with its .bin beside it (two files)",
+        )?;
         if !is_glb(path) {
             files.check(&bin_path(path)?.0)?;
         }
     }
-    let h = Hierarchy::load(&args.hierarchy)?;
+    let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(path) = &args.export_json {
         files.add_bytes(path, to_json(&h)?.as_bytes())?;
     }

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, ensure};
 use clap::Args;
-use cull::Hierarchy;
 use eval::evaluate::hierarchy_tin;
 use eval::failmap;
 
@@ -45,13 +44,13 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     ensure!(
         args.cell_size.is_finite() && args.cell_size > 0.0,
         "--cell-size must be a positive length, got {}",
-        args.cell_size
+        tin::compact_number(args.cell_size)
     );
     ensure!(
         args.eye_height.is_finite() && args.eye_height >= 0.0,
         "--eye-height must be a finite height above the ground (0 or more; an eye below the ground sees none of the \
          terrain), got {}",
-        args.eye_height
+        tin::compact_number(args.eye_height)
     );
     ensure!(
         args.out.is_some() || args.csv.is_some() || args.output.json,
@@ -59,10 +58,17 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     );
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
-    for path in args.out.iter().chain(&args.csv) {
-        files.check(path)?;
+    if let Some(path) = &args.out {
+        files.check_file(path, "-o", "the map is a PNG image (binary)")?;
     }
-    let h = Hierarchy::load(&args.hierarchy)?;
+    if let Some(path) = &args.csv {
+        files.check_file(
+            path,
+            "--csv",
+            "standard output carries failmap's summary (or its --json)",
+        )?;
+    }
+    let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     args.method
         .check(&h)
         .with_context(|| format!("{}: --method {}", args.hierarchy.display(), args.method))?;
@@ -77,6 +83,14 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     let advance = Output::monotone(&bar);
     let map = failmap::compute(&h, args.method, &tin, args.eye_height, args.cell_size, &advance)?;
     bar.finish_and_clear();
+    ensure!(
+        map.scored().next().is_some(),
+        "--cell-size {}: the centre of none of the {} x {} cells lies on the terrain of {}; give a smaller --cell-size",
+        tin::compact_number(args.cell_size),
+        map.cols,
+        map.rows,
+        args.hierarchy.display()
+    );
     let worst = map.worst();
     if let Some(path) = &args.out {
         let rgba = map.to_rgba();

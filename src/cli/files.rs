@@ -37,6 +37,15 @@ impl Outputs {
         Ok(self.batch.check(path)?)
     }
 
+    /// Checks a file output that cannot be `-` (standard output): given `-`, an error naming `flag` and saying `why`
+    /// (the output is binary, several files, or standard output carries the command's report), and to give a file.
+    pub fn check_file(&mut self, path: &Path, flag: &str, why: &str) -> Result<()> {
+        if path == Path::new("-") {
+            bail!("{flag} -: {why}; give a file name");
+        }
+        self.check(path)
+    }
+
     /// Checks an output that may be `-` (standard output). With `-`, `out` stops printing text and `--json` is
     /// refused (both would go to standard output).
     pub fn check_or_stdout(&mut self, path: &Path, out: &mut Output) -> Result<()> {
@@ -54,8 +63,15 @@ impl Outputs {
         Ok(())
     }
 
-    /// Checks a grouped OBJ output and its `.mtl` (refused when the OBJ is named like its `.mtl`).
-    pub fn check_grouped_obj(&mut self, obj: &Path) -> Result<()> {
+    /// Checks a grouped OBJ output (given with `flag`) and its `.mtl` (refused when the OBJ is named like its
+    /// `.mtl`, or is `-`: two files).
+    pub fn check_grouped_obj(&mut self, obj: &Path, flag: &str) -> Result<()> {
+        if obj == Path::new("-") {
+            bail!(
+                "{flag} -: the OBJ is written with its materials (.mtl) beside it, two files that standard output \
+                 cannot hold; give a file name (OUT.obj, and OUT.mtl is written beside it)"
+            );
+        }
         let (mtl, _) = mtl_path(obj)?;
         self.check(obj)?;
         self.check(&mtl)

@@ -68,7 +68,10 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
     if let Some(r) = args.undersampling
         && !(r.is_finite() && r > 0.0)
     {
-        anyhow::bail!("--undersampling radius must be positive and finite, got {r}");
+        anyhow::bail!(
+            "--undersampling radius must be positive and finite, got {}",
+            tin::compact_number(r)
+        );
     }
     let mut files = Outputs::new();
     let mut out = out;

@@ -1,5 +1,6 @@
 //! `tincull info`: what a terrain mesh holds and whether it is a sound height field.
 
+use super::output::count;
 use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
@@ -23,6 +24,13 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
     if super::mesh_input::is_hierarchy(&args.mesh.mesh) {
         args.mesh.refuse_for_hierarchy()?;
         return hierarchy(&args.mesh.mesh, out);
+    }
+    if super::mesh_input::file_kind(&args.mesh.mesh) == super::mesh_input::FileKind::Pvs {
+        anyhow::bail!(
+            "{} is a tincull PVS file (written by `tincull pvs -o`), which `info` does not describe: it describes OBJ \
+             meshes, DEM grids and hierarchies (.tch)",
+            args.mesh.mesh.display()
+        );
     }
     let (tin, import, dem) = args.mesh.load_with_source(out)?;
     let stats = tin::mesh_stats(&tin);
@@ -70,10 +78,10 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
     }
     if dem.is_none() {
         out.say(format!(
-            "  vertices      {} (file: {} vertices, {} faces{})",
+            "  vertices      {} (file: {}, {}{})",
             stats.vertices,
-            import.vertices_read,
-            import.faces_read,
+            count(import.vertices_read, "vertex"),
+            count(import.faces_read, "face"),
             if import.kept_faces {
                 ", faces kept"
             } else {
@@ -126,7 +134,7 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
 
 /// `tincull info FILE.tch`: what a hierarchy holds (its mesh, its nodes, its visibility data, how it was built).
 fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
-    let h = cull::Hierarchy::load(path)?;
+    let h = super::mesh_input::load_hierarchy(path)?;
     let file_bytes = std::fs::metadata(path)
         .with_context(|| path.display().to_string())?
         .len();
@@ -157,12 +165,12 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         ));
     }
     out.say(format!(
-        "  hierarchy     {}: {} nodes ({} leaves, {} roots, depth {depth}), {} triangles always visible",
+        "  hierarchy     {}: {} ({}, {}, depth {depth}), {} always visible",
         b_info.grouping.name(),
-        h.nodes.len(),
-        leaves,
-        h.roots.len(),
-        b - a
+        count(h.nodes.len(), "node"),
+        count(leaves, "leaf"),
+        count(h.roots.len(), "root"),
+        count((b - a) as usize, "triangle")
     ));
     out.say(format!(
         "  regions       {regions} in {} sectors x {} subsectors; visibility data {bytes} bytes ({per_triangle:.2} per \

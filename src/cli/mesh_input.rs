@@ -61,7 +61,7 @@ fn mesh_flag(keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Option<String> {
 /// other than its default), as written on the command line.
 fn dem_flag(dem: &DemArgs, dem_vertices: usize) -> Option<String> {
     if dem.z_scale != 1.0 {
-        Some(format!("--z-scale {}", dem.z_scale))
+        Some(format!("--z-scale {}", tin::compact_number(dem.z_scale)))
     } else if let Some((dx, dy)) = dem.spacing {
         Some(format!("--spacing {dx},{dy}"))
     } else if let Some(b) = dem.band {
@@ -345,15 +345,113 @@ pub fn is_hierarchy(path: &std::path::Path) -> bool {
         && head == cull::MAGIC
 }
 
+/// What a file holds, told by its first bytes: for the errors of a command given the wrong kind of file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileKind {
+    /// A tincull hierarchy (`.tch` magic number).
+    Hierarchy,
+    /// A tincull PVS file (`.pvs` magic number, written by `tincull pvs -o`).
+    Pvs,
+    /// Text whose first line that is neither blank nor a comment is an OBJ statement (`v`, `f`, `o`, ...).
+    ObjText,
+    /// Anything else, or a file that cannot be read.
+    Other,
+}
+
+/// What `path` holds by its first bytes ([`FileKind`]).
+pub fn file_kind(path: &std::path::Path) -> FileKind {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(4096);
+    if std::fs::File::open(path)
+        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .is_err()
+    {
+        return FileKind::Other;
+    }
+    if head.starts_with(&cull::MAGIC) {
+        return FileKind::Hierarchy;
+    }
+    if head.starts_with(&pvs::MAGIC) {
+        return FileKind::Pvs;
+    }
+    // The text up to the first byte that is not UTF-8 (a character cut by the 4096 bytes read, say).
+    let text = match std::str::from_utf8(&head) {
+        Ok(t) => t,
+        Err(e) => std::str::from_utf8(&head[..e.valid_up_to()]).unwrap_or_default(),
+    };
+    const STATEMENTS: [&str; 10] = ["v", "vt", "vn", "f", "o", "g", "s", "l", "mtllib", "usemtl"];
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'));
+    match first.and_then(|l| l.split_whitespace().next()) {
+        Some(word) if STATEMENTS.contains(&word) => FileKind::ObjText,
+        _ => FileKind::Other,
+    }
+}
+
+/// `path` with the extension `.tch`, for the command suggested to build a hierarchy of it.
+fn tch_beside(path: &std::path::Path) -> String {
+    path.with_extension("tch").display().to_string()
+}
+
+/// Reads the hierarchy that a command takes as its input (`cull`, `eval`, `export`, `pvs`, `failmap`, `info`,
+/// `render`, `view`): [`cull::Hierarchy::load`], and for a file that is not one, an error saying what it is (a mesh,
+/// a DEM grid, a PVS file) and how to build a hierarchy of a terrain.
+pub fn load_hierarchy(path: &std::path::Path) -> Result<cull::Hierarchy> {
+    let error = match cull::Hierarchy::load(path) {
+        Ok(h) => return Ok(h),
+        Err(e) => e,
+    };
+    if !matches!(error.kind(), cull::HierarchyError::BadMagic) {
+        return Err(error.into());
+    }
+    let p = path.display();
+    let named_tch = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("tch"));
+    match file_kind(path) {
+        FileKind::Pvs => bail!(
+            "{p} is a tincull PVS file (written by `tincull pvs -o`), not a hierarchy: this command reads the .tch \
+             written by `tincull build`"
+        ),
+        FileKind::ObjText if named_tch => bail!(
+            "{p} holds OBJ text (a mesh), not a tincull hierarchy, whatever its name: rename it to .obj, then build a \
+             hierarchy with `tincull build MESH.obj -o MESH.tch`"
+        ),
+        FileKind::ObjText => bail!(
+            "{p} is an OBJ mesh, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
+            tch_beside(path)
+        ),
+        _ if is_dem(path) => bail!(
+            "{p} is a DEM grid, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
+            tch_beside(path)
+        ),
+        _ if path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj")) =>
+        {
+            bail!(
+                "{p} is named as an OBJ mesh, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
+                tch_beside(path)
+            )
+        }
+        _ => Err(error.into()),
+    }
+}
+
 impl MeshArgs {
     /// An error when a flag of how to import a mesh or a DEM grid is given while the input is a hierarchy, rather
     /// than ignoring it: a `.tch` holds its mesh as it was built.
     pub fn refuse_for_hierarchy(&self) -> Result<()> {
-        if let Some(flag) = mesh_flag(self.import.keep_faces, self.import.dedupe, self.import.up)
-            .or_else(|| dem_flag(&self.import.dem, self.import.dem_vertices))
-        {
+        let flag = mesh_flag(self.import.keep_faces, self.import.dedupe, self.import.up)
+            .map(|f| (f, "an OBJ mesh input"))
+            .or_else(|| dem_flag(&self.import.dem, self.import.dem_vertices).map(|f| (f, "a DEM grid input")));
+        if let Some((flag, input)) = flag {
             bail!(
-                "{}: {flag} applies to a mesh or DEM grid input; a hierarchy (.tch) holds its mesh as it was built",
+                "{}: {flag} applies to {input}; a hierarchy (.tch) holds its mesh as it was built",
                 self.mesh.display()
             );
         }
@@ -371,6 +469,13 @@ impl MeshArgs {
             bail!(
                 "{} is a tincull hierarchy (.tch), not a mesh: this command reads an OBJ mesh or a DEM grid (commands \
                  that read a hierarchy: info, cull, eval, export, pvs, failmap, render, view)",
+                self.mesh.display()
+            );
+        }
+        if file_kind(&self.mesh) == FileKind::Pvs {
+            bail!(
+                "{} is a tincull PVS file (written by `tincull pvs -o`), not a terrain: this command reads an OBJ mesh \
+                 or a DEM grid",
                 self.mesh.display()
             );
         }
@@ -415,7 +520,11 @@ impl MeshArgs {
     /// Reads a DEM grid and simplifies it to `dem_vertices` vertices.
     fn load_dem(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
         if self.import.dem_vertices < 3 {
-            bail!("--dem-vertices must be at least 3, got {}", self.import.dem_vertices);
+            bail!(
+                "{}: --dem-vertices must be at least 3, got {}",
+                self.mesh.display(),
+                self.import.dem_vertices
+            );
         }
         let opts = self.import.dem.options();
         let spinner = out.spinner("reading DEM");

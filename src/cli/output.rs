@@ -114,3 +114,34 @@ impl Output {
         bar
     }
 }
+
+/// `n` and `noun` (given in the singular) for human text, the noun in the plural unless `n` is 1: `count(1,
+/// "range")` is "1 range", `count(3, "range")` "3 ranges", `count(2, "vertex")` "2 vertices". Not for JSON or CSV.
+pub fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        return format!("1 {noun}");
+    }
+    match noun {
+        "vertex" => format!("{n} vertices"),
+        "leaf" => format!("{n} leaves"),
+        _ if noun.ends_with('s') || noun.ends_with('x') || noun.ends_with("ch") || noun.ends_with("sh") => {
+            format!("{n} {noun}es")
+        }
+        _ => format!("{n} {noun}s"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::count;
+
+    #[test]
+    fn counts_agree_with_their_nouns() {
+        assert_eq!(count(1, "range"), "1 range");
+        assert_eq!(count(0, "range"), "0 ranges");
+        assert_eq!(count(2, "vertex"), "2 vertices");
+        assert_eq!(count(1, "vertex"), "1 vertex");
+        assert_eq!(count(3, "leaf"), "3 leaves");
+        assert_eq!(count(5, "pass"), "5 passes");
+    }
+}

@@ -1,6 +1,7 @@
 //! `tincull pvs`: from-region visibility. The potentially visible set (PVS) of one viewcell (`--cell`), of every
 //! cell of a grid over the footprint (`--grid`), or a check of random cells against the exact checker (`--check`).
 
+use super::output::count;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -143,9 +144,13 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     }
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.out {
-        files.check(path)?;
+        files.check_file(
+            path,
+            "-o",
+            "a .pvs file is binary, and standard output carries pvs's report",
+        )?;
     }
-    let h = Hierarchy::load(&args.hierarchy)?;
+    let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(n) = args.check {
         return check(args, &h, height, n, safe_params, out);
     }
@@ -241,13 +246,13 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     } else {
         for (c, r) in cells.iter().zip(&results).take(20) {
             out.say(format!(
-                "cell {:?}: PVS {} of {} triangles ({:.1}%) in {} ranges, {} nodes; {:.3} s",
+                "cell {:?}: PVS {} of {} ({:.1}%) in {}, {}; {:.3} s",
                 c.rect,
                 r.triangles(),
-                nt,
+                count(nt as usize, "triangle"),
                 100.0 * r.triangles() as f64 / nt.max(1) as f64,
-                r.ranges.len(),
-                r.nodes.len(),
+                count(r.ranges.len(), "range"),
+                count(r.nodes.len(), "node"),
                 r.seconds
             ));
         }
@@ -255,9 +260,9 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
             out.say(format!("… and {} more cells", cells.len() - 20));
         }
         out.say(format!(
-            "{} cells, method {} at {}², mean PVS {:.0} of {} triangles, {:.3} s per cell, {:.2} s in all \
+            "{}, method {} at {}², mean PVS {:.0} of {} triangles, {:.3} s per cell, {:.2} s in all \
              (+{:.2} s preparation), {} bytes{}",
-            cells.len(),
+            count(cells.len(), "cell"),
             params.method.name(),
             params.resolution,
             mean_size,

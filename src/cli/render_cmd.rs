@@ -1,6 +1,7 @@
 //! `tincull render`: headless renders of a hierarchy or a mesh to PNG (map, orbit overview with a viewpoint's
 //! culling, or the eye view with a culled-versus-unculled comparison).
 
+use super::output::count;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
@@ -105,7 +106,7 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
 pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Terrain> {
     if super::mesh_input::is_hierarchy(path) {
         import.mesh(path).refuse_for_hierarchy()?;
-        let h = cull::Hierarchy::load(path)?;
+        let h = super::mesh_input::load_hierarchy(path)?;
         Ok(Terrain::from_hierarchy(h)?)
     } else {
         let (tin, _) = import.mesh(path).load(out)?;
@@ -221,21 +222,21 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     }
     files.commit()?;
     out.say(format!(
-        "wrote {} ({}x{}, {} draws of {} triangles, on {})",
+        "wrote {} ({}x{}, {} of {}, on {})",
         args.out.display(),
         result.image.width,
         result.image.height,
-        result.frame.draws,
-        result.frame.triangles,
+        count(result.frame.draws as usize, "draw"),
+        count(result.frame.triangles as usize, "triangle"),
         gpu.describe()
     ));
     if let Some(s) = &result.cull {
         out.say(format!(
-            "culled for eye {:?}: draw {} of {} triangles; {} nodes tested, {} culled by occlusion, {} by frustum",
+            "culled for eye {:?}: draw {} of {}; {} tested, {} culled by occlusion, {} by frustum",
             options.eye.unwrap_or_default(),
             s.triangles_drawn,
-            s.triangles_drawn + s.triangles_culled,
-            s.nodes_tested,
+            count((s.triangles_drawn + s.triangles_culled) as usize, "triangle"),
+            count(s.nodes_tested as usize, "node"),
             s.culled_by_occlusion,
             s.culled_by_frustum
         ));

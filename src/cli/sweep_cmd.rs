@@ -3,6 +3,7 @@
 //! skipped, and the file is rewritten atomically after each combination; a file written for another setup (mesh,
 //! build options, evaluation) is refused ([`eval::sweep::setup_digest`]).
 
+use super::output::count;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -39,7 +40,7 @@ pub struct SweepArgs {
     /// Viewpoints per class.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
-    /// Viewpoint classes, comma-separated: ground, low, high, valley, ridge, sky.
+    /// Viewpoint classes, comma-separated, each once: ground, low, high, valley, ridge, sky.
     #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
     pub classes: Vec<ViewpointClass>,
     /// Seed of the viewpoint generator.
@@ -158,9 +159,17 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     anyhow::ensure!(
         eval.fov_deg > 0.0 && eval.fov_deg <= 360.0,
         "--fov must be in (0, 360] degrees, got {}",
-        eval.fov_deg
+        tin::compact_number(eval.fov_deg)
     );
     anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
+    super::eval_cmd::check_classes(&eval.classes)?;
+    // Which combinations are valid does not depend on the mesh (only their keys' seed counts do): refuse a sweep of
+    // none before any work.
+    let (valid, notes) = spec.combos(0);
+    if valid.is_empty() {
+        let reasons: Vec<&str> = notes.iter().map(|n| n.strip_prefix("skipped ").unwrap_or(n)).collect();
+        anyhow::bail!("no combination to sweep is valid: {}", reasons.join("; "));
+    }
 
     // Refuse an output that cannot be written, or that is the mesh or the config, before any work (it is rewritten
     // after each combination).
@@ -168,6 +177,12 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     check.input(&args.mesh.mesh)?;
     if let Some(config) = &args.config {
         check.input(config)?;
+    }
+    if args.out == std::path::Path::new("-") {
+        anyhow::bail!(
+            "-o -: sweep reads its CSV back and rewrites it after each combination (it is resumable), which standard \
+             output cannot do; give a file name"
+        );
     }
     check.check(&args.out)?;
     let mut table = match std::fs::read_to_string(&args.out) {
@@ -187,8 +202,8 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     let todo: Vec<_> = combos.iter().filter(|c| !table.contains(&c.key)).collect();
     let skipped = combos.len() - todo.len();
     out.say(format!(
-        "{} combinations: {} already in {}, {} to run",
-        combos.len(),
+        "{}: {} already in {}, {} to run",
+        count(combos.len(), "combination"),
         skipped,
         args.out.display(),
         todo.len()
@@ -247,10 +262,10 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         bar.finish_and_clear();
     }
     out.say(format!(
-        "{}: {} combinations, {} lines",
+        "{}: {}, {}",
         args.out.display(),
-        table.combos(),
-        table.lines()
+        count(table.combos(), "combination"),
+        count(table.lines(), "line")
     ));
     out.json(&json!({
         "output": args.out,

@@ -1,5 +1,6 @@
 //! `tincull tiles plan|build|merge`: tiled builds of terrains too large for one build (crate `tiles`).
 
+use super::output::count;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -204,13 +205,13 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         .iter()
         .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
     out.say(format!(
-        "{} ({} x {} samples) -> {}: {} tiles ({rows} x {cols}) of at most {} intervals, halo {} samples, far field \
+        "{} ({} x {} samples) -> {}: {} ({rows} x {cols}) of at most {} intervals, halo {} samples, far field \
          {} blocks (at most {} points per tile); tiles write to {}",
         args.dem.display(),
         grid.rows,
         grid.cols,
         args.out.display(),
-        plan.tiles.len(),
+        count(plan.tiles.len(), "tile"),
         options.tile,
         options.halo,
         field.finest(),
@@ -300,13 +301,13 @@ fn plan_mesh(
         .iter()
         .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
     out.say(format!(
-        "{} ({} vertices, {} triangles) -> {}: {} tiles (of a {rows} x {cols} grid of {} m squares), halo {} m, far \
+        "{} ({} vertices, {} triangles) -> {}: {} (of a {rows} x {cols} grid of {} m squares), halo {} m, far \
          field blocks of {} m; parts and tiles in {}",
         args.dem.display(),
         tin.num_vertices(),
         tin.num_triangles(),
         args.out.display(),
-        plan.tiles.len(),
+        count(plan.tiles.len(), "tile"),
         options.tile,
         options.halo,
         options.far_block,
@@ -401,8 +402,8 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
     }
     let peak = peak_memory_bytes();
     out.say(format!(
-        "{} tiles in {seconds:.2} s{}",
-        reports.len(),
+        "{} in {seconds:.2} s{}",
+        count(reports.len(), "tile"),
         peak.map(|b| format!(", peak memory {:.1} MB", b as f64 / 1e6))
             .unwrap_or_default()
     ));
@@ -452,12 +453,12 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     let peak = peak_memory_bytes();
     out.say(format!(
-        "{} tiles -> {}: {} vertices, {} triangles, {} nodes, {} always visible; {seconds:.2} s{}",
-        plan.tiles.len(),
+        "{} -> {}: {} vertices, {} triangles, {}, {} always visible; {seconds:.2} s{}",
+        count(plan.tiles.len(), "tile"),
         args.out.display(),
         h.mesh.positions.len(),
         h.num_triangles(),
-        h.nodes.len(),
+        count(h.nodes.len(), "node"),
         h.always_visible[1] - h.always_visible[0],
         peak.map(|b| format!(", peak memory {:.1} MB", b as f64 / 1e6))
             .unwrap_or_default()

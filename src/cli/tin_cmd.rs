@@ -22,10 +22,10 @@ pub struct TinArgs {
     /// Output OBJ file (`-` for standard output).
     #[arg(short, long)]
     pub out: PathBuf,
-    /// Stop at this many vertices.
+    /// Stop at this many vertices (with --max-error: at whichever is reached first).
     #[arg(long)]
     pub vertices: Option<usize>,
-    /// Stop when the largest vertical error is at most this (m).
+    /// Stop when the largest vertical error is at most this (m) (with --vertices: at whichever is reached first).
     #[arg(long)]
     pub max_error: Option<f64>,
     /// Keep every valid sample: the full-resolution grid, Delaunay-triangulated, without simplification (unlike

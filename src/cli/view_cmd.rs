@@ -1,6 +1,7 @@
 //! `tincull view`: the interactive viewer on a hierarchy or a mesh (its rebuilds and exports use the `pipeline`
 //! crate directly).
 
+use super::output::count;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -62,7 +63,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     let mut params = args.params.resolve(None)?;
     let source = if is_tch {
         args.import.mesh(&args.input).refuse_for_hierarchy()?;
-        let h = cull::Hierarchy::load(&args.input)?;
+        let h = super::mesh_input::load_hierarchy(&args.input)?;
         let b = &h.build;
         let p = &args.params;
         params.sectors = p.sectors.unwrap_or(h.sectors);
@@ -113,8 +114,9 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     }
     if summary.rebuilds > 0 {
         out.say(format!(
-            "built the hierarchy {} time(s); the last has {} groups",
-            summary.rebuilds, summary.groups
+            "built the hierarchy {}; the last has {}",
+            count(summary.rebuilds as usize, "time"),
+            count(summary.groups, "group")
         ));
     }
     if let Some((visible, false_culls)) = summary.truth {

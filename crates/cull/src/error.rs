@@ -21,11 +21,13 @@ pub enum HierarchyError {
         /// The newest version this build reads (it reads every version from 1).
         supported: u32,
     },
-    /// The file ends before the end of its header, or of the data whose length the header declares.
+    /// The file ends before the end of its header, or of the data whose length the header declares (truncated, or
+    /// the length field corrupt).
     Truncated {
-        /// Bytes needed: the header's, or the declared length of the data after it.
+        /// Bytes the whole file needs: [`crate::file::HEADER_LEN`] when it is shorter than its header, else the
+        /// header's and the data length it declares.
         expected: u64,
-        /// Bytes present.
+        /// Bytes of the whole file.
         found: u64,
     },
     /// The checksum does not match: the file is corrupted.
@@ -74,7 +76,7 @@ impl std::fmt::Display for HierarchyError {
                 "unsupported hierarchy format version {found} (this build reads versions 1 to {supported})"
             ),
             HierarchyError::Truncated { expected, found } => {
-                write!(f, "truncated hierarchy file: {found} bytes where {expected} are needed")
+                f.write_str(&crate::file::truncation(" hierarchy file", *expected, *found))
             }
             HierarchyError::Checksum { stored, found } => write!(
                 f,

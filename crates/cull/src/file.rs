@@ -31,11 +31,13 @@ pub const HEADER_LEN: usize = 8 + 4 + 8 + 4;
 pub enum FrameError {
     /// The bytes do not start with the expected magic number.
     BadMagic,
-    /// Fewer bytes than the header, or than the payload length it states.
+    /// Fewer bytes than the header, or than the header and the payload length it declares (the file is truncated,
+    /// or its length field corrupt).
     Truncated {
-        /// Bytes needed.
+        /// Bytes the whole file needs: [`HEADER_LEN`] when it is shorter than its header, else the header's and the
+        /// payload length it declares (always more than [`HEADER_LEN`]).
         expected: u64,
-        /// Bytes present.
+        /// Bytes of the whole file.
         found: u64,
     },
     /// This many bytes follow the payload.
@@ -53,9 +55,7 @@ impl std::fmt::Display for FrameError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             FrameError::BadMagic => write!(f, "it does not start with the expected magic number"),
-            FrameError::Truncated { expected, found } => {
-                write!(f, "truncated: {found} bytes where {expected} are needed")
-            }
+            FrameError::Truncated { expected, found } => f.write_str(&truncation("", *expected, *found)),
             FrameError::Trailing(extra) => write!(f, "{extra} unexpected bytes after the data"),
             FrameError::Checksum { stored, found } => {
                 write!(f, "checksum mismatch (stored {stored:08x}, computed {found:08x})")
@@ -65,6 +65,17 @@ impl std::fmt::Display for FrameError {
 }
 
 impl std::error::Error for FrameError {}
+
+/// What [`FrameError::Truncated`] says, starting with "truncated" and then `file` (as " hierarchy file"): a file
+/// shorter than its header, or one shorter than the length its header declares (truncated, or the length field
+/// corrupt, as a declared length far beyond any file is).
+pub(crate) fn truncation(file: &str, expected: u64, found: u64) -> String {
+    if expected == HEADER_LEN as u64 {
+        format!("truncated{file}: {found} bytes, fewer than the {HEADER_LEN} of its header")
+    } else {
+        format!("truncated or corrupt{file}: its header declares {expected} bytes, the file has {found}")
+    }
+}
 
 /// Frames `payload` as a file of this layout: `magic`, `version`, payload length, CRC-32 (IEEE) of the payload, the
 /// payload (little-endian). Shared by every binary file of tincull (`.tch` here, `.pvs` in the `pvs` crate).
@@ -115,8 +126,8 @@ pub fn unframe<'a>(bytes: &'a [u8], magic: &[u8; 8]) -> Result<(u32, &'a [u8]), 
     let payload = &bytes[HEADER_LEN..];
     if (payload.len() as u64) < len {
         return Err(FrameError::Truncated {
-            expected: len,
-            found: payload.len() as u64,
+            expected: len.saturating_add(HEADER_LEN as u64),
+            found: bytes.len() as u64,
         });
     }
     if payload.len() as u64 > len {

@@ -230,7 +230,7 @@ impl GroundTruthSet {
         anyhow::ensure!(
             opts.fov_deg > 0.0 && opts.fov_deg <= 360.0,
             "the field of view must be in (0, 360] degrees, got {}",
-            opts.fov_deg
+            tin::compact_number(opts.fov_deg)
         );
         anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
         let truth = GroundTruth::new(tin);

@@ -48,14 +48,16 @@ pub struct FailureMap {
 pub fn grid_size(tin: &Tin, cell: f64) -> Result<(usize, usize)> {
     ensure!(
         cell.is_finite() && cell > 0.0,
-        "--cell must be a positive length, got {cell}"
+        "--cell-size must be a positive length, got {}",
+        tin::compact_number(cell)
     );
     let b = tin.bbox();
     let cols = ((b.max.x - b.min.x) / cell).ceil().max(1.0);
     let rows = ((b.max.y - b.min.y) / cell).ceil().max(1.0);
     ensure!(
         cols * rows <= MAX_CELLS as f64,
-        "a {cell} m cell gives {cols} x {rows} cells, more than {MAX_CELLS}: use a larger --cell-size"
+        "a {} m cell gives {cols} x {rows} cells, more than {MAX_CELLS}: use a larger --cell-size",
+        tin::compact_number(cell)
     );
     Ok((cols as usize, rows as usize))
 }
@@ -70,7 +72,11 @@ pub fn compute(
     cell: f64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<FailureMap> {
-    ensure!(eye_height.is_finite(), "--eye-height must be finite, got {eye_height}");
+    ensure!(
+        eye_height.is_finite(),
+        "--eye-height must be finite, got {}",
+        tin::compact_number(eye_height)
+    );
     ensure!(tin.num_triangles() > 0, "the mesh has no triangles");
     let (cols, rows) = grid_size(tin, cell)?;
     let b = tin.bbox();

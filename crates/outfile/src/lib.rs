@@ -124,7 +124,11 @@ impl fmt::Display for Error {
             ErrorKind::NoDirectory(d) => write!(f, "{p}: the directory {} does not exist", d.display()),
             ErrorKind::NoFileName => write!(f, "{p}: not a file name"),
             ErrorKind::SymlinkLoop => write!(f, "{p}: too many levels of symbolic links"),
-            ErrorKind::StdoutNotAllowed => write!(f, "{p}: standard output cannot take this output"),
+            ErrorKind::StdoutNotAllowed => write!(
+                f,
+                "{p}: this output cannot go to standard output (`-` is taken only where a command's help says so); \
+                 give a file name"
+            ),
             ErrorKind::SameFile(other) => {
                 write!(
                     f,

@@ -114,9 +114,7 @@ impl PvsFile {
         let (version, payload) = match unframe(bytes, &MAGIC) {
             Ok(framed) => framed,
             Err(FrameError::BadMagic) => return bad("it does not start with the PVS magic number".into()),
-            Err(FrameError::Truncated { expected, found }) => {
-                return bad(format!("truncated: {found} bytes where {expected} are needed"));
-            }
+            Err(e @ FrameError::Truncated { .. }) => return bad(e.to_string()),
             Err(FrameError::Trailing(extra)) => return bad(format!("{extra} unexpected bytes after the data")),
             Err(FrameError::Checksum { .. }) => return bad("checksum mismatch".into()),
         };

@@ -67,10 +67,10 @@ pub fn far_from_bytes(bytes: &[u8], grid: [usize; 2], name: &Path) -> Result<Vec
         return Err(TilesError::Plan {
             path: name.to_path_buf(),
             reason: format!(
-                "far-field point {} (row {}, column {}, height {}) is not a sample of the {} x {} grid",
+                "far-field point {} (row {}, column {}, 1-based; height {}) is not a sample of the {} x {} grid",
                 i + 1,
-                p.row,
-                p.col,
+                u64::from(p.row) + 1,
+                u64::from(p.col) + 1,
                 p.z,
                 grid[0],
                 grid[1]
@@ -427,7 +427,10 @@ mod tests {
         let e = far_from_bytes(&bytes, [9, 5], name)
             .expect_err("row 9 of 9 rows")
             .to_string();
-        assert!(e.contains("far-00003.bin") && e.contains("point 2 (row 9"), "{e}");
+        assert!(
+            e.contains("far-00003.bin") && e.contains("point 2 (row 10, column 1, 1-based"),
+            "{e}"
+        );
         let nan = far_to_bytes(&[FarPoint {
             row: 0,
             col: 0,

@@ -52,9 +52,9 @@ impl Grid {
         }
         if let Some(i) = z.iter().position(|h| h.is_infinite()) {
             return Err(TinError::InvalidParameter(format!(
-                "grid sample (row {}, col {}) is infinite",
-                i / cols,
-                i % cols
+                "row {}, column {} (1-based, row 1 north): the height is infinite",
+                i / cols + 1,
+                i % cols + 1
             )));
         }
         Ok(Grid {

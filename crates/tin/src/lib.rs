@@ -34,3 +34,29 @@ pub use prefetch::prefetch;
 pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify, simplify_constrained};
 pub use synth::{SynthOptions, synth_grid, synth_tin};
 pub use validate::{MeshStats, PrecisionReport, ValidationReport, find_overlaps, mesh_stats, validate, validate_parts};
+
+/// A number as messages print it: as Rust writes it (`2.5`, `1000`, `inf`) from 10^-4 to 10^9 in magnitude, and in
+/// scientific notation outside (`1e308`, `1.5e-9`), so that a huge or tiny value given by a user takes a few
+/// characters instead of hundreds of digits.
+pub fn compact_number(x: f64) -> String {
+    let a = x.abs();
+    if a.is_finite() && a != 0.0 && !(1e-4..1e9).contains(&a) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+#[cfg(test)]
+mod compact_number_tests {
+    use super::compact_number;
+
+    #[test]
+    fn huge_and_tiny_numbers_are_short() {
+        assert_eq!(compact_number(1e308), "1e308");
+        assert_eq!(compact_number(-2.5e-9), "-2.5e-9");
+        assert_eq!(compact_number(1234.5), "1234.5");
+        assert_eq!(compact_number(0.0), "0");
+        assert_eq!(compact_number(f64::INFINITY), "inf");
+    }
+}

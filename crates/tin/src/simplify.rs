@@ -95,7 +95,8 @@ impl SimplifyOptions {
             && !(e.is_finite() && e >= 0.0)
         {
             return Err(TinError::InvalidParameter(format!(
-                "max_error must be finite and non-negative, got {e}"
+                "max_error must be finite and non-negative, got {}",
+                crate::compact_number(e)
             )));
         }
         Ok(())
@@ -256,9 +257,9 @@ fn check_grid(grid: &Grid) -> Result<()> {
     }
     if let Some(i) = grid.z.iter().position(|h| h.is_infinite()) {
         return Err(TinError::InvalidParameter(format!(
-            "grid sample (row {}, col {}) is infinite",
-            i / grid.cols,
-            i % grid.cols
+            "row {}, column {} (1-based, row 1 north): the height is infinite",
+            i / grid.cols + 1,
+            i % grid.cols + 1
         )));
     }
     Ok(())

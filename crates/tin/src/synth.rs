@@ -68,7 +68,7 @@ impl SynthOptions {
         if !(self.extent.is_finite() && self.extent > 0.0 && self.extent < 1e12) {
             return Err(TinError::InvalidParameter(format!(
                 "synthetic terrain extent must be positive and below 1e12 m, got {}",
-                self.extent
+                crate::compact_number(self.extent)
             )));
         }
         let spacing = self.extent / (self.vertices as f64).sqrt();
@@ -82,7 +82,7 @@ impl SynthOptions {
         if !(self.relief.is_finite() && self.relief >= 0.0 && self.relief < 1e12) {
             return Err(TinError::InvalidParameter(format!(
                 "synthetic terrain relief must be non-negative and below 1e12 m, got {}",
-                self.relief
+                crate::compact_number(self.relief)
             )));
         }
         Ok(())

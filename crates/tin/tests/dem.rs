@@ -265,7 +265,9 @@ fn npy_malformed_files() {
         .flat_map(|v| v.to_le_bytes())
         .collect();
     write_npy(&path, 1, "<f8", false, "(2, 2)", &inf);
-    assert!(format_message(read_dem(&path, &s)).contains("(row 1, col 0) is infinite"));
+    assert!(
+        format_message(read_dem(&path, &s)).contains("row 2, column 1 (1-based, row 1 north): the height is infinite")
+    );
     // Missing file.
     assert!(matches!(
         read_dem(&dir.path().join("none.npy"), &s),

@@ -33,7 +33,7 @@ use crate::grid::Grid;
 
 /// Reads an ESRI ASCII grid (see the module documentation).
 pub fn read_asc(path: &Path, opts: &DemOptions) -> Result<Grid> {
-    opts.check()?;
+    opts.check_one_band(path, ".asc")?;
     let bytes = read_bytes(path)?;
     parse_asc(&bytes, path, opts)
 }
@@ -57,7 +57,7 @@ pub fn read_asc_height_unit(path: &Path, opts: &DemOptions) -> Result<f64> {
 
 /// The header of an ESRI ASCII grid, read up to its first line of values.
 fn read_header(path: &Path, opts: &DemOptions) -> Result<Header> {
-    opts.check()?;
+    opts.check_one_band(path, ".asc")?;
     let mut lines = Lines::open(path)?;
     let mut h = Header::default();
     while let Some((n, line)) = lines.next()? {

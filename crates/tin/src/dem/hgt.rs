@@ -67,7 +67,7 @@ pub fn parse_tile_name(file_name: &str) -> Option<TileName> {
 
 /// Reads an SRTM tile (see the module documentation).
 pub fn read_hgt(path: &Path, opts: &DemOptions) -> Result<Grid> {
-    opts.check()?;
+    opts.check_one_band(path, ".hgt")?;
     let tile = tile_of(path)?;
     let bytes = read_bytes(path)?;
     parse_hgt(&bytes, tile, path, opts)
@@ -75,7 +75,7 @@ pub fn read_hgt(path: &Path, opts: &DemOptions) -> Result<Grid> {
 
 /// The grid of an SRTM tile from its name and size, without reading its samples.
 pub fn read_hgt_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
-    opts.check()?;
+    opts.check_one_band(path, ".hgt")?;
     let tile = tile_of(path)?;
     let len = file_len(&open(path)?, path)?;
     Ok(shape(side(len, path)?, tile, opts))

@@ -52,7 +52,8 @@ pub struct DemOptions {
     pub spacing: Option<(f64, f64)>,
     /// Factor applied to every stored value to get heights in metres (default 1).
     pub z_scale: f64,
-    /// The elevation band (1-based) of a multi-band GeoTIFF; single-band files need none. Other formats ignore it.
+    /// The elevation band (1-based) of a multi-band GeoTIFF; single-band files need none. Other formats have one band
+    /// and refuse it.
     #[serde(default)]
     pub band: Option<u16>,
 }
@@ -72,7 +73,7 @@ impl DemOptions {
         if !self.z_scale.is_finite() || self.z_scale == 0.0 {
             return Err(TinError::InvalidParameter(format!(
                 "z scale must be finite and non-zero, got {}",
-                self.z_scale
+                crate::compact_number(self.z_scale)
             )));
         }
         if let Some((dx, dy)) = self.spacing
@@ -81,6 +82,19 @@ impl DemOptions {
             return Err(TinError::InvalidParameter(format!(
                 "spacing must be positive and finite, got {dx} x {dy}"
             )));
+        }
+        Ok(())
+    }
+
+    /// [`DemOptions::check`] for a reader of a single-band format (`format`, as `.npy`), which refuses a band rather
+    /// than ignoring it, naming the file.
+    pub(crate) fn check_one_band(&self, path: &Path, format: &str) -> Result<()> {
+        self.check()?;
+        if let Some(b) = self.band {
+            return Err(TinError::format(
+                path,
+                format!("--band {b}: a {format} grid has one band; a band is chosen in a multi-band GeoTIFF only"),
+            ));
         }
         Ok(())
     }

@@ -55,7 +55,7 @@ pub struct Sidecar {
 
 /// Reads a `.npy` DEM and its sidecar (see the module documentation).
 pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
-    opts.check()?;
+    opts.check_one_band(path, ".npy")?;
     let bytes = read_bytes(path)?;
     let array = parse_npy(&bytes, path)?;
     let (shape, nodata) = placement(path, array.rows, array.cols, opts)?;
@@ -75,7 +75,7 @@ pub fn read_npy(path: &Path, opts: &DemOptions) -> Result<Grid> {
 /// The grid of a `.npy` DEM: its header and sidecar, without its samples (the file's length is checked against
 /// the header).
 pub fn read_npy_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
-    opts.check()?;
+    opts.check_one_band(path, ".npy")?;
     let mut file = open(path)?;
     let layout = read_layout(&mut file, path)?;
     Ok(placement(path, layout.rows, layout.cols, opts)?.0)
@@ -297,15 +297,19 @@ pub fn read_sidecar(path: &Path) -> Result<Sidecar> {
                 .ok_or_else(|| TinError::format(path, format!("{key} must be a non-negative integer, found {v}"))),
         }
     };
-    let spacing = match (number("spacing_x_m")?, number("spacing_y_m")?) {
-        (Some(dx), Some(dy)) if dx > 0.0 && dy > 0.0 => Some((dx, dy)),
-        (None, None) => None,
-        (dx, dy) => {
-            return Err(TinError::format(
-                path,
-                format!("spacing_x_m and spacing_y_m must both be positive numbers, found {dx:?} and {dy:?}"),
-            ));
+    let (dx, dy) = (number("spacing_x_m")?, number("spacing_y_m")?);
+    for (key, v) in [("spacing_x_m", dx), ("spacing_y_m", dy)] {
+        if let Some(v) = v
+            && v <= 0.0
+        {
+            return Err(TinError::format(path, format!("{key} is {v}, must be positive")));
         }
+    }
+    let spacing = match (dx, dy) {
+        (Some(dx), Some(dy)) => Some((dx, dy)),
+        (None, None) => None,
+        (Some(_), None) => return Err(TinError::format(path, "spacing_x_m is given without spacing_y_m")),
+        (None, Some(_)) => return Err(TinError::format(path, "spacing_y_m is given without spacing_x_m")),
     };
     Ok(Sidecar {
         spacing,

@@ -23,14 +23,14 @@ pub const MAX_SAMPLES: u64 = 1 << 28;
 
 /// Reads a PNG height map (see the module documentation).
 pub fn read_png(path: &Path, opts: &DemOptions) -> Result<Grid> {
-    opts.check()?;
+    opts.check_one_band(path, "PNG")?;
     let bytes = read_bytes(path)?;
     parse_png(&bytes, path, opts)
 }
 
 /// The grid of a PNG height map from its header, without decoding its samples.
 pub fn read_png_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
-    opts.check()?;
+    opts.check_one_band(path, "PNG")?;
     let spacing = spacing(path, opts)?;
     let file = std::io::BufReader::new(open(path)?);
     let mut decoder = png::Decoder::new_with_limits(file, png::Limits { bytes: 1 << 31 });
