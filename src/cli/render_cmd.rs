@@ -168,21 +168,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     } else {
         colour
     };
-    // A culling parameter that this render does not use is an error, as for `cull`, rather than ignored.
     let eye = args.eye.or(pvs_eye);
-    let culls = terrain.hierarchy.is_some()
-        && (eye.is_some() && view != ViewKind::Map || colour == Some(ColourMode::Visibility));
-    if culls {
-        args.safe.check_method(args.method)?;
-    } else {
-        let method = (args.method != cull::CullMethod::Safe).then(|| format!("--method {}", args.method.name()));
-        if let Some(flag) = method.or_else(|| args.safe.first_given()) {
-            bail!(
-                "{flag}: this render culls nothing (culling needs a hierarchy, and --eye with --view eye or orbit, or \
-                 --colour visibility)"
-            );
-        }
-    }
     let options = RenderOptions {
         view,
         eye,
@@ -200,6 +186,20 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         pvs: pvs_mask,
     };
     viewer::validate(&terrain, &options)?;
+    // A culling parameter that this render does not use is an error, as for `cull`, rather than ignored.
+    let culls = terrain.hierarchy.is_some()
+        && (eye.is_some() && view != ViewKind::Map || colour == Some(ColourMode::Visibility));
+    if culls {
+        args.safe.check_method(args.method)?;
+    } else {
+        let method = (args.method != cull::CullMethod::Safe).then(|| format!("--method {}", args.method.name()));
+        if let Some(flag) = method.or_else(|| args.safe.first_given()) {
+            bail!(
+                "{flag}: this render culls nothing (culling needs a hierarchy, and --eye with --view eye or orbit, or \
+                 --colour visibility)"
+            );
+        }
+    }
     let mut files = Outputs::new();
     files.input(&args.input)?;
     anyhow::ensure!(
