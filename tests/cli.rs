@@ -293,6 +293,23 @@ fn dems_in_feet_are_read_in_metres_with_a_warning() {
     let out = ok(&["info", s(&asc)]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("Foot_US") && err.contains("--z-scale 3.28083333"), "{err}");
+    // The old ESRI text form stating the heights' unit (`Zunits METERS`): coordinates in feet, heights as written,
+    // and no warning.
+    std::fs::write(
+        dir.path().join("ft.prj"),
+        "Projection    STATEPLANE\nFipszone      4202\nDatum         NAD83\nZunits        METERS\nUnits         FEET\n",
+    )
+    .expect("prj");
+    let out = ok(&["info", s(&asc), "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("--z-scale"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(v["bbox"]["max"][2].as_f64(), Some(9.0), "heights in metres as written");
+    assert_eq!(
+        v["bbox"]["max"][0].as_f64(),
+        Some(250.0 * survey),
+        "x in US survey feet"
+    );
 }
 
 /// A GeoTIFF with GDAL's internal nodata mask (an image tagged as a mask after the samples): the samples it marks

@@ -244,7 +244,8 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
 
 /// Warns when a DEM's heights were taken to be in its projected CRS's feet without the file saying so (a GeoTIFF
 /// without `VerticalUnitsGeoKey`, [`tin::dem::geotiff::GeoTiffInfo::heights_unit_assumed`]; an `.asc` whose `.prj` is
-/// in feet); nothing for other files, or one whose header cannot be read (the reader names that error).
+/// in feet and does not state the heights' unit); nothing for other files, or one whose header cannot be read (the
+/// reader names that error).
 pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: Output) {
     let ext = path
         .extension()
@@ -258,8 +259,8 @@ pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: 
             .map(|i| (i.conversion, i.height_unit_m)),
         "asc" => tin::dem::asc::read_asc_height_unit(path, opts)
             .ok()
-            .filter(|&u| u != 1.0)
-            .map(|u| {
+            .filter(|&(_, assumed)| assumed)
+            .map(|(u, _)| {
                 (
                     tin::dem::asc::read_asc_conversion(path, opts)
                         .ok()

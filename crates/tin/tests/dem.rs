@@ -464,7 +464,8 @@ fn asc_in_feet_is_put_into_metres() {
     );
     assert_eq!(
         tin::dem::asc::read_asc_height_unit(&path, &opts()).expect("reads"),
-        unit
+        (unit, true),
+        "the .prj does not say the heights' unit: the coordinates' is assumed"
     );
     let w = tin::read_dem_window(&path, &opts(), [1, 3], [2, 4]).expect("window");
     assert_eq!((w.dx, w.z[0]), (g.dx, g.z[m + 2]));
@@ -493,6 +494,123 @@ fn asc_in_feet_is_put_into_metres() {
         .expect("reads")
         .expect("converted");
     assert!(conversion.contains("Units FEET"), "{conversion}");
+}
+
+/// The unit of heights a `.prj` states (a compound CRS's vertical unit, the ESRI text form's `Zunits`) wins over the
+/// coordinates' unit; a compound CRS is read by its horizontal part; a vertical unit never passes for the coordinates'.
+#[test]
+fn asc_prj_states_the_heights_unit() {
+    use tin::dem::asc::{
+        prj_geographic_unit, prj_height_unit, prj_linear_unit, read_asc_conversion, read_asc_height_unit,
+    };
+    let survey = 1200.0 / 3937.0;
+    let esri_text = |zunits: &str, units: &str| {
+        format!("Projection    STATEPLANE\nFipszone      4202\nZunits        {zunits}\nUnits         {units}\n")
+    };
+    assert_eq!(prj_height_unit(&esri_text("NO", "FEET")), None);
+    assert_eq!(prj_height_unit("Projection UTM\nUnits FEET\n"), None, "no Zunits line");
+    assert_eq!(prj_height_unit(&esri_text("METERS", "FEET")).map(|u| u.0), Some(1.0));
+    assert_eq!(prj_height_unit(&esri_text("FEET", "METERS")).map(|u| u.0), Some(survey));
+    assert_eq!(
+        prj_height_unit(&esri_text("INTERNATIONAL FEET", "METERS")).map(|u| u.0),
+        Some(0.3048)
+    );
+    assert_eq!(
+        prj_height_unit(&esri_text("0.3048", "METERS")).map(|u| u.0),
+        Some(0.3048)
+    );
+    assert_eq!(prj_height_unit(&esri_text("-2", "METERS")), None, "not a unit");
+    assert_eq!(
+        prj_height_unit(&esri_text("FURLONGS", "METERS")),
+        None,
+        "a unit it does not know"
+    );
+    assert_eq!(prj_height_unit(WGS84_PRJ), None, "no vertical CRS");
+    let vert_ft = "VERT_CS[\"NAVD88 height (ftUS)\",VERT_DATUM[\"North American Vertical Datum 1988\",2005],\
+                   UNIT[\"US survey foot\",0.3048006096012192],AXIS[\"Gravity-related height\",UP]]";
+    let utm_m = format!("PROJCS[\"UTM 14N\",{WGS84_PRJ},PROJECTION[\"Transverse_Mercator\"],UNIT[\"metre\",1]]");
+    let plane_ft = format!(
+        "PROJCS[\"Texas North Central (ftUS)\",{WGS84_PRJ},PROJECTION[\"Lambert\"],UNIT[\"US survey foot\",0.3048006096012192]]"
+    );
+    let compound = |horizontal: &str| format!("COMPD_CS[\"x + NAVD88 height (ftUS)\",{horizontal},{vert_ft}]");
+    assert_eq!(
+        prj_height_unit(&compound(&utm_m)).map(|u| u.0),
+        Some(0.3048006096012192)
+    );
+    assert_eq!(
+        prj_linear_unit(&compound(&utm_m)),
+        None,
+        "the vertical unit is not the coordinates'"
+    );
+    assert_eq!(
+        prj_linear_unit(&compound(&plane_ft)).map(|u| u.0),
+        Some(0.3048006096012192)
+    );
+    assert_eq!(prj_geographic_unit(&compound(&utm_m)), None);
+    assert_eq!(prj_geographic_unit(&compound(WGS84_PRJ)), Some(1.0));
+    assert_eq!(prj_linear_unit(&compound(WGS84_PRJ)), None);
+    // WKT 2: the vertical unit is the axis's; the datum's is not looked at.
+    let wkt2 = format!(
+        "COMPOUNDCRS[\"x\",{utm_m},VERTCRS[\"NAVD88 height\",VDATUM[\"North American Vertical Datum 1988\"],\
+         CS[vertical,1],AXIS[\"gravity-related height (H)\",up,LENGTHUNIT[\"metre\",1]]]]"
+    );
+    assert_eq!(prj_height_unit(&wkt2), Some((1.0, "metre".to_string())));
+
+    // Read: a 2 x 3 grid in metres, then under each .prj.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("z.asc");
+    std::fs::write(
+        &path,
+        "ncols 3\nnrows 2\nxllcorner 100\nyllcorner 200\ncellsize 10\n1 2 3\n4 5 6\n",
+    )
+    .expect("write");
+    let plain = read_dem(&path, &opts()).expect("metres");
+    let prj = dir.path().join("z.prj");
+    let same = |a: &[f64], k: f64| a.iter().zip(&plain.z).all(|(x, y)| x.to_bits() == (y * k).to_bits());
+    // Coordinates in feet, heights stated in metres: heights as written, nothing assumed.
+    std::fs::write(&prj, esri_text("METERS", "FEET")).expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!(g.dx, 10.0 * survey);
+    assert!(same(&g.z, 1.0), "{:?}", g.z);
+    assert_eq!(read_asc_height_unit(&path, &opts()).expect("reads"), (1.0, false));
+    let c = read_asc_conversion(&path, &opts()).expect("reads").expect("converted");
+    assert!(c.contains("x, y in US survey feet") && !c.contains("assumed"), "{c}");
+    // Coordinates in metres, heights in feet.
+    std::fs::write(&prj, esri_text("FEET", "METERS")).expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!((g.dx, g.origin), (plain.dx, plain.origin));
+    assert!(same(&g.z, survey), "{:?}", g.z);
+    assert_eq!(read_asc_height_unit(&path, &opts()).expect("reads"), (survey, false));
+    let c = read_asc_conversion(&path, &opts()).expect("reads").expect("converted");
+    assert!(
+        c.starts_with("heights in US survey feet (Zunits FEET)") && c.contains("z.prj"),
+        "{c}"
+    );
+    // The same from a compound WKT; and both in feet.
+    std::fs::write(&prj, compound(&utm_m)).expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!(g.dx, plain.dx);
+    assert!(same(&g.z, 0.3048006096012192), "{:?}", g.z);
+    std::fs::write(&prj, compound(&plane_ft)).expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!(g.dx, 10.0 * 0.3048006096012192);
+    assert!(same(&g.z, 0.3048006096012192), "{:?}", g.z);
+    assert_eq!(
+        read_asc_height_unit(&path, &opts()).expect("reads"),
+        (0.3048006096012192, false)
+    );
+    // Geographic with heights in feet: degrees into metres, heights into metres.
+    std::fs::write(
+        &path,
+        "ncols 3\nnrows 2\nxllcenter 10\nyllcenter 45\ncellsize 0.5\n1 2 3\n4 5 6\n",
+    )
+    .expect("write");
+    std::fs::write(&prj, compound(WGS84_PRJ)).expect("write");
+    let g = read_dem(&path, &opts()).expect("reads");
+    assert_eq!(g.dy, 0.5 * METRES_PER_DEGREE);
+    assert!(same(&g.z, 0.3048006096012192), "{:?}", g.z);
+    let c = read_asc_conversion(&path, &opts()).expect("reads").expect("converted");
+    assert!(c.contains("heights in US survey foot times"), "{c}");
 }
 
 #[test]
@@ -909,13 +1027,17 @@ proptest::proptest! {
     /// The `.prj` readers take any text, brackets and quotes unbalanced, non-ASCII included, without panicking; a
     /// unit they return is positive and finite.
     #[test]
-    fn prj_readers_take_any_text(body in "[A-Za-z\"\\[\\](),. 0-9é_-]{0,80}", root in 0usize..4) {
-        let text = format!("{}{body}", ["", "PROJCS[", "PROJCRS[\"x\",", "GEOGCS["][root]);
+    fn prj_readers_take_any_text(body in "[A-Za-z\"\\[\\](),. 0-9é_\n-]{0,80}", root in 0usize..7) {
+        let roots = ["", "PROJCS[", "PROJCRS[\"x\",", "GEOGCS[", "COMPD_CS[\"x\",", "COMPOUNDCRS[", "Projection UTM\nZunits "];
+        let text = format!("{}{body}", roots[root]);
         if let Some((m, _)) = tin::dem::asc::prj_linear_unit(&text) {
             proptest::prop_assert!(m.is_finite() && m > 0.0);
         }
         if let Some(d) = tin::dem::asc::prj_geographic_unit(&text) {
             proptest::prop_assert!(d.is_finite() && d > 0.0);
+        }
+        if let Some((m, _)) = tin::dem::asc::prj_height_unit(&text) {
+            proptest::prop_assert!(m.is_finite() && m > 0.0);
         }
     }
 }

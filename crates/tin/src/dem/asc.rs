@@ -13,9 +13,11 @@
 //! geographic CRS (WKT `GEOGCS[…]`, `GEOGCRS[…]`, `GEODCRS[…]`, or the old ESRI text form `Projection GEOGRAPHIC`),
 //! the corners and cell sizes are degrees (or the WKT's angular unit) and are put into metres as GeoTIFFs in degrees
 //! are (the frame of [`super::hgt`]). When its root is a projected CRS in feet ([`prj_linear_unit`]: WKT
-//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are, or the old ESRI text form's `Units FEET`), coordinates,
-//! cell sizes and heights (a `.prj` does not say the heights' unit; they are taken to be in the same feet) are
-//! multiplied into metres. Any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
+//! `PROJCS[…]`, `PROJCRS[…]`, as US state-plane grids are, or the old ESRI text form's `Units FEET`), coordinates and
+//! cell sizes are multiplied into metres. A compound CRS (`COMPD_CS[…]`, `COMPOUNDCRS[…]`) is read by its horizontal
+//! part. Heights are multiplied by the unit the `.prj` states for them ([`prj_height_unit`]: a compound CRS's
+//! vertical unit, the ESRI text form's `Zunits`); when it states none, they are taken to be in the coordinates' unit
+//! (metres for degrees). Any other `.prj`, or none, means metres. An unreadable `.prj` is an error.
 //!
 //! A window ([`super::read_dem_window`]) is read by streaming the text: the values before it are counted, not
 //! parsed, those of its rows outside its columns are skipped, and reading stops after its last row; so values
@@ -43,16 +45,18 @@ pub fn read_asc_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
     Ok(read_header(path, opts)?.shape(path, opts)?.0)
 }
 
-/// How the grid's coordinates were put into metres: a sentence when a `.prj` beside it says they are degrees (see
-/// the module documentation), None when they are metres already.
+/// How the grid's coordinates (and heights) were put into metres: a sentence when a `.prj` beside it says they are
+/// degrees or feet (see the module documentation), None when they are metres already.
 pub fn read_asc_conversion(path: &Path, opts: &DemOptions) -> Result<Option<String>> {
     Ok(read_header(path, opts)?.grid(path, opts)?.2)
 }
 
-/// Metres per unit of an ESRI ASCII grid's heights: 1, or the foot of a projected `.prj` in feet (a `.prj` does not
-/// say the heights' unit: they are taken to be in the same one).
-pub fn read_asc_height_unit(path: &Path, opts: &DemOptions) -> Result<f64> {
-    Ok(read_header(path, opts)?.grid(path, opts)?.1.unit)
+/// Metres per unit of an ESRI ASCII grid's heights, and whether that unit was assumed: the unit its `.prj` states for
+/// heights ([`prj_height_unit`]), else the foot of a projected `.prj` in feet (assumed: taken to be the
+/// coordinates'), else 1.
+pub fn read_asc_height_unit(path: &Path, opts: &DemOptions) -> Result<(f64, bool)> {
+    let values = read_header(path, opts)?.grid(path, opts)?.1;
+    Ok((values.unit, values.unit_assumed))
 }
 
 /// The header of an ESRI ASCII grid, read up to its first line of values.
@@ -231,12 +235,14 @@ pub(super) fn read_asc_strips(
 }
 
 /// The lines of a text file, read one at a time (1-based numbers), naming the file and line in errors.
-/// How a grid's values become heights: its nodata value, and metres per unit of the values (1, or the foot of a
-/// projected `.prj` in feet).
+/// How a grid's values become heights: its nodata value, and metres per unit of the values (1, or the unit its `.prj`
+/// states for heights, or else the foot of a projected `.prj` in feet).
 #[derive(Clone, Copy, Debug)]
 struct Values {
     nodata: Option<f64>,
     unit: f64,
+    /// Whether `unit` was taken from the coordinates' because the `.prj` does not state the heights'.
+    unit_assumed: bool,
 }
 
 impl Default for Values {
@@ -244,6 +250,7 @@ impl Default for Values {
         Values {
             nodata: None,
             unit: 1.0,
+            unit_assumed: false,
         }
     }
 }
@@ -465,8 +472,13 @@ impl Header {
             .filter(|&n| n <= (1 << 31))
             .ok_or_else(|| err(format!("{rows} x {cols} samples is too many")))?;
         let prj = read_prj(path)?;
-        let mut unit = 1.0;
-        let (shape, conversion) = if let Some((deg, prj)) = prj
+        // The heights' unit when the `.prj` states it; else the coordinates' (metres for degrees).
+        let heights = prj.as_ref().and_then(|(text, _)| prj_height_unit(text));
+        let heights_note = |xy: &str| match &heights {
+            Some((m, name)) if *m != 1.0 => format!("{xy}heights in {name} times {m} m"),
+            _ => xy.trim_end_matches([',', ' ']).to_string(),
+        };
+        let (shape, values, conversion) = if let Some((deg, prj)) = prj
             .as_ref()
             .and_then(|(text, prj)| prj_geographic_unit(text).map(|deg| (deg, prj)))
         {
@@ -477,15 +489,29 @@ impl Header {
             let north = south + (rows as f64 - 1.0) * dy;
             let (shape, conversion) = degrees::grid_in_metres(rows, cols, west, north, (dx, dy), opts)
                 .map_err(|m| err(format!("{} says geographic, but {m}", prj.display())))?;
-            (shape, Some(format!("{} (CRS from {})", conversion, prj.display())))
+            let values = Values {
+                nodata: h.nodata,
+                unit: heights.as_ref().map_or(1.0, |u| u.0),
+                unit_assumed: false,
+            };
+            let conversion = heights_note(&format!("{conversion}, "));
+            (
+                shape,
+                values,
+                Some(format!("{conversion} (CRS from {})", prj.display())),
+            )
         } else {
-            // A projected CRS in feet: every coordinate (and, the `.prj` saying nothing of heights, every height) is
-            // multiplied into metres.
+            // A projected CRS in feet: every coordinate is multiplied into metres, and every height too unless the
+            // `.prj` states the heights' unit.
             let feet = prj
                 .as_ref()
                 .and_then(|(text, prj)| prj_linear_unit(text).map(|u| (u, prj)));
             let m = feet.as_ref().map_or(1.0, |((m, _), _)| *m);
-            unit = m;
+            let values = Values {
+                nodata: h.nodata,
+                unit: heights.as_ref().map_or(m, |u| u.0),
+                unit_assumed: heights.is_none() && m != 1.0,
+            };
             let (dx, dy) = opts.spacing.unwrap_or((header_spacing.0 * m, header_spacing.1 * m));
             let (xll, yll) = (xll * m, yll * m);
             let x0 = if x_corner { xll + 0.5 * dx } else { xll };
@@ -498,16 +524,25 @@ impl Header {
                 dy,
                 origin,
             };
-            let conversion = feet.map(|((m, name), prj)| {
-                format!(
-                    "x, y and heights in {name} times {m} m (CRS from {}; heights assumed in the same unit: a .prj does \
-                     not say theirs)",
+            let conversion = match (&feet, &heights, &prj) {
+                (Some(((m, name), prj)), None, _) => Some(format!(
+                    "x, y and heights in {name} times {m} m (CRS from {}; heights assumed in the same unit: the .prj \
+                     does not say theirs)",
                     prj.display()
-                )
-            });
-            (shape, conversion)
+                )),
+                (Some(((m, name), prj)), Some(_), _) => Some(format!(
+                    "{} (CRS from {})",
+                    heights_note(&format!("x, y in {name} times {m} m, ")),
+                    prj.display()
+                )),
+                (None, Some((hm, _)), Some((_, prj))) if *hm != 1.0 => {
+                    Some(format!("{} (CRS from {})", heights_note(""), prj.display()))
+                }
+                _ => None,
+            };
+            (shape, values, conversion)
         };
-        Ok((shape, Values { nodata: h.nodata, unit }, conversion))
+        Ok((shape, values, conversion))
     }
 }
 
@@ -519,15 +554,56 @@ fn prj_of(grid: &Path) -> Option<std::path::PathBuf> {
         .find(|p| p.is_file())
 }
 
-/// How `.asc` coordinates are to be read, from the text of a `.prj`: `Some(degrees per unit)` when its root is a
-/// geographic CRS (see the module documentation), None for anything else.
-pub fn prj_geographic_unit(text: &str) -> Option<f64> {
+/// The root keyword of a CRS text, in upper case (`PROJCS`, `GEOGCRS`, `COMPD_CS`, `PROJECTION`, …), and the text
+/// with any byte-order mark and leading space removed.
+fn crs_root(text: &str) -> (String, &str) {
     let t = text.trim_start_matches('\u{feff}').trim_start();
-    let root: String = t
+    let root = t
         .chars()
-        .take_while(|c| c.is_ascii_alphabetic())
+        .take_while(|c| c.is_ascii_alphabetic() || *c == '_')
         .collect::<String>()
         .to_ascii_uppercase();
+    (root, t)
+}
+
+/// Whether `root` is the keyword of a compound CRS (WKT 1 `COMPD_CS`, WKT 2 `COMPOUNDCRS`): a horizontal CRS, then a
+/// vertical one.
+fn is_compound(root: &str) -> bool {
+    matches!(root, "COMPD_CS" | "COMPOUNDCRS")
+}
+
+/// The first element nested in the WKT element `t` starts with (the horizontal CRS of a compound CRS), through its
+/// closing bracket; None when there is none or it is not closed.
+fn first_component(t: &str) -> Option<&str> {
+    let open = t.find(['[', '('])?;
+    let (mut quoted, mut start, mut depth) = (false, open + 1, 0usize);
+    for (i, c) in t.char_indices().skip_while(|&(i, _)| i <= open) {
+        match c {
+            '"' => quoted = !quoted,
+            _ if quoted => {}
+            '[' | '(' => depth += 1,
+            ']' | ')' if depth == 0 => return None,
+            ']' | ')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(t[start..=i].trim_start());
+                }
+            }
+            ',' if depth == 0 => start = i + 1,
+            _ => {}
+        }
+    }
+    None
+}
+
+/// How `.asc` coordinates are to be read, from the text of a `.prj`: `Some(degrees per unit)` when its root is a
+/// geographic CRS, or a compound CRS whose horizontal part is one (see the module documentation), None for anything
+/// else.
+pub fn prj_geographic_unit(text: &str) -> Option<f64> {
+    let (root, t) = crs_root(text);
+    if is_compound(&root) {
+        return first_component(t).and_then(prj_geographic_unit);
+    }
     let wkt_geographic = matches!(root.as_str(), "GEOGCS" | "GEOGCRS" | "GEODCRS" | "GEOGRAPHICCRS")
         && t[root.len()..].trim_start().starts_with(['[', '(']);
     if wkt_geographic {
@@ -547,10 +623,7 @@ pub fn prj_geographic_unit(text: &str) -> Option<f64> {
         return Some(if (deg - 1.0).abs() < 1e-9 { 1.0 } else { deg });
     }
     // The ESRI text form: `Projection GEOGRAPHIC`, with `Units DD` (decimal degrees) or none.
-    let mut words = t.lines().map(|l| l.split_whitespace().collect::<Vec<_>>());
-    words
-        .any(|w| w.len() == 2 && w[0].eq_ignore_ascii_case("projection") && w[1].eq_ignore_ascii_case("geographic"))
-        .then_some(1.0)
+    (esri_text_field(t, "projection").as_deref() == Some("GEOGRAPHIC")).then_some(1.0)
 }
 
 /// The text and path of the `.prj` beside `grid`; None when there is none.
@@ -564,22 +637,32 @@ fn read_prj(grid: &Path) -> Result<Option<(String, std::path::PathBuf)>> {
     Ok(Some((text, prj)))
 }
 
-/// The linear unit of a projected CRS in WKT (root `PROJCS`, `PROJCRS` or `PROJECTEDCRS`) when it is not the metre:
-/// metres per unit and the unit's name, from the first `UNIT[name, factor]` or `LENGTHUNIT[…]` that is neither inside
-/// the base geographic CRS (its datum, ellipsoid or angular unit) nor a parameter's of the map projection (WKT 2's
-/// `CONVERSION`): the unit of the coordinates. The old ESRI text form (`Projection …` then `Units FEET`) is read too.
-/// None for metres, for any other CRS, and for a unit without a positive factor.
-pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
-    let t = text.trim_start_matches('\u{feff}').trim_start();
+/// Keywords of the elements of a projected CRS whose units are not those of its coordinates: the base geographic
+/// CRS (its datum, ellipsoid and angular unit) and the map projection's parameters (WKT 2's `CONVERSION`).
+const NOT_COORDINATES: [&str; 10] = [
+    "GEOGCS",
+    "BASEGEOGCRS",
+    "BASEGEODCRS",
+    "GEOGCRS",
+    "GEODCRS",
+    "DATUM",
+    "SPHEROID",
+    "ELLIPSOID",
+    "CONVERSION",
+    "PARAMETER",
+];
+
+/// Keywords of the vertical CRS of a compound CRS (WKT 1 and 2).
+const VERTICAL: [&str; 3] = ["VERT_CS", "VERTCRS", "VERTICALCRS"];
+
+/// Keywords of a vertical datum, whose units (if any) are not the heights'.
+const VERTICAL_DATUM: [&str; 4] = ["VERT_DATUM", "VDATUM", "VERTICALDATUM", "VRF"];
+
+/// The first `UNIT[name, factor]` or `LENGTHUNIT[…]` of a WKT text for which `wanted` holds of the keywords of the
+/// elements open around it (outermost first): its factor (None when it is not a positive finite number) and name.
+/// None when no unit is wanted.
+fn first_wkt_unit(t: &str, wanted: impl Fn(&[&str]) -> bool) -> Option<(Option<f64>, String)> {
     let upper = t.to_ascii_uppercase();
-    let root: String = upper.chars().take_while(|c| c.is_ascii_alphabetic()).collect();
-    if root == "PROJECTION" {
-        return esri_text_linear_unit(t);
-    }
-    if !matches!(root.as_str(), "PROJCS" | "PROJCRS" | "PROJECTEDCRS") {
-        return None;
-    }
-    // The keywords of the elements open at each bracket, outermost first.
     let mut open: Vec<&str> = Vec::new();
     let mut word_start = 0;
     let mut quoted = false;
@@ -589,31 +672,15 @@ pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
             _ if quoted => {}
             '[' | '(' => {
                 let word = upper[word_start..i].trim();
-                let inside_base = open.iter().any(|w| {
-                    matches!(
-                        *w,
-                        "GEOGCS"
-                            | "BASEGEOGCRS"
-                            | "BASEGEODCRS"
-                            | "GEOGCRS"
-                            | "GEODCRS"
-                            | "DATUM"
-                            | "SPHEROID"
-                            | "ELLIPSOID"
-                            | "CONVERSION"
-                            | "PARAMETER"
-                    )
-                });
-                if matches!(word, "UNIT" | "LENGTHUNIT") && !open.is_empty() && !inside_base {
+                if matches!(word, "UNIT" | "LENGTHUNIT") && wanted(&open) {
+                    // `upper` and `t` have the same bytes at the same places but for the case of ASCII letters.
                     let mut parts = t[i + 1..].split([',', ']', ')']);
-                    let name = parts.next()?.trim().trim_matches('"').to_string();
+                    let name = parts.next().unwrap_or_default().trim().trim_matches('"').to_string();
                     let factor = parts
-                        .next()?
-                        .trim()
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|f| f.is_finite() && *f > 0.0)?;
-                    return ((factor - 1.0).abs() > 1e-12).then_some((factor, name));
+                        .next()
+                        .and_then(|f| f.trim().parse::<f64>().ok())
+                        .filter(|f| f.is_finite() && *f > 0.0);
+                    return Some((factor, name));
                 }
                 open.push(word);
                 word_start = i + 1;
@@ -629,29 +696,82 @@ pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
     None
 }
 
-/// The linear unit of the old ESRI text form of a `.prj` (`Projection UTM`, `Units FEET`, …) when it is not the
-/// metre: `Units FEET` is the US survey foot, as ArcInfo and GDAL read it, and `Units INTERNATIONAL_FEET` (or any
-/// unit naming both "INT" and "FEET") the international foot. None for `Projection GEOGRAPHIC`, for metres and for a
-/// unit it does not know.
-fn esri_text_linear_unit(t: &str) -> Option<(f64, String)> {
-    let field = |key: &str| {
-        t.lines().find_map(|l| {
-            let mut w = l.split_whitespace();
-            (w.next()?.eq_ignore_ascii_case(key)).then(|| w.collect::<Vec<_>>().join("_").to_ascii_uppercase())
-        })
-    };
-    if field("projection")? == "GEOGRAPHIC" {
+/// The linear unit of a projected CRS in WKT (root `PROJCS`, `PROJCRS` or `PROJECTEDCRS`, or a compound CRS whose
+/// horizontal part is one) when it is not the metre: metres per unit and the unit's name, from the first
+/// `UNIT[name, factor]` or `LENGTHUNIT[…]` that is neither inside the base geographic CRS (its datum, ellipsoid or
+/// angular unit), nor a parameter's of the map projection (WKT 2's `CONVERSION`), nor the vertical CRS's: the unit of
+/// the coordinates. The old ESRI text form (`Projection …` then `Units FEET`) is read too. None for metres, for any
+/// other CRS, and for a unit without a positive factor.
+pub fn prj_linear_unit(text: &str) -> Option<(f64, String)> {
+    let (root, t) = crs_root(text);
+    if root == "PROJECTION" {
+        return esri_text_linear_unit(t);
+    }
+    if !matches!(root.as_str(), "PROJCS" | "PROJCRS" | "PROJECTEDCRS") && !is_compound(&root) {
         return None;
     }
-    let units = field("units")?;
-    if !units.contains("FEET") && !units.contains("FOOT") {
+    let (factor, name) = first_wkt_unit(t, |open| {
+        !open.is_empty() && !open.iter().any(|w| NOT_COORDINATES.contains(w) || VERTICAL.contains(w))
+    })?;
+    let factor = factor?;
+    ((factor - 1.0).abs() > 1e-12).then_some((factor, name))
+}
+
+/// The unit of the heights when a `.prj` states it: metres per unit (1 for metres) and how the `.prj` names it. A
+/// compound CRS states it as its vertical CRS's unit (WKT 1 `VERT_CS[…, UNIT[…]]`, WKT 2 `VERTCRS[…, LENGTHUNIT[…]]`),
+/// the old ESRI text form as its `Zunits` line (`METERS`, `FEET` for the US survey foot, a unit naming both "INT" and
+/// "FEET" for the international foot, or a positive number of metres per unit). None when the `.prj` does not say
+/// (`Zunits NO`, a CRS without a vertical part, a unit without a positive factor, or a `Zunits` it does not know):
+/// the heights are then taken to be in the coordinates' unit.
+pub fn prj_height_unit(text: &str) -> Option<(f64, String)> {
+    let (root, t) = crs_root(text);
+    if root == "PROJECTION" {
+        let z = esri_text_field(t, "zunits")?;
+        return if z.starts_with("MET") {
+            Some((1.0, format!("metres (Zunits {z})")))
+        } else if z.contains("FEET") || z.contains("FOOT") {
+            Some(feet(&z, "Zunits"))
+        } else {
+            let m = z.parse::<f64>().ok().filter(|m| m.is_finite() && *m > 0.0)?;
+            Some((m, format!("units of {m} m (Zunits {z})")))
+        };
+    }
+    if !is_compound(&root) {
         return None;
     }
-    Some(if units.contains("INT") {
-        (0.3048, format!("international feet (Units {units})"))
-    } else {
-        (1200.0 / 3937.0, format!("US survey feet (Units {units})"))
+    let (factor, name) = first_wkt_unit(t, |open| {
+        open.iter().any(|w| VERTICAL.contains(w)) && !open.iter().any(|w| VERTICAL_DATUM.contains(w))
+    })?;
+    Some((factor?, name))
+}
+
+/// The value of the line `key value…` of the old ESRI text form of a `.prj` (the key in any case), its words joined by
+/// `_`, in upper case; None when there is no such line.
+fn esri_text_field(t: &str, key: &str) -> Option<String> {
+    t.lines().find_map(|l| {
+        let mut w = l.split_whitespace();
+        (w.next()?.eq_ignore_ascii_case(key)).then(|| w.collect::<Vec<_>>().join("_").to_ascii_uppercase())
     })
+}
+
+/// Metres per unit and a description of the foot that the ESRI text form's `unit` names on its line `key`: the US
+/// survey foot, as ArcInfo and GDAL read `FEET`, or the international foot for a unit naming both "INT" and "FEET".
+fn feet(unit: &str, key: &str) -> (f64, String) {
+    if unit.contains("INT") {
+        (0.3048, format!("international feet ({key} {unit})"))
+    } else {
+        (1200.0 / 3937.0, format!("US survey feet ({key} {unit})"))
+    }
+}
+
+/// The linear unit of the old ESRI text form of a `.prj` (`Projection UTM`, `Units FEET`, …) when it is not the
+/// metre (see [`feet`]). None for `Projection GEOGRAPHIC`, for metres and for a unit it does not know.
+fn esri_text_linear_unit(t: &str) -> Option<(f64, String)> {
+    if esri_text_field(t, "projection")? == "GEOGRAPHIC" {
+        return None;
+    }
+    let units = esri_text_field(t, "units")?;
+    (units.contains("FEET") || units.contains("FOOT")).then(|| feet(&units, "Units"))
 }
 
 /// Parses an ESRI ASCII grid held in memory; `path` names it in errors and locates its `.prj` (if any).
