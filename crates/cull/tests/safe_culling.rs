@@ -300,6 +300,50 @@ fn slivers() {
     assert_safe("slivers", &tin, &eyes);
 }
 
+/// Single-vertex spikes (needles, up to 15 times the grid spacing) on a gentle plain, and a row of them forming a
+/// wall with a one-vertex notch, at UTM-sized coordinates 3 km up: the thinnest occluders a TIN has (every edge of a
+/// needle is steep, its triangles are seen edge-on from most eyes). Eyes on the needles' tips, a hair above them,
+/// beside them, and level with the notch.
+#[test]
+fn needles_and_a_notched_needle_wall() {
+    let offset = DVec3::new(5e5, 4.8e6, 3000.0);
+    let needle = |x: f64, y: f64| {
+        let (i, j) = ((x / 10.0).round() as i64, (y / 10.0).round() as i64);
+        let spike = if (i * 7 + j * 13) % 23 == 0 {
+            40.0 + 5.0 * ((i + j) % 23) as f64
+        } else {
+            0.0
+        };
+        let wall = if j == 17 && (3..28).contains(&i) && i != 15 {
+            120.0
+        } else {
+            0.0
+        };
+        2.0 * (x / 45.0).sin() * (y / 60.0).cos() + spike + wall
+    };
+    let tin = grid_tin(31, 300.0, offset, needle);
+    let mut extra = Vec::new();
+    for (i, j) in [(0i64, 0i64), (5, 4), (10, 8), (14, 17), (20, 10)] {
+        let (x, y) = (10.0 * i as f64, 10.0 * j as f64);
+        let tip = DVec3::new(x, y, needle(x, y)) + offset;
+        extra.extend([
+            tip,
+            tip + DVec3::new(0.0, 0.0, 1e-9),
+            tip + DVec3::new(0.0, 0.0, 2.0),
+            tip + DVec3::new(3.0, 0.0, -20.0),
+        ]);
+    }
+    // Level with the wall's notch (vertex 15 of row 17) and looking through it, from both sides.
+    for (y, z) in [(100.0, 1.0), (60.0, 3.0), (260.0, 2.0)] {
+        extra.push(DVec3::new(150.0, y, needle(150.0, y) + z) + offset);
+    }
+    let captured = assert_safe("needles", &tin, &eyes_over(&tin, &extra));
+    assert!(
+        captured.safe > 0.4,
+        "the needle wall hides what lies behind it: {captured:?}"
+    );
+}
+
 /// The notch terrain at UTM-sized coordinates: the same proofs hold with large offsets.
 #[test]
 fn utm_offsets() {
