@@ -484,3 +484,27 @@ fn every_output_named_like_another_format_is_refused() {
         ]
     );
 }
+
+#[test]
+fn an_output_that_ends_in_a_slash_is_named_a_directory() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let obj = dir.path().join("m.obj");
+    fs::copy(mesh(SMALL), &obj).expect("copy the mesh");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", p(&obj), "-o", p(&tch)]);
+    fs::create_dir(dir.path().join("sub")).expect("mkdir");
+    // A missing name, an existing file and an existing directory, each with a trailing slash.
+    for name in ["newdir/", "h.json/", "sub/"] {
+        let out = format!("{}/{name}", p(dir.path()));
+        fails_with(
+            &["export", p(&tch), "--export-json", &out],
+            &[&out, "which names a directory, not a file; give a file name"],
+        );
+    }
+    let out = format!("{}/", p(&obj));
+    fails_with(
+        &["build", p(&obj), "-o", &out],
+        &[&out, "which names a directory, not a file"],
+    );
+    assert_eq!(names(dir.path()), ["h.tch", "m.obj", "sub"], "nothing written");
+}
