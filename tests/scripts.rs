@@ -139,3 +139,59 @@ fn the_dask_driver_explains_a_missing_dask_and_refuses_no_workers() {
         "{stderr}"
     );
 }
+
+/// The chart scripts: `--help` prints the description without drawing (it redrew the chart in docs/), an argument a
+/// script does not take is refused, and a missing matplotlib is named with the environment that has it instead of a
+/// traceback. A `matplotlib` package that fails to import stands for a missing one (and keeps any real one away).
+#[test]
+fn the_chart_scripts_have_help_and_name_a_missing_matplotlib() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fake = dir.path().join("site");
+    std::fs::create_dir_all(fake.join("matplotlib")).expect("mkdir");
+    std::fs::write(
+        fake.join("matplotlib/__init__.py"),
+        "raise ImportError(\"No module named 'matplotlib'\")\n",
+    )
+    .expect("write");
+    let python = |script: &str, args: &[&str]| {
+        Command::new("python3")
+            .arg(root().join("scripts").join(script))
+            .args(args)
+            .env("PYTHONPATH", &fake)
+            .env("PYTHONDONTWRITEBYTECODE", "1")
+            .current_dir(dir.path())
+            .output()
+            .expect("python3 runs")
+    };
+    for (script, takes) in [
+        ("lloyd_egbert_chart.py", 0),
+        ("pvs_chart.py", 0),
+        ("stewart_chart.py", 0),
+        ("scale_chart.py", 2),
+    ] {
+        let out = python(script, &["--help"]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{script} --help:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(stdout.starts_with("Chart"), "{script} --help:\n{stdout}");
+
+        let extra: Vec<&str> = std::iter::repeat_n("x", takes + 1).collect();
+        let out = python(script, &extra);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{script} {extra:?}");
+        assert!(stderr.contains(&format!("{script}: unknown argument x")), "{stderr}");
+
+        let out = python(script, &[]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{script}");
+        assert!(!stderr.contains("Traceback"), "{script}:\n{stderr}");
+        assert!(
+            stderr.contains("error: matplotlib is not installed") && stderr.contains(".venv-notebooks"),
+            "{script}:\n{stderr}"
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).expect("list").count(), 1, "nothing drawn");
+}
