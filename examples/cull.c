@@ -24,6 +24,10 @@ static unsigned char *read_file(const char *path, size_t *len) {
     if (!f) return NULL;
     fseek(f, 0, SEEK_END);
     long n = ftell(f);
+    if (n < 0) {
+        fclose(f);
+        return NULL;
+    }
     fseek(f, 0, SEEK_SET);
     unsigned char *buf = malloc(n > 0 ? (size_t)n : 1);
     if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
@@ -37,7 +41,7 @@ static unsigned char *read_file(const char *path, size_t *len) {
 
 int main(int argc, char **argv) {
     if (argc < 4) {
-        fprintf(stderr, "usage: %s FILE.tch safe|thesis|stewart X,Y,Z[,YAW,FOV] ...\n", argv[0]);
+        fprintf(stderr, "usage: %s FILE.tch safe|thesis|stewart|lloyd-egbert X,Y,Z[,YAW,FOV] ...\n", argv[0]);
         return 2;
     }
     if ((tc_abi_version() >> 16) != (TC_ABI_VERSION >> 16)) {
@@ -45,10 +49,15 @@ int main(int argc, char **argv) {
                 tc_abi_version() & 0xffff, TC_ABI_VERSION >> 16, TC_ABI_VERSION & 0xffff);
         return 1;
     }
-    uint32_t method = strcmp(argv[2], "thesis") == 0         ? TC_METHOD_THESIS
-                      : strcmp(argv[2], "stewart") == 0      ? TC_METHOD_STEWART
-                      : strcmp(argv[2], "lloyd-egbert") == 0 ? TC_METHOD_LLOYD_EGBERT
-                                                             : TC_METHOD_SAFE;
+    uint32_t method;
+    if (strcmp(argv[2], "safe") == 0) method = TC_METHOD_SAFE;
+    else if (strcmp(argv[2], "thesis") == 0) method = TC_METHOD_THESIS;
+    else if (strcmp(argv[2], "stewart") == 0) method = TC_METHOD_STEWART;
+    else if (strcmp(argv[2], "lloyd-egbert") == 0) method = TC_METHOD_LLOYD_EGBERT;
+    else {
+        fprintf(stderr, "error: unknown method %s: expected safe, thesis, stewart or lloyd-egbert\n", argv[2]);
+        return 2;
+    }
 
     TcCuller *by_path = NULL, *by_buffer = NULL;
     int32_t st = tc_load_path(argv[1], method, &by_path);
@@ -73,6 +82,10 @@ int main(int argc, char **argv) {
     size_t capacity = 1;
     TcRange *ranges = malloc(capacity * sizeof *ranges);
     TcRange *check = malloc(info.max_ranges * sizeof *check);
+    if (!ranges || !check) {
+        fprintf(stderr, "error: out of memory\n");
+        return 1;
+    }
     for (int a = 3; a < argc; a++) {
         double v[5] = {0, 0, 0, 0, 360};
         int n = sscanf(argv[a], "%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]);
@@ -84,7 +97,12 @@ int main(int argc, char **argv) {
         st = tc_cull(by_path, v, v[3], v[4], ranges, capacity, &count);
         if (st == TC_ERR_BUFFER_TOO_SMALL) {
             capacity = count;
-            ranges = realloc(ranges, capacity * sizeof *ranges);
+            TcRange *grown = realloc(ranges, capacity * sizeof *ranges);
+            if (!grown) {
+                fprintf(stderr, "error: out of memory\n");
+                return 1;
+            }
+            ranges = grown;
             st = tc_cull(by_path, v, v[3], v[4], ranges, capacity, &count);
         }
         if (st != TC_OK) return fail("tc_cull", st);

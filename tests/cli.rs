@@ -1137,3 +1137,26 @@ fn messages_and_help_read_well() {
         "keep_faces",
     );
 }
+
+#[test]
+fn demo_refuses_dash_as_its_out_dir() {
+    // Run in a scratch directory: a demo that took `-` as a directory name would write there.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let m = mesh("jacksboro-2k.obj");
+    let out = bin()
+        .args(["demo", s(&m), "--out-dir", "-", "--viewpoints", "1", "-q"])
+        .current_dir(dir.path())
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--out-dir -: the demo writes several files") && stderr.contains("give a directory name"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path()).expect("list").count(),
+        0,
+        "nothing created"
+    );
+}

@@ -319,3 +319,192 @@ fn an_output_named_like_another_format_is_refused() {
     ok(&["build", "-q", p(&obj), "-o", p(&other)]);
     ok(&["info", p(&other)]);
 }
+
+#[test]
+fn every_output_named_like_another_format_is_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let obj = dir.path().join("m.obj");
+    fs::copy(mesh(SMALL), &obj).expect("copy the mesh");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", p(&obj), "-o", p(&tch)]);
+    // Another hierarchy and the mesh beside it: an export named like them would replace them with JSON or glTF.
+    let other = dir.path().join("other.tch");
+    fs::copy(&tch, &other).expect("copy the hierarchy");
+    let before = |path: &Path| fs::read(path).expect("read");
+    let (mesh_bytes, other_bytes) = (before(&obj), before(&other));
+    let named = |n: &str| dir.path().join(n).to_str().expect("UTF-8").to_string();
+    let cases: Vec<(Vec<String>, &str, &str)> = vec![
+        (
+            vec![
+                "export".into(),
+                p(&tch).into(),
+                "--export-json".into(),
+                p(&other).into(),
+            ],
+            "writes a hierarchy's JSON",
+            "name it .json",
+        ),
+        (
+            vec!["export".into(), p(&tch).into(), "--export-obj".into(), p(&other).into()],
+            "writes an OBJ mesh",
+            "name it .obj",
+        ),
+        (
+            vec!["export".into(), p(&tch).into(), "--export-gltf".into(), p(&obj).into()],
+            "writes glTF",
+            "name it .glb or .gltf",
+        ),
+        (
+            vec![
+                "build".into(),
+                p(&obj).into(),
+                "-o".into(),
+                named("b.tch"),
+                "--export-json".into(),
+                p(&other).into(),
+            ],
+            "writes a hierarchy's JSON",
+            "name it .json",
+        ),
+        (
+            vec![
+                "build".into(),
+                p(&obj).into(),
+                "-o".into(),
+                named("b.tch"),
+                "--export-obj".into(),
+                named("g.npy"),
+            ],
+            "writes an OBJ mesh",
+            "name it .obj",
+        ),
+        (
+            vec![
+                "horizon".into(),
+                p(&obj).into(),
+                "--export-json".into(),
+                p(&other).into(),
+            ],
+            "writes horizons as JSON",
+            "name it .json",
+        ),
+        (
+            vec!["eval".into(), p(&tch).into(), "--csv".into(), p(&other).into()],
+            "writes the evaluation as CSV",
+            "name it .csv",
+        ),
+        (
+            vec!["eval".into(), p(&tch).into(), "--export-json".into(), named("e.csv")],
+            "writes the evaluation as JSON",
+            "name it .json",
+        ),
+        (
+            vec![
+                "pvs".into(),
+                p(&tch).into(),
+                "--cell".into(),
+                "0,0,10,10".into(),
+                "-o".into(),
+                p(&other).into(),
+            ],
+            "writes a PVS file",
+            "name it .pvs",
+        ),
+        (
+            vec![
+                "failmap".into(),
+                p(&tch).into(),
+                "--cell-size".into(),
+                "100".into(),
+                "-o".into(),
+                p(&other).into(),
+            ],
+            "writes a PNG image",
+            "name it .png",
+        ),
+        (
+            vec![
+                "failmap".into(),
+                p(&tch).into(),
+                "--cell-size".into(),
+                "100".into(),
+                "--csv".into(),
+                named("map.json"),
+            ],
+            "writes the map as CSV",
+            "name it .csv",
+        ),
+        (
+            vec![
+                "tiles".into(),
+                "plan".into(),
+                p(&obj).into(),
+                "--tile".into(),
+                "500".into(),
+                "-o".into(),
+                p(&other).into(),
+            ],
+            "writes a tiling plan (JSON)",
+            "name it .json",
+        ),
+    ];
+    for (args, what, fix) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let path = args[args.len() - 1];
+        fails_with(&args, &[path, what, fix]);
+    }
+    assert_eq!(before(&obj), mesh_bytes, "the mesh is left alone");
+    assert_eq!(before(&other), other_bytes, "the other hierarchy is left alone");
+    assert_eq!(names(dir.path()), ["h.tch", "m.obj", "other.tch"], "nothing written");
+    // Each output's own extension, in any case, is taken.
+    ok(&[
+        "export",
+        p(&tch),
+        "-q",
+        "--export-json",
+        &named("h.JSON"),
+        "--export-obj",
+        &named("g.obj"),
+        "--export-gltf",
+        &named("h.GLB"),
+    ]);
+    ok(&["export", p(&tch), "-q", "--export-gltf", &named("t.gltf")]);
+    assert_eq!(
+        names(dir.path()),
+        [
+            "g.mtl",
+            "g.obj",
+            "h.GLB",
+            "h.JSON",
+            "h.tch",
+            "m.obj",
+            "other.tch",
+            "t.bin",
+            "t.gltf"
+        ]
+    );
+}
+
+#[test]
+fn an_output_that_ends_in_a_slash_is_named_a_directory() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let obj = dir.path().join("m.obj");
+    fs::copy(mesh(SMALL), &obj).expect("copy the mesh");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", p(&obj), "-o", p(&tch)]);
+    fs::create_dir(dir.path().join("sub")).expect("mkdir");
+    // A missing name, an existing file and an existing directory, each with a trailing slash.
+    for name in ["newdir/", "h.json/", "sub/"] {
+        let out = format!("{}/{name}", p(dir.path()));
+        fails_with(
+            &["export", p(&tch), "--export-json", &out],
+            &[&out, "which names a directory, not a file; give a file name"],
+        );
+    }
+    let out = format!("{}/", p(&obj));
+    fails_with(
+        &["build", p(&obj), "-o", &out],
+        &[&out, "which names a directory, not a file"],
+    );
+    assert_eq!(names(dir.path()), ["h.tch", "m.obj", "sub"], "nothing written");
+}

@@ -48,7 +48,8 @@ def find_tincull(given):
     if given:
         return os.path.abspath(given)
     here = os.path.dirname(os.path.abspath(__file__))
-    built = os.path.join(here, "..", "..", "target", "release", "tincull")
+    target = os.environ.get("CARGO_TARGET_DIR") or os.path.join(here, "..", "..", "target")
+    built = os.path.join(target, "release", "tincull")
     if os.path.exists(built):
         return os.path.abspath(built)
     on_path = shutil.which("tincull")
@@ -65,10 +66,18 @@ def main():
     p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster [2]")
     p.add_argument("--threads", type=int, default=0, help="threads of each tile job [all cores of its worker]")
     p.add_argument("--retries", type=int, default=2, help="retries of a failed tile job [2]")
-    p.add_argument("--tincull", help="the tincull binary [target/release/tincull, else on PATH]")
+    p.add_argument("--tincull", help="the tincull binary [$CARGO_TARGET_DIR or target/, release/tincull there, else on PATH]")
     args = p.parse_args()
+    if args.scheduler is None and args.workers < 1:
+        p.error(f"--workers must be at least 1 (a local cluster of {args.workers} workers would never run a tile)")
+    if args.retries < 0:
+        p.error(f"--retries must be 0 or more, got {args.retries}")
+    if args.threads < 0:
+        p.error(f"--threads must be 0 (all cores) or more, got {args.threads}")
 
     tincull = find_tincull(args.tincull)
+    if not (os.path.isfile(tincull) and os.access(tincull, os.X_OK)):
+        sys.exit(f"error: {tincull}: not an executable tincull binary (--tincull)")
     plan = os.path.abspath(args.plan)
     out = os.path.abspath(args.out)
     try:
@@ -77,7 +86,15 @@ def main():
     except (OSError, ValueError, KeyError) as e:
         sys.exit(f"error: {args.plan}: not a readable tincull plan: {e}")
 
-    from dask.distributed import Client, LocalCluster, as_completed
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError as e:
+        here = os.path.dirname(os.path.abspath(__file__))
+        sys.exit(
+            f"error: Dask is not installed for {sys.executable} ({e}): install it with "
+            f"`{sys.executable} -m pip install -r {os.path.join(here, 'requirements.txt')}`, or run "
+            "scripts/tiles-dask, which makes .venv-tiles with it"
+        )
 
     start = time.time()
     cluster = None
@@ -96,6 +113,9 @@ def main():
             reports.append(fut.result())
             print(f"tiles: {k}/{tiles}", file=sys.stderr)
         merged = client.submit(merge, tincull, plan, out, futures, key="merge", pure=False).result()
+    except RuntimeError as e:
+        # A tile or the merge failed (after its retries): tincull's own message, without a traceback.
+        sys.exit(f"error: {e}")
     finally:
         client.close()
         if cluster is not None:

@@ -252,6 +252,7 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
             "standard output carries build's report (or the .tch, with `-o -`), and `tincull export FILE.tch \
              --export-json -` prints a built hierarchy's JSON there",
         )?;
+        super::files::refuse_other_format(path, "a hierarchy's JSON", "json")?;
     }
     if let Some(path) = &args.export_obj {
         files.check_grouped_obj(path, "--export-obj")?;

@@ -42,6 +42,12 @@ pub struct DemoArgs {
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
     anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    if args.out_dir == Path::new("-") {
+        anyhow::bail!(
+            "--out-dir -: the demo writes several files (the hierarchy, its JSON, the grouped OBJ and .mtl, the \
+             evaluation, renders) into a directory, which standard output cannot hold; give a directory name"
+        );
+    }
     if args.out_dir.exists() && !args.out_dir.is_dir() {
         anyhow::bail!("--out-dir {}: exists and is not a directory", args.out_dir.display());
     }

@@ -67,12 +67,13 @@ pub fn check_classes(classes: &[ViewpointClass]) -> Result<()> {
 /// Checks the evaluation's outputs (before the work).
 pub fn check_outputs(files: &mut Outputs, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
     let why = "standard output carries the evaluation's table (or its --json summary)";
-    for (path, flag) in json
-        .map(|p| (p, "--export-json"))
+    for (path, flag, what, own) in json
+        .map(|p| (p, "--export-json", "the evaluation as JSON", "json"))
         .into_iter()
-        .chain(csv.map(|p| (p, "--csv")))
+        .chain(csv.map(|p| (p, "--csv", "the evaluation as CSV", "csv")))
     {
         files.check_file(path, flag, why)?;
+        super::files::refuse_other_format(path, what, own)?;
     }
     Ok(())
 }

@@ -9,7 +9,7 @@ use super::{Output, OutputArgs};
 use pipeline::export::to_json;
 use pipeline::gltf::{bin_path, gltf_files, is_glb};
 
-use super::files::Outputs;
+use super::files::{Outputs, refuse_other_format, refuse_other_formats};
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]
@@ -39,6 +39,7 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.export_json {
         files.check_or_stdout(path, &mut out)?;
+        refuse_other_format(path, "a hierarchy's JSON", "json")?;
     }
     if let Some(path) = &args.export_obj {
         files.check_grouped_obj(path, "--export-obj")?;
@@ -52,6 +53,7 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         if !is_glb(path) {
             files.check(&bin_path(path)?.0)?;
         }
+        refuse_other_formats(path, "glTF", &["glb", "gltf"])?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(path) = &args.export_json {

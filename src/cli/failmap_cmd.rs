@@ -60,6 +60,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.out {
         files.check_file(path, "-o", "the map is a PNG image (binary)")?;
+        super::files::refuse_other_format(path, "a PNG image", "png")?;
     }
     if let Some(path) = &args.csv {
         files.check_file(
@@ -67,6 +68,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
             "--csv",
             "standard output carries failmap's summary (or its --json)",
         )?;
+        super::files::refuse_other_format(path, "the map as CSV", "csv")?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     args.method

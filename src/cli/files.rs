@@ -73,6 +73,7 @@ impl Outputs {
             );
         }
         let (mtl, _) = mtl_path(obj)?;
+        refuse_other_format(obj, "an OBJ mesh (with its .mtl)", "obj")?;
         self.check(obj)?;
         self.check(&mtl)
     }
@@ -127,16 +128,24 @@ const KNOWN_EXTENSIONS: [&str; 15] = [
 ];
 
 /// An error when the output `path` of a command that writes `what` (whose extension is `own`) is named with the
-/// extension of another format that tincull knows (`tin -o t.npy`, `build -o b.obj`): the file would later be read
-/// as that format. Other names (and `-`) are left to the user.
+/// extension of another format that tincull knows (`tin -o t.npy`, `build -o b.obj`, `export --export-json b.tch`):
+/// the file would later be read as that format, and an existing file of that format (another hierarchy, the mesh)
+/// would be replaced by something else. Other names (and `-`) are left to the user.
 pub fn refuse_other_format(path: &Path, what: &str, own: &str) -> Result<()> {
+    refuse_other_formats(path, what, &[own])
+}
+
+/// [`refuse_other_format`] for an output that may take any of the extensions `own` (glTF: `.glb` or `.gltf`).
+pub fn refuse_other_formats(path: &Path, what: &str, own: &[&str]) -> Result<()> {
     let Some(ext) = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase) else {
         return Ok(());
     };
-    if ext != own && KNOWN_EXTENSIONS.contains(&ext.as_str()) {
+    if !own.contains(&ext.as_str()) && KNOWN_EXTENSIONS.contains(&ext.as_str()) {
+        let names: Vec<String> = own.iter().map(|e| format!(".{e}")).collect();
         bail!(
-            "{}: this command writes {what}, which a .{ext} name would make read as another format; name it .{own}",
-            path.display()
+            "{}: this command writes {what}, which a .{ext} name would make read as another format; name it {}",
+            path.display(),
+            names.join(" or ")
         );
     }
     Ok(())

@@ -78,6 +78,7 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
     files.input(&args.mesh.mesh)?;
     if let Some(path) = &args.export_json {
         files.check_or_stdout(path, &mut out)?;
+        super::files::refuse_other_format(path, "horizons as JSON", "json")?;
     }
     let (tin, _) = args.mesh.load(out)?;
     let (field, seconds) = compute_with_progress(&tin, &config, args.undersampling, out)?;

@@ -149,6 +149,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
             "-o",
             "a .pvs file is binary, and standard output carries pvs's report",
         )?;
+        super::files::refuse_other_format(path, "a PVS file", "pvs")?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(n) = args.check {

@@ -145,6 +145,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         files.input(config)?;
     }
     files.check(&args.out)?;
+    super::files::refuse_other_format(&args.out, "a tiling plan (JSON)", "json")?;
     let params = args.params.resolve(args.config.as_deref())?;
     // In samples for a DEM; a mesh's plan scales them by its vertex spacing (`plan_mesh`).
     let options = PlanOptions {

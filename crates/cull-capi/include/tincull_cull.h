@@ -34,7 +34,8 @@
 #define TC_ERR_FORMAT 3
 
 /**
- * An argument is out of range (unknown method, non-finite eye, field of view outside (0, 360], bad UTF-8 path).
+ * An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
+ * yaw, field of view outside (0, 360], bad UTF-8 path).
  */
 #define TC_ERR_INVALID 4
 

@@ -30,7 +30,8 @@ pub const TC_ERR_NULL: i32 = 1;
 pub const TC_ERR_IO: i32 = 2;
 /// The bytes are not a valid `.tch` hierarchy (bad magic, version, checksum, structure).
 pub const TC_ERR_FORMAT: i32 = 3;
-/// An argument is out of range (unknown method, non-finite eye, field of view outside (0, 360], bad UTF-8 path).
+/// An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
+/// yaw, field of view outside (0, 360], bad UTF-8 path).
 pub const TC_ERR_INVALID: i32 = 4;
 /// The caller's range buffer is too small; `*count` holds the number of ranges needed.
 pub const TC_ERR_BUFFER_TOO_SMALL: i32 = 5;
@@ -131,7 +132,14 @@ fn guard(body: impl FnOnce() -> Result<(), Failure>) -> i32 {
         Ok(()) => TC_OK,
         Err(Failure(code, message)) => {
             let c = CString::new(message.replace('\0', " ")).unwrap_or_default();
-            LAST_ERROR.with(|e| *e.borrow_mut() = c);
+            // `try_with`: a call from a thread-local destructor (a C++ `thread_local`, a pthread key's destructor)
+            // may come after this thread's message was destroyed; the code is still returned, and `with` would
+            // panic outside `catch_unwind`, aborting the process.
+            let _ = LAST_ERROR.try_with(|e| {
+                if let Ok(mut slot) = e.try_borrow_mut() {
+                    *slot = c;
+                }
+            });
             code
         }
     }
@@ -213,7 +221,7 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
         let m = method(method_id)?;
         let h = Hierarchy::load(Path::new(path)).map_err(|e| load_error("tc_load_path", e))?;
         m.check(&h)
-            .map_err(|e| Failure(TC_ERR_INVALID, format!("{path}: {e}")))?;
+            .map_err(|e| Failure(TC_ERR_INVALID, format!("tc_load_path: {path}: {e}")))?;
         // SAFETY: `out` checked non-null.
         unsafe { store(h, m, out) };
         Ok(())
@@ -368,7 +376,11 @@ pub unsafe extern "C" fn tc_info(culler: *const TcCuller, out: *mut TcInfo) -> i
 /// and stays valid until the next failing call on the same thread.
 #[unsafe(no_mangle)]
 pub extern "C" fn tc_last_error() -> *const c_char {
-    LAST_ERROR.with(|e| e.borrow().as_ptr())
+    // During this thread's exit (a thread-local destructor calling in) the message may be gone: an empty string,
+    // never a panic across the boundary.
+    LAST_ERROR
+        .try_with(|e| e.try_borrow().map(|m| m.as_ptr()).unwrap_or(c"".as_ptr()))
+        .unwrap_or(c"".as_ptr())
 }
 
 /// Releases a culler from `tc_load_*`; NULL is ignored. The pointer must not be used afterwards.

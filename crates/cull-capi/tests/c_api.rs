@@ -118,13 +118,9 @@ fn static_lib() -> PathBuf {
     panic!("libtincull_cull.a not found near {}", deps.display());
 }
 
-#[test]
-fn c_example_prints_the_rust_ranges() {
-    let h = bundled_hierarchy();
-    let dir = tempfile::tempdir().expect("tempdir");
-    let tch = dir.path().join("jacksboro-2k.tch");
-    std::fs::write(&tch, h.to_bytes().expect("to_bytes")).expect("write the .tch");
-    let exe = dir.path().join("cull");
+/// `examples/cull.c` compiled with the system `cc` into `dir`.
+fn compile_example(dir: &Path) -> PathBuf {
+    let exe = dir.join("cull");
     let cc = Command::new("cc")
         .arg(workspace().join("examples/cull.c"))
         .arg("-I")
@@ -139,6 +135,16 @@ fn c_example_prints_the_rust_ranges() {
         "cc failed:\n{}",
         String::from_utf8_lossy(&cc.stderr)
     );
+    exe
+}
+
+#[test]
+fn c_example_prints_the_rust_ranges() {
+    let h = bundled_hierarchy();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("jacksboro-2k.tch");
+    std::fs::write(&tch, h.to_bytes().expect("to_bytes")).expect("write the .tch");
+    let exe = compile_example(dir.path());
     let eyes = eyes(&h);
     // Every method that applies to this (crystal-grouped) hierarchy; `stewart` needs a quadtree.
     for method in CullMethod::ALL.into_iter().filter(|m| m.check(&h).is_ok()) {
@@ -170,6 +176,41 @@ fn c_example_prints_the_rust_ranges() {
         }
         assert!(culled_somewhere, "{method}: the eyes should cull something");
     }
+}
+
+/// The example refuses a method name it does not know (a typo must not silently cull with `safe`).
+#[test]
+fn c_example_refuses_an_unknown_method() {
+    let h = bundled_hierarchy();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("jacksboro-2k.tch");
+    std::fs::write(&tch, h.to_bytes().expect("to_bytes")).expect("write the .tch");
+    let exe = compile_example(dir.path());
+    let eye = info_eye(&h);
+    let run = Command::new(&exe)
+        .arg(&tch)
+        .arg("thesys")
+        .arg(&eye)
+        .output()
+        .expect("the example runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("unknown method thesys: expected safe, thesis, stewart or lloyd-egbert"),
+        "{stderr}"
+    );
+    assert!(run.stdout.is_empty(), "no ranges printed");
+    // Its usage names every method.
+    let usage = Command::new(&exe).output().expect("the example runs");
+    assert_eq!(usage.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&usage.stderr).contains("safe|thesis|stewart|lloyd-egbert"));
+}
+
+/// An eye 200 m above the middle of the terrain, as the example takes it (`X,Y,Z`).
+fn info_eye(h: &Hierarchy) -> String {
+    let e = eyes(h);
+    let last = e.last().expect("an eye");
+    format!("{},{},{}", last[0], last[1], last[2])
 }
 
 fn last_error() -> String {
@@ -250,6 +291,100 @@ fn errors_are_codes_with_messages() {
         tc_free(std::ptr::null_mut());
     }
     assert_eq!(tc_abi_version() >> 16, 1);
+}
+
+/// A method the hierarchy's grouping does not take and a non-finite yaw are `TC_ERR_INVALID`, with messages that
+/// name the file (or the buffer), the method and the value.
+#[test]
+fn a_method_of_the_wrong_grouping_and_a_non_finite_yaw_are_invalid() {
+    let h = bundled_hierarchy();
+    let bytes = h.to_bytes().expect("to_bytes");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("crystal.tch");
+    std::fs::write(&tch, &bytes).expect("write the .tch");
+    let path = std::ffi::CString::new(tch.to_str().expect("UTF-8 path")).expect("no NUL");
+    let mut c: *mut TcCuller = std::ptr::null_mut();
+    // SAFETY: valid pointers and lengths throughout.
+    unsafe {
+        assert_eq!(
+            tc_load_buffer(bytes.as_ptr(), bytes.len(), TC_METHOD_STEWART, &mut c),
+            TC_ERR_INVALID
+        );
+        assert!(c.is_null());
+        let e = last_error();
+        assert!(
+            e.starts_with("memory buffer: method `stewart` needs a quadtree hierarchy"),
+            "{e}"
+        );
+        assert_eq!(tc_load_path(path.as_ptr(), TC_METHOD_STEWART, &mut c), TC_ERR_INVALID);
+        assert!(c.is_null());
+        let e = last_error();
+        assert!(
+            e.starts_with(&format!("tc_load_path: {}: method `stewart`", tch.display())),
+            "{e}"
+        );
+        assert_eq!(tc_load_path(path.as_ptr(), TC_METHOD_SAFE, &mut c), TC_OK);
+        let mut info = TcInfo::default();
+        assert_eq!(tc_info(c, &mut info), TC_OK);
+        let eye = info.origin.map(|o| o + 500.0);
+        let mut count = 0usize;
+        for yaw in [f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                tc_cull(c, eye.as_ptr(), yaw, 90.0, std::ptr::null_mut(), 0, &mut count),
+                TC_ERR_INVALID
+            );
+            assert!(
+                last_error().contains(&format!("yaw {yaw} is not finite")),
+                "{}",
+                last_error()
+            );
+        }
+        tc_free(c);
+    }
+}
+
+static AT_EXIT_STATUS: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(-1);
+static AT_EXIT_MESSAGE_READ: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Calls the library from a thread-local destructor, as a C++ `thread_local` object or a pthread key's destructor
+/// may: a failing call and `tc_last_error` then.
+struct CallsAtThreadExit;
+
+impl Drop for CallsAtThreadExit {
+    fn drop(&mut self) {
+        let mut c: *mut TcCuller = std::ptr::null_mut();
+        // SAFETY: a NULL path is the library's own check; `out` is writable.
+        let status = unsafe { tc_load_path(std::ptr::null(), TC_METHOD_SAFE, &mut c) };
+        AT_EXIT_STATUS.store(status, std::sync::atomic::Ordering::SeqCst);
+        // SAFETY: the library returns a NUL-terminated string (possibly empty).
+        let _ = unsafe { CStr::from_ptr(tc_last_error()) }.to_bytes().len();
+        AT_EXIT_MESSAGE_READ.store(true, std::sync::atomic::Ordering::SeqCst);
+    }
+}
+
+thread_local! {
+    static AT_EXIT: CallsAtThreadExit = const { CallsAtThreadExit };
+}
+
+/// A failing call from a thread-local destructor, after the thread's message was destroyed, still returns its code:
+/// reaching the destroyed message must not panic across the boundary (which aborts the process).
+#[test]
+fn a_failing_call_during_thread_exit_returns_its_code() {
+    std::thread::spawn(|| {
+        // Registered before the library's message, so destroyed after it (destructors run in reverse order).
+        AT_EXIT.with(|_| ());
+        let mut c: *mut TcCuller = std::ptr::null_mut();
+        // SAFETY: as above; this failing call creates the thread's message.
+        assert_eq!(
+            unsafe { tc_load_path(std::ptr::null(), TC_METHOD_SAFE, &mut c) },
+            TC_ERR_NULL
+        );
+        assert!(last_error().contains("path is NULL"));
+    })
+    .join()
+    .expect("the thread exits normally");
+    assert_eq!(AT_EXIT_STATUS.load(std::sync::atomic::Ordering::SeqCst), TC_ERR_NULL);
+    assert!(AT_EXIT_MESSAGE_READ.load(std::sync::atomic::Ordering::SeqCst));
 }
 
 /// C-API cull time against the Rust call, same process, same eyes (printed with `--nocapture`).

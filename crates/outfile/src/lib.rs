@@ -100,6 +100,8 @@ pub enum ErrorKind {
     NoDirectory(PathBuf),
     /// The path has no file name (`..`, `/`, empty).
     NoFileName,
+    /// The path ends in a separator (`out/`), which names a directory whether or not one exists.
+    DirectoryName,
     /// A symlink chain too long or circular.
     SymlinkLoop,
     /// Standard output is not allowed here (a multi-file output or a command that prints to it).
@@ -123,6 +125,11 @@ impl fmt::Display for Error {
             ),
             ErrorKind::NoDirectory(d) => write!(f, "{p}: the directory {} does not exist", d.display()),
             ErrorKind::NoFileName => write!(f, "{p}: not a file name"),
+            ErrorKind::DirectoryName => write!(
+                f,
+                "{p}: ends in `{}`, which names a directory, not a file; give a file name",
+                std::path::MAIN_SEPARATOR
+            ),
             ErrorKind::SymlinkLoop => write!(f, "{p}: too many levels of symbolic links"),
             ErrorKind::StdoutNotAllowed => write!(
                 f,
@@ -260,6 +267,16 @@ pub fn check(path: &Path) -> Result<Target> {
     }
     if path.file_name().is_none() {
         return Err(err(path, ErrorKind::NoFileName));
+    }
+    // `out/` or `x.json/`: the system would answer "Not a directory" or "Is a directory", or take a missing name
+    // for a directory to come; the user meant a directory either way.
+    if path
+        .as_os_str()
+        .as_encoded_bytes()
+        .last()
+        .is_some_and(|&b| std::path::is_separator(char::from(b)))
+    {
+        return Err(err(path, ErrorKind::DirectoryName));
     }
     // An existing target is judged by what the kernel follows to (this also covers links such as /dev/stdout ->
     // /proc/self/fd/1 -> pipe:[..], which no path resolution can follow); a missing one by resolving the link chain.
