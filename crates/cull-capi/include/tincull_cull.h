@@ -171,7 +171,7 @@ extern "C" {
 uint32_t tc_abi_version(void);
 
 /**
- * Loads the `.tch` file at `path` (NUL-terminated UTF-8) and prepares a culler of `method` (`TC_METHOD_*`).
+ * Loads the `.tch` file at `path` (NUL-terminated UTF-8) and prepares a culler of method `method_id` (`TC_METHOD_*`).
  * On success `*out` receives a culler to release with [`tc_free`]; on failure `*out` is set to NULL.
  *
  * # Safety
@@ -183,7 +183,7 @@ int32_t tc_load_path(const char *path,
 
 /**
  * Loads a `.tch` hierarchy from `len` bytes at `data` (copied; the buffer may be freed afterwards) and prepares a
- * culler of `method` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`].
+ * culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`].
  *
  * # Safety
  * `data` points to `len` readable bytes and `out` is writable, or either is NULL (then `TC_ERR_NULL`).
@@ -198,7 +198,9 @@ int32_t tc_load_buffer(const uint8_t *data,
  * counter-clockwise from +x) with a horizontal field of view of `fov_deg` degrees (in (0, 360]; 360 looks all
  * around), exactly like `tincull cull --eye x,y,z --yaw Y --fov F`. Writes the ranges to draw, ascending and merged,
  * into `ranges[0..*count]`. When `capacity` is too small nothing is written, `*count` receives the number needed
- * and the result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough).
+ * and the result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough). Any finite eye is culled
+ * from, one below the terrain too (nothing is visible from there, so no triangle drawn or culled is wrong), where
+ * `tincull cull` refuses it as a mistake.
  *
  * # Safety
  * `culler` comes from a `tc_load_*` call and is not used by another thread meanwhile; `eye` points to 3 doubles;

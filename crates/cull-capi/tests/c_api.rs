@@ -393,14 +393,16 @@ fn cull_time_through_the_c_api() {
     let h = bundled_hierarchy();
     let bytes = h.to_bytes().expect("to_bytes");
     let eyes = eyes(&h);
-    for method in CullMethod::ALL {
+    // The same method both ways, each that applies to this (crystal-grouped) hierarchy: `stewart` needs a quadtree.
+    for method in CullMethod::ALL.into_iter().filter(|m| m.check(&h).is_ok()) {
         let culler = AnyCuller::new(&h, method);
         let mut list = DrawList::default();
         let mut c: *mut TcCuller = std::ptr::null_mut();
-        let id = if method == CullMethod::Safe {
-            TC_METHOD_SAFE
-        } else {
-            TC_METHOD_THESIS
+        let id = match method {
+            CullMethod::Safe => TC_METHOD_SAFE,
+            CullMethod::Thesis => TC_METHOD_THESIS,
+            CullMethod::Stewart => TC_METHOD_STEWART,
+            CullMethod::LloydEgbert => TC_METHOD_LLOYD_EGBERT,
         };
         // SAFETY: valid buffer and out pointer.
         assert_eq!(
