@@ -11,24 +11,9 @@ matplotlib (`scripts/charts` installs it into .venv-notebooks):
 import json
 from pathlib import Path
 
-import sys
+from chart_cli import pyplot  # scripts/chart_cli.py, beside this script
 
-# Before anything is read or drawn: `--help` must not redraw the chart, and a missing matplotlib is named.
-if any(a in ("-h", "--help") for a in sys.argv[1:]):
-    print(__doc__.strip())
-    sys.exit(0)
-if len(sys.argv) > 1:
-    sys.exit(f"{sys.argv[0]}: unknown argument {sys.argv[1]} (usage: {sys.argv[0]}; --help says more)")
-try:
-    import matplotlib
-except ImportError as e:
-    sys.exit(
-        f"error: matplotlib is not installed for {sys.executable} ({e}): scripts/charts makes .venv-notebooks "
-        "with it; run this with .venv-notebooks/bin/python"
-    )
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+plt = pyplot(__doc__)
 
 root = Path(__file__).resolve().parent.parent / "docs"
 meshes = [("jacksboro-10k", "jacksboro-10k"), ("cascades-100k", "Cascades 100k")]

@@ -10,22 +10,9 @@ import math
 import sys
 from pathlib import Path
 
-# Before anything is read or drawn: `--help` must not redraw the chart, and a missing matplotlib is named.
-if any(a in ("-h", "--help") for a in sys.argv[1:]):
-    print(__doc__.strip())
-    sys.exit(0)
-if len(sys.argv) > 3:
-    sys.exit(f"{sys.argv[0]}: unknown argument {sys.argv[3]} (usage: {sys.argv[0]} [CSV] [PNG]; --help says more)")
-try:
-    import matplotlib
-except ImportError as e:
-    sys.exit(
-        f"error: matplotlib is not installed for {sys.executable} ({e}): scripts/charts makes .venv-notebooks "
-        "with it; run this with .venv-notebooks/bin/python"
-    )
+from chart_cli import pyplot  # scripts/chart_cli.py, beside this script
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+plt = pyplot(__doc__, " [CSV] [PNG]", 2)
 
 BUILD_STAGES = [
     ("load_s", "build: read + Delaunay"),
