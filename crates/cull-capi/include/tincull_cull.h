@@ -199,8 +199,7 @@ int32_t tc_load_buffer(const uint8_t *data,
  * around), exactly like `tincull cull --eye x,y,z --yaw Y --fov F`. Writes the ranges to draw, ascending and merged,
  * into `ranges[0..*count]`. When `capacity` is too small nothing is written, `*count` receives the number needed
  * and the result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough). Any finite eye is culled
- * from, one below the terrain too (nothing is visible from there, so no triangle drawn or culled is wrong), where
- * `tincull cull` refuses it as a mistake.
+ * from, one below the terrain too (nothing is visible from there, so no triangle culled is wrong).
  *
  * # Safety
  * `culler` comes from a `tc_load_*` call and is not used by another thread meanwhile; `eye` points to 3 doubles;
