@@ -185,6 +185,8 @@ int32_t tc_load_path(const char *path,
  * Loads a `.tch` hierarchy from `len` bytes at `data` (copied; the buffer may be freed afterwards) and prepares a
  * culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`].
  *
+ * A `len` over `PTRDIFF_MAX` gives `TC_ERR_INVALID` (no buffer is that long) without reading `data`.
+ *
  * # Safety
  * `data` points to `len` readable bytes and `out` is writable, or either is NULL (then `TC_ERR_NULL`).
  */

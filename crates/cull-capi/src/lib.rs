@@ -231,6 +231,8 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
 /// Loads a `.tch` hierarchy from `len` bytes at `data` (copied; the buffer may be freed afterwards) and prepares a
 /// culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`].
 ///
+/// A `len` over `PTRDIFF_MAX` gives `TC_ERR_INVALID` (no buffer is that long) without reading `data`.
+///
 /// # Safety
 /// `data` points to `len` readable bytes and `out` is writable, or either is NULL (then `TC_ERR_NULL`).
 #[unsafe(no_mangle)]
@@ -244,7 +246,13 @@ pub unsafe extern "C" fn tc_load_buffer(data: *const u8, len: usize, method_id: 
         if data.is_null() {
             return fail(TC_ERR_NULL, "tc_load_buffer: data is NULL");
         }
-        // SAFETY: the caller passes `len` readable bytes at `data`.
+        if isize::try_from(len).is_err() {
+            return fail(
+                TC_ERR_INVALID,
+                format!("tc_load_buffer: len {len} is over PTRDIFF_MAX: no buffer is that long"),
+            );
+        }
+        // SAFETY: the caller passes `len` readable bytes at `data`, and `len` is at most `isize::MAX`.
         let bytes = unsafe { std::slice::from_raw_parts(data, len) };
         let m = method(method_id)?;
         let h = Hierarchy::from_bytes(bytes).map_err(|e| load_error("memory buffer", e))?;

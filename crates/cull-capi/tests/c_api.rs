@@ -248,6 +248,13 @@ fn errors_are_codes_with_messages() {
             TC_ERR_FORMAT
         );
         assert!(last_error().contains("memory buffer"), "{}", last_error());
+        // A length no buffer can have is refused before anything is read.
+        assert_eq!(
+            tc_load_buffer(junk.as_ptr(), usize::MAX, TC_METHOD_SAFE, &mut c),
+            TC_ERR_INVALID
+        );
+        assert!(last_error().contains("over PTRDIFF_MAX"), "{}", last_error());
+        assert!(c.is_null());
         let bytes = bundled_hierarchy().to_bytes().expect("to_bytes");
         assert_eq!(tc_load_buffer(bytes.as_ptr(), bytes.len(), 7, &mut c), TC_ERR_INVALID);
         assert!(last_error().contains("unknown method 7"));
