@@ -35,7 +35,7 @@
 
 /**
  * An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
- * yaw, field of view outside (0, 360], bad UTF-8 path).
+ * yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix).
  */
 #define TC_ERR_INVALID 4
 
@@ -171,8 +171,9 @@ extern "C" {
 uint32_t tc_abi_version(void);
 
 /**
- * Loads the `.tch` file at `path` (NUL-terminated UTF-8) and prepares a culler of method `method_id` (`TC_METHOD_*`).
- * On success `*out` receives a culler to release with [`tc_free`]; on failure `*out` is set to NULL.
+ * Loads the `.tch` file at `path` (NUL-terminated: any bytes on Unix, UTF-8 elsewhere) and prepares a culler of
+ * method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`]; on failure
+ * `*out` is set to NULL.
  *
  * # Safety
  * `path` is a NUL-terminated string and `out` a writable pointer, or NULL (then `TC_ERR_NULL`).

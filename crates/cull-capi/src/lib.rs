@@ -31,7 +31,7 @@ pub const TC_ERR_IO: i32 = 2;
 /// The bytes are not a valid `.tch` hierarchy (bad magic, version, checksum, structure).
 pub const TC_ERR_FORMAT: i32 = 3;
 /// An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
-/// yaw, field of view outside (0, 360], bad UTF-8 path).
+/// yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix).
 pub const TC_ERR_INVALID: i32 = 4;
 /// The caller's range buffer is too small; `*count` holds the number of ranges needed.
 pub const TC_ERR_BUFFER_TOO_SMALL: i32 = 5;
@@ -198,8 +198,24 @@ pub extern "C" fn tc_abi_version() -> u32 {
     TC_ABI_VERSION
 }
 
-/// Loads the `.tch` file at `path` (NUL-terminated UTF-8) and prepares a culler of method `method_id` (`TC_METHOD_*`).
-/// On success `*out` receives a culler to release with [`tc_free`]; on failure `*out` is set to NULL.
+/// The path named by a C string: its bytes as they are on Unix (a file name there is any bytes), UTF-8 elsewhere.
+fn path_of(s: &CStr) -> Result<&Path, Failure> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        Ok(Path::new(std::ffi::OsStr::from_bytes(s.to_bytes())))
+    }
+    #[cfg(not(unix))]
+    {
+        s.to_str()
+            .map(Path::new)
+            .map_err(|_| Failure(TC_ERR_INVALID, "tc_load_path: the path is not UTF-8".into()))
+    }
+}
+
+/// Loads the `.tch` file at `path` (NUL-terminated: any bytes on Unix, UTF-8 elsewhere) and prepares a culler of
+/// method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`]; on failure
+/// `*out` is set to NULL.
 ///
 /// # Safety
 /// `path` is a NUL-terminated string and `out` a writable pointer, or NULL (then `TC_ERR_NULL`).
@@ -215,13 +231,11 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
             return fail(TC_ERR_NULL, "tc_load_path: path is NULL");
         }
         // SAFETY: the caller passes a NUL-terminated string.
-        let path = unsafe { CStr::from_ptr(path) }
-            .to_str()
-            .map_err(|_| Failure(TC_ERR_INVALID, "tc_load_path: the path is not UTF-8".into()))?;
+        let path = path_of(unsafe { CStr::from_ptr(path) })?;
         let m = method(method_id)?;
-        let h = Hierarchy::load(Path::new(path)).map_err(|e| load_error("tc_load_path", e))?;
+        let h = Hierarchy::load(path).map_err(|e| load_error("tc_load_path", e))?;
         m.check(&h)
-            .map_err(|e| Failure(TC_ERR_INVALID, format!("tc_load_path: {path}: {e}")))?;
+            .map_err(|e| Failure(TC_ERR_INVALID, format!("tc_load_path: {}: {e}", path.display())))?;
         // SAFETY: `out` checked non-null.
         unsafe { store(h, m, out) };
         Ok(())

@@ -467,3 +467,31 @@ fn the_readme_states_the_abi_version() {
         "the README's \"Current version\" is not {major}.{minor}"
     );
 }
+
+/// On Unix a file name is any bytes: `tc_load_path` opens one that is not UTF-8, and names it in its errors.
+#[cfg(unix)]
+#[test]
+fn a_path_that_is_not_utf8_loads_on_unix() {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let name = std::ffi::OsStr::from_bytes(b"terrain-\xff\xfe.tch");
+    let tch = dir.path().join(name);
+    std::fs::write(&tch, bundled_hierarchy().to_bytes().expect("to_bytes")).expect("write the .tch");
+    let path = std::ffi::CString::new(tch.as_os_str().as_bytes()).expect("no NUL");
+    let mut c: *mut TcCuller = std::ptr::null_mut();
+    // SAFETY: a NUL-terminated path and a writable out pointer; the culler is freed once.
+    unsafe {
+        assert_eq!(
+            tc_load_path(path.as_ptr(), TC_METHOD_SAFE, &mut c),
+            TC_OK,
+            "{}",
+            last_error()
+        );
+        assert!(!c.is_null());
+        tc_free(c);
+        std::fs::remove_file(&tch).expect("remove");
+        assert_eq!(tc_load_path(path.as_ptr(), TC_METHOD_SAFE, &mut c), TC_ERR_IO);
+        assert!(c.is_null());
+        assert!(last_error().contains("terrain-"), "{}", last_error());
+    }
+}
