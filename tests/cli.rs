@@ -1138,6 +1138,29 @@ fn messages_and_help_read_well() {
     );
 }
 
+/// `info FILE.tch` checks the hierarchy's mesh as a height field, as `info MESH` does: a `.tch` whose mesh is not one
+/// (written by another tool: its structure loads) is reported, with the violations in `--json`.
+#[test]
+fn info_checks_a_hierarchys_mesh_as_a_height_field() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = build_2k(dir.path());
+    let text = String::from_utf8_lossy(&ok(&["info", s(&tch)]).stdout).into_owned();
+    assert!(text.contains("height field  yes"), "{text}");
+    assert_eq!(json(&["info", s(&tch), "--json"])["height_field"], true);
+
+    // Two vertices at one x,y: a vertical wall.
+    let mut h = cull::Hierarchy::load(&tch).expect("loads");
+    let [x, y, _] = h.mesh.positions[1];
+    h.mesh.positions[0][0] = x;
+    h.mesh.positions[0][1] = y;
+    let bad = dir.path().join("wall.tch");
+    std::fs::write(&bad, h.to_bytes().expect("encodes")).expect("write");
+    let text = String::from_utf8_lossy(&ok(&["info", s(&bad)]).stdout).into_owned();
+    assert!(text.contains("height field  NO"), "{text}");
+    let v = json(&["info", s(&bad), "--json", "-q"]);
+    assert_eq!(v["height_field"], false);
+}
+
 #[test]
 fn demo_refuses_dash_as_its_out_dir() {
     // Run in a scratch directory: a demo that took `-` as a directory name would write there.

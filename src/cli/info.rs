@@ -152,6 +152,9 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
     let per_triangle = bytes as f64 / triangles.max(1) as f64;
     let [a, b] = h.always_visible;
     let b_info = &h.build;
+    // The mesh checked as a height field, as `info MESH` checks one: a `.tch` from anything but `tincull` may hold
+    // one that is not (its structure is checked on load, not this).
+    let check = eval::evaluate::hierarchy_tin(&h).map(|tin| tin::validate(&tin));
     out.say(format!("{} (a tincull hierarchy, {file_bytes} bytes)", path.display()));
     out.say(format!(
         "  mesh          {} vertices, {} triangles",
@@ -177,6 +180,19 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
          triangle)",
         h.sectors, b_info.subsectors
     ));
+    out.say(format!(
+        "  height field  {}",
+        match &check {
+            Ok(c) if c.is_height_field() => "yes".to_string(),
+            Ok(_) => "NO (see --json for the violations)".to_string(),
+            Err(e) => format!("NO ({e:#})"),
+        }
+    ));
+    if let Ok(c) = &check {
+        for w in &c.warnings {
+            out.warn(w);
+        }
+    }
     let undersampling = b_info
         .undersampling
         .map_or(String::new(), |u| format!(", undersampling {u} m"));
@@ -206,6 +222,8 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         "regions": regions,
         "visibility_bytes": bytes,
         "visibility_bytes_per_triangle": per_triangle,
+        "height_field": check.as_ref().is_ok_and(|c| c.is_height_field()),
+        "validation": check.as_ref().ok(),
         "build": b_info,
     }))
 }

@@ -58,7 +58,7 @@ pub enum Command {
     /// The main job: build and evaluate the bundled default terrain, print a report and write out/.
     Demo(demo_cmd::DemoArgs),
     /// Describe a terrain mesh (counts, bounding box, relief, height-field check, triangle quality) or a hierarchy
-    /// (.tch: its mesh, nodes, visibility data and build parameters).
+    /// (.tch: its mesh and the height-field check of it, nodes, visibility data and build parameters).
     Info(info::InfoArgs),
     /// Turn a DEM grid (.npy, .asc, .hgt, .png, .tif) into a simplified TIN by greedy insertion, written as OBJ.
     Tin(tin_cmd::TinArgs),
