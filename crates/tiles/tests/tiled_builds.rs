@@ -162,10 +162,15 @@ fn halo_and_far_field_lie_on_or_below_the_merged_terrain() {
 /// Asserts that the safe culler culls no visible triangle of `h` (exact checker) from 40 seeded eyes 2, 20 and 200 m
 /// above its terrain, and culls something.
 fn assert_safe_culling(h: &Hierarchy) {
+    assert_no_false_culls(h, &[AnyCuller::Safe(SafeCuller::new(h, SafeParams::default()))], &[]);
+}
+
+/// Asserts that each of `cullers` culls no visible triangle of `h` (exact checker) from 40 seeded eyes 2, 20 and
+/// 200 m above its terrain and from `eyes`, and that each culls something.
+fn assert_no_false_culls(h: &Hierarchy, cullers: &[AnyCuller], eyes: &[DVec3]) {
     let tin = tin_of(h);
     let truth = GroundTruth::new(&tin);
     let loc = truth.locator();
-    let culler = AnyCuller::Safe(SafeCuller::new(h, SafeParams::default()));
     let (lo, hi) = (tin.bbox().min, tin.bbox().max);
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
     let mut next = || {
@@ -174,26 +179,38 @@ fn assert_safe_culling(h: &Hierarchy) {
             .wrapping_add(1_442_695_040_888_963_407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    let mut culled = 0usize;
-    let mut eyes = 0;
-    while eyes < 40 {
+    let mut all = eyes.to_vec();
+    while all.len() < eyes.len() + 40 {
         let xy = DVec2::new(lo.x + next() * (hi.x - lo.x), lo.y + next() * (hi.y - lo.y));
         let Some(ground) = loc.ground_height(&tin, xy) else {
             continue;
         };
-        let above = [2.0, 20.0, 200.0][eyes % 3];
-        let eye = xy.extend(ground + above);
-        eyes += 1;
-        let visible = truth.visible_triangles(eye);
-        let mask = culler
-            .cull(&Camera::all_around(eye.to_array()))
-            .mask(tin.num_triangles());
-        for t in 0..tin.num_triangles() {
-            assert!(!visible[t] || mask[t], "false cull of triangle {t} from {eye:?}");
-        }
-        culled += mask.iter().filter(|&&m| !m).count();
+        all.push(xy.extend(ground + [2.0, 20.0, 200.0][all.len() % 3]));
     }
-    assert!(culled > 0, "the safe culler culled nothing on the merged terrain");
+    let mut culled = vec![0usize; cullers.len()];
+    for eye in all {
+        let visible = truth.visible_triangles(eye);
+        for (culler, culled) in cullers.iter().zip(&mut culled) {
+            let mask = culler
+                .cull(&Camera::all_around(eye.to_array()))
+                .mask(tin.num_triangles());
+            for t in 0..tin.num_triangles() {
+                assert!(
+                    !visible[t] || mask[t],
+                    "{}: false cull of triangle {t} from {eye:?}",
+                    culler.method().name()
+                );
+            }
+            *culled += mask.iter().filter(|&&m| !m).count();
+        }
+    }
+    for (culler, culled) in cullers.iter().zip(culled) {
+        assert!(
+            culled > 0,
+            "{} culled nothing on the merged terrain",
+            culler.method().name()
+        );
+    }
 }
 
 #[test]
@@ -202,6 +219,66 @@ fn safe_culling_of_a_merged_terrain_never_culls_a_visible_triangle() {
     let grid = synth(48 * 48, 5);
     let (plan, path) = plan_grid(dir.path(), &grid, 12, 3, 0.5);
     assert_safe_culling(&build_all(&plan, &path));
+}
+
+/// Spikes and a notched wall, one sample wide, on a plain at UTM-sized coordinates, cut into small tiles with a thin
+/// halo (the wall runs along the side between two rows of tiles). The run-time cullers read the merged mesh and hierarchy, not the tiles'
+/// horizons: neither the safe culler nor Lloyd & Egbert's may cull a visible triangle of the merge, from random eyes
+/// and from eyes a millimetre and half a metre above the spike tips and the wall, and level with the notch on either
+/// side of the wall.
+#[test]
+fn tiled_spikes_and_a_notched_wall_are_culled_safely() {
+    let (rows, cols) = (48, 48);
+    let mut z: Vec<f64> = (0..rows * cols)
+        .map(|i| 3000.0 + 5.0 * ((i % cols) as f64 / 7.0).sin() * ((i / cols) as f64 / 5.0).cos())
+        .collect();
+    let mut tips = Vec::new();
+    for (k, &(r, c)) in [
+        (5, 5),
+        (9, 30),
+        (17, 13),
+        (26, 41),
+        (33, 7),
+        (40, 22),
+        (44, 45),
+        (13, 24),
+    ]
+    .iter()
+    .enumerate()
+    {
+        z[r * cols + c] += 60.0 + 45.0 * k as f64;
+        tips.push((r, c));
+    }
+    // The wall across tile sides, with its notch in the middle.
+    for c in 6..42 {
+        z[24 * cols + c] += 150.0;
+    }
+    z[24 * cols + 23] -= 140.0;
+    let (dx, dy) = (10.0, 10.0);
+    let origin = DVec2::new(500_000.0, 4_800_000.0);
+    let grid = Grid::new(rows, cols, dx, dy, origin, z).expect("grid");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (plan, path) = plan_grid(dir.path(), &grid, 12, 1, 0.0);
+    assert_eq!(plan.tiles.len(), 16);
+    let h = build_all(&plan, &path);
+    let at = |r: usize, c: usize, up: f64| {
+        let p = grid.sample(r, c).expect("no voids");
+        DVec3::new(p.x, p.y, p.z + up)
+    };
+    let mut eyes = Vec::new();
+    for &(r, c) in tips.iter().chain(&[(24, 10), (24, 23), (24, 35)]) {
+        eyes.push(at(r, c, 1e-3));
+        eyes.push(at(r, c, 0.5));
+    }
+    // Level with the bottom of the notch, 50 m to either side of the wall.
+    let notch = at(24, 23, 0.5);
+    eyes.push(DVec3::new(notch.x, notch.y - 5.0 * dy, notch.z));
+    eyes.push(DVec3::new(notch.x, notch.y + 5.0 * dy, notch.z));
+    let cullers = [
+        AnyCuller::Safe(SafeCuller::new(&h, SafeParams::default())),
+        AnyCuller::new(&h, cull::CullMethod::LloydEgbert),
+    ];
+    assert_no_false_culls(&h, &cullers, &eyes);
 }
 
 /// Tiles grouped by quadtree merge into a quadtree hierarchy: each tile's cells under its tile node, the file marked
