@@ -230,17 +230,16 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }))
 }
 
-/// Creates the folder `dir` of a plan's tile files, then runs `work`, which writes into it: when `work` fails and the
-/// folder was new, it is removed again (it is then empty, the files being all or nothing), so a failed plan leaves
-/// nothing behind.
+/// Creates the folder `dir` of a plan's tile files, then runs `work`, which writes into it: when `work` fails or is
+/// interrupted (Ctrl-C) and the folder was new, it is removed again (it is then empty, the files being all or
+/// nothing), so a failed plan leaves nothing behind.
 fn in_new_dir<T>(dir: &Path, work: impl FnOnce() -> Result<T>) -> Result<T> {
-    let existed = dir.is_dir();
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let result = work();
-    if result.is_err() && !existed {
-        let _ = std::fs::remove_dir(dir);
+    let new = outfile::NewDir::create(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let result = work()?;
+    if let Some(new) = new {
+        new.keep();
     }
-    result
+    Ok(result)
 }
 
 /// `tiles plan MESH`: the whole mesh is read once and cut; each tile's part is written beside the plan.
