@@ -26,7 +26,8 @@
 //!    Two targets of one batch that resolve to the same file are refused.
 //! 6. **Interrupted, nothing left behind.** Every temporary file is registered while it exists;
 //!    [`remove_temporaries`] removes them all, for a command's interrupt handler (Ctrl-C, `SIGTERM`) to call before it
-//!    exits (a process killed outright, `SIGKILL`, cannot clean up: its `.tincull-*.tmp` files stay).
+//!    exits (a process killed outright, `SIGKILL`, cannot clean up: its `.tincull-*.tmp` files stay). A folder
+//!    created for the outputs with [`NewDir`] is removed with them when it is then empty.
 //! 7. **Inputs are never outputs.** The files a command reads, declared with [`Batch::input`], cannot be its
 //!    outputs: a target that is the same file as an input (the same path once links are followed, or, on Unix, the
 //!    same device and inode, which also catches hard links) is refused before anything is written, whichever of the
