@@ -170,6 +170,26 @@ fn errors_name_what_is_wrong() {
     fails_with(&["tiles", "merge", s(&plan), "-o", s(&merged)], &first);
     assert!(!merged.exists(), "a failed merge leaves no file");
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
+    // A tile given twice is built once, and the tiles in index order.
+    let v = json(&[
+        "tiles",
+        "build",
+        s(&plan),
+        "--tile",
+        "4",
+        "--tile",
+        "1",
+        "--tile",
+        "4",
+        "--json",
+    ]);
+    let built: Vec<u64> = v["tiles"]
+        .as_array()
+        .expect("tiles")
+        .iter()
+        .map(|t| t["index"].as_u64().expect("index"))
+        .collect();
+    assert_eq!(built, [1, 4]);
     fails_with(&["tiles", "build", s(&plan)], "--tile");
     // Each DEM tile reads its own far-field file, written beside the plan; damaged or missing, it is named.
     let far = dir.path().join("plan.tiles").join("far-00004.bin");
@@ -186,6 +206,19 @@ fn errors_name_what_is_wrong() {
         &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
         "directory",
     );
+    // The plan of t.npy named t.json would replace the grid's sidecar, which holds its spacing: refused.
+    let sidecar = std::fs::read(dir.path().join("t.json")).expect("sidecar");
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&dir.path().join("t.npy")),
+            "-o",
+            s(&dir.path().join("t.json")),
+        ],
+        "the same file as the input",
+    );
+    assert_eq!(std::fs::read(dir.path().join("t.json")).expect("sidecar"), sidecar);
     std::fs::write(dir.path().join("bad.json"), "[1, 2]").expect("write");
     fails_with(
         &["tiles", "build", s(&dir.path().join("bad.json")), "--all"],
@@ -398,6 +431,25 @@ fn a_malformed_plan_is_refused_naming_the_tile() {
         "as an earlier tile is",
     );
     fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "edited.json");
+    // A tile's output that names what the job reads (the DEM, a far-field file): refused, the file untouched (the
+    // DEM was replaced by the tile's hierarchy).
+    let dem = dir.path().join("t.npy");
+    let dem_bytes = std::fs::read(&dem).expect("DEM");
+    edit(&|v| v["tiles"][0]["output"] = serde_json::json!("t.npy"));
+    fails_with(
+        &["tiles", "build", s(&edited), "--tile", "0"],
+        "the same file as the input",
+    );
+    assert_eq!(std::fs::read(&dem).expect("DEM"), dem_bytes, "the DEM is untouched");
+    edit(&|v| v["tiles"][0]["output"] = serde_json::json!("t.json"));
+    fails_with(
+        &["tiles", "build", s(&edited), "--tile", "0"],
+        "the same file as the input",
+    );
+    edit(&|v| v["tiles"][1]["output"] = v["tiles"][1]["far"].clone());
+    fails_with(&["tiles", "build", s(&edited), "--tile", "1"], "far-00001.bin");
+    edit(&|v| v["tiles"][2]["output"] = serde_json::json!("edited.json"));
+    fails_with(&["tiles", "build", s(&edited), "--tile", "2"], "tile 2: its output");
     edit(&|v| v["tiles"] = serde_json::json!([]));
     fails_with(&["tiles", "build", s(&edited), "--all"], "it has no tiles");
     fails_with(&["tiles", "merge", s(&edited), "-o", s(&merged)], "it has no tiles");
