@@ -160,6 +160,10 @@ fn bad_arguments_give_clear_errors() {
         "at most 1000000 cells",
     );
     fails_with(&["pvs", s(&tch), "--check", "1000000000000"], "at most 1000000 cells");
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "--cell-size", "1e-300"],
+        "--cell-size 1e-300",
+    );
     let eye = format!("{cx},{cy},-5");
     fails_with(&["cull", s(&tch), "--eye", &eye, "--above-ground"], "must be 0 or more");
     fails_with(

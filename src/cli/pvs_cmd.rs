@@ -363,10 +363,14 @@ fn check(
         let y0 = rng.random_range(b.min.y..b.max.y - s);
         let centre = glam::DVec2::new(x0 + 0.5 * s, y0 + 0.5 * s);
         if truth.locator().ground_height(&tin, centre).is_some() {
-            cells.push(ViewCell {
+            let cell = ViewCell {
                 rect: [x0, y0, x0 + s, y0 + s],
                 height,
-            });
+            };
+            // A side too small to widen the cell at its coordinates is named here, not in a viewcell's error.
+            cell.validate()
+                .with_context(|| format!("--cell-size {}", tin::compact_number(s)))?;
+            cells.push(cell);
         }
     }
     let nt = tin.num_triangles();
