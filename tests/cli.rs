@@ -927,6 +927,11 @@ fn contradictory_or_empty_options_are_errors() {
         &["eval", s(&tch), "--viewpoints", "18446744073709551615"],
         "--viewpoints 18446744073709551615: at most 1000000 per class",
     );
+    // A failure map of too many cells says how many compactly (not in 300 digits).
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "1e-300", "--json"],
+        "a 1e-300 m cell gives 2.994297e304 x 3.18190",
+    );
     // A binary file given as the eyes: said to be one, naming it.
     fails_with(
         &["cull", s(&tch), "--eyes", s(&tch)],
