@@ -922,6 +922,21 @@ fn contradictory_or_empty_options_are_errors() {
     );
     let help = String::from_utf8_lossy(&ok(&["eval", "--help"]).stdout).into_owned();
     assert!(help.contains("not with --classes or --viewpoints"), "{help}");
+    // More viewpoints than a run could score: refused, not a capacity overflow (a panic) or an aborted allocation.
+    fails_with(
+        &["eval", s(&tch), "--viewpoints", "18446744073709551615"],
+        "--viewpoints 18446744073709551615: at most 1000000 per class",
+    );
+    // A failure map of too many cells says how many compactly (not in 300 digits).
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "1e-300", "--json"],
+        "a 1e-300 m cell gives 2.994297e304 x 3.18190",
+    );
+    // A binary file given as the eyes: said to be one, naming it.
+    fails_with(
+        &["cull", s(&tch), "--eyes", s(&tch)],
+        "j2k.tch: a binary file, not a text file of eye positions",
+    );
 
     let v = String::from_utf8_lossy(&run(&["failmap", s(&tch), "--cell-size", "1e9", "--json"]).stdout).into_owned();
     assert!(v.is_empty(), "{v}");

@@ -100,3 +100,23 @@ fn an_interrupted_command_leaves_nothing_behind() {
         assert_eq!(names(dir.path()), ["h.tch"], "signal {signal}");
     }
 }
+
+/// `tiles plan` creates the folder of its tiles' files: interrupted while it writes them, it removes the folder too.
+#[test]
+fn an_interrupted_plan_leaves_no_folder() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("g.npy");
+    ok(&["synth", "--vertices", "250000", "--rng-seed", "1", "-o", s(&npy), "-q"]);
+    let before = names(dir.path());
+    let plan = dir.path().join("plan.json");
+    // Some 15,000 tiles: seconds of far-field files.
+    for ms in [400, 1200] {
+        let code = interrupted(
+            &["tiles", "plan", s(&npy), "-o", s(&plan), "--tile", "4", "-q"],
+            Duration::from_millis(ms),
+            false,
+        );
+        assert_eq!(code, Some(130), "interrupted after {ms} ms");
+        assert_eq!(names(dir.path()), before, "after {ms} ms");
+    }
+}

@@ -153,6 +153,17 @@ fn bad_arguments_give_clear_errors() {
         "lies below the terrain",
     );
     fails_with(&["pvs", s(&tch), "--grid", "1"], "more than 1000000");
+    fails_with(&["pvs", s(&tch), "--grid", "1e-300"], "a grid of 1e-300 m gives 2.99");
+    // As many random cells: refused before they are drawn (a capacity overflow panicked, or the allocation aborted).
+    fails_with(
+        &["pvs", s(&tch), "--check", "18446744073709551615"],
+        "at most 1000000 cells",
+    );
+    fails_with(&["pvs", s(&tch), "--check", "1000000000000"], "at most 1000000 cells");
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "--cell-size", "1e-300"],
+        "--cell-size 1e-300",
+    );
     let eye = format!("{cx},{cy},-5");
     fails_with(&["cull", s(&tch), "--eye", &eye, "--above-ground"], "must be 0 or more");
     fails_with(

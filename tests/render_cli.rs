@@ -146,12 +146,16 @@ fn render_rejects_bad_options_with_clear_messages() {
     let obj = dir.path().join("t.obj");
     ok(&tincull(&["synth", "-o", p(&obj), "--vertices", "300", "-q"]));
     let png = dir.path().join("x.png");
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["--view", "eye"], "--eye"),
         (&["--pvs-cell", "0,0,10,10"], "hierarchy"),
         (&["--size", "0x10"], "size"),
         (&["--view", "map", "--compare"], "--compare"),
         (&["--colour", "groups"], "hierarchy"),
+        // Options of another option, given without it: refused, not ignored.
+        (&["--resolution", "0"], "--pvs-cell"),
+        (&["--runs", "3"], "--compare"),
+        (&["--fov", "1e300"], "got 1e300"),
     ];
     for (extra, needle) in cases {
         let mut args = vec!["render", p(&obj), "--out", p(&png)];

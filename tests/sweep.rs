@@ -291,6 +291,13 @@ fn a_sweep_of_nothing_valid_is_an_error() {
         (["--sectors", "0", "--subsectors", "1"], "sectors 0 x subsectors 1"),
         (["--sectors", "512", "--subsectors", "4"], "sectors 512 x subsectors 4"),
         (["--classes", "low,ridge,low", "--sectors", "4"], "`low` is given twice"),
+        // The seed count as given, not as Rust's `Some(0)`.
+        (["--seeds", "0", "--sectors", "4"], "subsectors 1, seeds 0, rng seed 1"),
+        // More viewpoints than a run could score: refused, not a capacity overflow (a panic).
+        (
+            ["--viewpoints", "18446744073709551615", "--sectors", "4"],
+            "at most 1000000 per class",
+        ),
     ] {
         // A mesh that does not exist: the checks come first.
         let o = Command::new(env!("CARGO_BIN_EXE_tincull"))

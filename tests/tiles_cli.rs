@@ -170,6 +170,26 @@ fn errors_name_what_is_wrong() {
     fails_with(&["tiles", "merge", s(&plan), "-o", s(&merged)], &first);
     assert!(!merged.exists(), "a failed merge leaves no file");
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
+    // A tile given twice is built once, and the tiles in index order.
+    let v = json(&[
+        "tiles",
+        "build",
+        s(&plan),
+        "--tile",
+        "4",
+        "--tile",
+        "1",
+        "--tile",
+        "4",
+        "--json",
+    ]);
+    let built: Vec<u64> = v["tiles"]
+        .as_array()
+        .expect("tiles")
+        .iter()
+        .map(|t| t["index"].as_u64().expect("index"))
+        .collect();
+    assert_eq!(built, [1, 4]);
     fails_with(&["tiles", "build", s(&plan)], "--tile");
     // Each DEM tile reads its own far-field file, written beside the plan; damaged or missing, it is named.
     let far = dir.path().join("plan.tiles").join("far-00004.bin");
@@ -186,6 +206,19 @@ fn errors_name_what_is_wrong() {
         &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
         "directory",
     );
+    // The plan of t.npy named t.json would replace the grid's sidecar, which holds its spacing: refused.
+    let sidecar = std::fs::read(dir.path().join("t.json")).expect("sidecar");
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&dir.path().join("t.npy")),
+            "-o",
+            s(&dir.path().join("t.json")),
+        ],
+        "the same file as the input",
+    );
+    assert_eq!(std::fs::read(dir.path().join("t.json")).expect("sidecar"), sidecar);
     std::fs::write(dir.path().join("bad.json"), "[1, 2]").expect("write");
     fails_with(
         &["tiles", "build", s(&dir.path().join("bad.json")), "--all"],
@@ -338,4 +371,120 @@ fn a_plan_of_many_tiles_needs_few_open_files() {
         .expect("tiles folder")
         .count();
     assert_eq!(far, 144, "one far-field file per tile");
+}
+
+/// A halo wider than the grid is the whole grid (it overflowed past the end of the grid, and the job panicked).
+#[test]
+fn a_halo_wider_than_the_grid_is_the_whole_grid() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("t.npy");
+    ok(&["synth", "--vertices", "900", "--rng-seed", "2", "-o", s(&npy), "-q"]);
+    let plan = dir.path().join("plan.json");
+    let v = json(&[
+        "tiles",
+        "plan",
+        s(&npy),
+        "-o",
+        s(&plan),
+        "--tile",
+        "10",
+        "--halo",
+        &usize::MAX.to_string(),
+        "--sectors",
+        "8",
+        "--subsectors",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(v["tiles"].as_u64(), Some(9));
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    ok(&["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch")), "-q"]);
+}
+
+/// A plan edited by hand or another file given as a plan: refused with the file and the tile named, never a hang (a
+/// tile far out in the tile grid looped the merge's quadtree forever) or a merge that cannot say what is wrong.
+#[test]
+fn a_malformed_plan_is_refused_naming_the_tile() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = planned(dir.path());
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let original: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&plan).expect("plan")).expect("plan JSON");
+    let edited = dir.path().join("edited.json");
+    let merged = dir.path().join("m.tch");
+    let edit = |change: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = original.clone();
+        change(&mut v);
+        std::fs::write(&edited, serde_json::to_string(&v).expect("JSON")).expect("write");
+    };
+    edit(&|v| v["tiles"][0]["tile_row"] = serde_json::json!(1u64 << 63));
+    fails_with(
+        &["tiles", "merge", s(&edited), "-o", s(&merged)],
+        "tile 0 is at row 9223372036854775808",
+    );
+    edit(&|v| {
+        v["tiles"][1]["tile_row"] = serde_json::json!(0);
+        v["tiles"][1]["tile_col"] = serde_json::json!(0);
+    });
+    fails_with(
+        &["tiles", "merge", s(&edited), "-o", s(&merged)],
+        "as an earlier tile is",
+    );
+    fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "edited.json");
+    // A tile's output that names what the job reads (the DEM, a far-field file): refused, the file untouched (the
+    // DEM was replaced by the tile's hierarchy).
+    let dem = dir.path().join("t.npy");
+    let dem_bytes = std::fs::read(&dem).expect("DEM");
+    edit(&|v| v["tiles"][0]["output"] = serde_json::json!("t.npy"));
+    fails_with(
+        &["tiles", "build", s(&edited), "--tile", "0"],
+        "the same file as the input",
+    );
+    assert_eq!(std::fs::read(&dem).expect("DEM"), dem_bytes, "the DEM is untouched");
+    edit(&|v| v["tiles"][0]["output"] = serde_json::json!("t.json"));
+    fails_with(
+        &["tiles", "build", s(&edited), "--tile", "0"],
+        "the same file as the input",
+    );
+    edit(&|v| v["tiles"][1]["output"] = v["tiles"][1]["far"].clone());
+    fails_with(&["tiles", "build", s(&edited), "--tile", "1"], "far-00001.bin");
+    edit(&|v| v["tiles"][2]["output"] = serde_json::json!("edited.json"));
+    fails_with(&["tiles", "build", s(&edited), "--tile", "2"], "tile 2: its output");
+    edit(&|v| v["tiles"] = serde_json::json!([]));
+    fails_with(&["tiles", "build", s(&edited), "--all"], "it has no tiles");
+    fails_with(&["tiles", "merge", s(&edited), "-o", s(&merged)], "it has no tiles");
+    edit(&|v| v["options"]["max_error"] = serde_json::json!(-1.0));
+    fails_with(
+        &["tiles", "build", s(&edited), "--all"],
+        "edited.json: not a tincull tile plan",
+    );
+    assert!(!merged.exists(), "no merge of a malformed plan");
+    // A hierarchy given for the plan: said to be binary, not "stream did not contain valid UTF-8".
+    let tch = tile_outputs(&plan)[0].clone();
+    fails_with(
+        &["tiles", "merge", s(&tch), "-o", s(&merged)],
+        "a binary file, not the JSON",
+    );
+    fails_with(&["tiles", "build", s(&tch), "--all"], "not a tincull tile plan");
+}
+
+/// A mesh's plan keeps a list per square of its tiles and of its far field's blocks: cut into too many, it is
+/// refused before the lists are made (a 2 m tile of a 30 km mesh asked for gigabytes and aborted).
+#[test]
+fn a_mesh_cut_into_too_many_squares_is_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = dir.path().join("mesh.json");
+    let m = mesh("jacksboro-2k.obj");
+    fails_with(
+        &["tiles", "plan", s(&m), "-o", s(&plan), "--tile", "2"],
+        "give a larger --tile",
+    );
+    fails_with(
+        &["tiles", "plan", s(&m), "-o", s(&plan), "--far-block", "1"],
+        "give a larger --far-block",
+    );
+    assert!(
+        !plan.exists() && !dir.path().join("mesh.tiles").exists(),
+        "nothing written"
+    );
 }

@@ -106,7 +106,13 @@ impl SafeArgs {
 /// Reads a file of eye positions, one `x,y,z` per line (blank lines and `#` comments skipped); errors name the file
 /// and the 1-based line.
 pub fn read_eyes(path: &Path) -> Result<Vec<[f64; 3]>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        anyhow::anyhow!(
+            "{}: a binary file, not a text file of eye positions (one x,y,z a line)",
+            path.display()
+        )
+    })?;
     let eyes: Vec<[f64; 3]> = text
         .lines()
         .enumerate()

@@ -27,7 +27,7 @@ pub struct DemoArgs {
     /// Directory for the outputs.
     #[arg(long, default_value = "out")]
     pub out_dir: PathBuf,
-    /// Viewpoints per class for the evaluation.
+    /// Viewpoints per class for the evaluation, 1 to 1000000.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
     /// How to import the mesh.
@@ -41,7 +41,7 @@ pub struct DemoArgs {
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
-    anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    super::eval_cmd::check_viewpoints(args.viewpoints)?;
     if args.out_dir == Path::new("-") {
         anyhow::bail!(
             "--out-dir -: the demo writes several files (the hierarchy, its JSON, the grouped OBJ and .mtl, the \

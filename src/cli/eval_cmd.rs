@@ -9,14 +9,14 @@ use truth::ViewpointClass;
 use super::culling_args::{SafeArgs, read_eyes};
 use super::files::Outputs;
 use super::{Output, OutputArgs};
-use eval::evaluate::{EvalOptions, Evaluation, evaluate, hierarchy_tin};
+use eval::evaluate::{EvalOptions, Evaluation, MAX_VIEWPOINTS, evaluate, hierarchy_tin};
 
 /// Arguments of `tincull eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
-    /// Viewpoints per class (not with --eyes).
+    /// Viewpoints per class, 1 to 1000000 (not with --eyes).
     #[arg(long, default_value_t = 20)]
     pub viewpoints: usize,
     /// Viewpoint classes, comma-separated, each once: ground, low, high, valley, ridge, sky (not with --eyes).
@@ -94,9 +94,19 @@ pub fn add_outputs(
     Ok(())
 }
 
+/// Checks `--viewpoints` (of `eval`, `sweep` and `demo`): at least 1, at most [`MAX_VIEWPOINTS`].
+pub(crate) fn check_viewpoints(n: usize) -> Result<()> {
+    ensure!(n > 0, "--viewpoints must be at least 1");
+    ensure!(
+        n <= MAX_VIEWPOINTS,
+        "--viewpoints {n}: at most {MAX_VIEWPOINTS} per class (each viewpoint's ground truth takes milliseconds or more)"
+    );
+    Ok(())
+}
+
 /// Runs `tincull eval`.
 pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
-    ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    check_viewpoints(args.viewpoints)?;
     check_classes(&args.classes)?;
     let safe = args.safe.params()?;
     let eyes = args.eyes.as_deref().map(read_eyes).transpose()?;

@@ -29,10 +29,10 @@ pub struct PvsArgs {
     /// Every cell of a grid of SIZE × SIZE metres over the footprint's bounding box (progress bar).
     #[arg(long, value_name = "SIZE")]
     pub grid: Option<f64>,
-    /// Check N random cells of `--cell-size` against the exact checker from 64 sample points each (corners, edges,
-    /// interior, both heights): misses (target 0), PVS size against the union of the sampled visible sets and of the
-    /// safe culler's drawn sets, seconds and bytes per cell; for `koltun` at every `--resolution`, `regions`, and
-    /// `both` at the highest resolution.
+    /// Check N random cells (1 to 1000000) of `--cell-size` against the exact checker from 64 sample points each
+    /// (corners, edges, interior, both heights): misses (target 0), PVS size against the union of the sampled visible
+    /// sets and of the safe culler's drawn sets, seconds and bytes per cell; for `koltun` at every `--resolution`,
+    /// `regions`, and `both` at the highest resolution.
     #[arg(long, value_name = "N")]
     pub check: Option<usize>,
     /// Side of the random cells of `--check` (m) [default: 100].
@@ -128,8 +128,13 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         ..cull::SafeParams::default()
     };
     let mut files = Outputs::new();
-    if args.check == Some(0) {
-        anyhow::bail!("--check must be at least 1 cell");
+    if let Some(n) = args.check {
+        ensure!(n >= 1, "--check must be at least 1 cell");
+        ensure!(
+            n <= pvs::MAX_GRID_CELLS,
+            "--check {n}: at most {} cells (as --grid; each is checked from 64 sample points)",
+            pvs::MAX_GRID_CELLS
+        );
     }
     if args.check.is_none() {
         for (flag, given) in [
@@ -358,10 +363,14 @@ fn check(
         let y0 = rng.random_range(b.min.y..b.max.y - s);
         let centre = glam::DVec2::new(x0 + 0.5 * s, y0 + 0.5 * s);
         if truth.locator().ground_height(&tin, centre).is_some() {
-            cells.push(ViewCell {
+            let cell = ViewCell {
                 rect: [x0, y0, x0 + s, y0 + s],
                 height,
-            });
+            };
+            // A side too small to widen the cell at its coordinates is named here, not in a viewcell's error.
+            cell.validate()
+                .with_context(|| format!("--cell-size {}", tin::compact_number(s)))?;
+            cells.push(cell);
         }
     }
     let nt = tin.num_triangles();

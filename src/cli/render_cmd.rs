@@ -77,10 +77,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "H0,H1", value_parser = parse_pair, allow_hyphen_values = true, requires = "pvs_cell")]
     pub above_ground: Option<[f64; 2]>,
     /// With --pvs-cell: resolution R of the PVS's R × R ray-space bitmap, 1 to 256.
-    #[arg(long, default_value_t = 64, value_name = "R")]
+    #[arg(long, default_value_t = 64, value_name = "R", requires = "pvs_cell")]
     pub resolution: u32,
     /// With --compare: timed repetitions of each frame (the median is reported).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..), requires = "compare")]
     pub runs: u32,
     /// Output flags.
     #[command(flatten)]

@@ -37,7 +37,7 @@ pub struct SweepArgs {
     /// Seeds of the crystal's random generator: numbers or ranges (`1..5`, `1,2,3`); `--rng-seed` is the same.
     #[arg(long, visible_alias = "rng-seed", default_value = "1")]
     pub rng_seeds: String,
-    /// Viewpoints per class.
+    /// Viewpoints per class, 1 to 1000000.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
     /// Viewpoint classes, comma-separated, each once: ground, low, high, valley, ridge, sky.
@@ -127,7 +127,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         ..ParamArgs::default()
     }
     .resolve(args.config.as_deref())?;
-    anyhow::ensure!(args.viewpoints > 0, "--viewpoints must be at least 1");
+    super::eval_cmd::check_viewpoints(args.viewpoints)?;
     let spec = SweepSpec {
         sectors: u32_list(&args.sectors, "--sectors")?,
         subsectors: u32_list(&args.subsectors, "--subsectors")?,

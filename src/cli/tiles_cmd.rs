@@ -11,7 +11,7 @@ use serde_json::json;
 use tiles::{Plan, PlanOptions, TileReport, TilesError};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
-use super::files::{Outputs, write_one};
+use super::files::Outputs;
 use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, ImportArgs, MeshArgs, UpArg, is_dem};
 use super::{Output, OutputArgs};
 
@@ -101,7 +101,7 @@ pub struct PlanArgs {
 pub struct TileBuildArgs {
     /// The plan (from `tiles plan`).
     pub plan: PathBuf,
-    /// Build this tile (0-based); repeat for several.
+    /// Build this tile (0-based); repeat for several (each is built once, in index order).
     #[arg(long)]
     pub tile: Vec<usize>,
     /// Build every tile of the plan.
@@ -140,7 +140,7 @@ pub fn run(args: &TilesArgs) -> Result<()> {
 
 fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
-    files.input(&args.dem)?;
+    dem_inputs(&mut files, &args.dem)?;
     if let Some(config) = &args.config {
         files.input(config)?;
     }
@@ -230,17 +230,26 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }))
 }
 
-/// Creates the folder `dir` of a plan's tile files, then runs `work`, which writes into it: when `work` fails and the
-/// folder was new, it is removed again (it is then empty, the files being all or nothing), so a failed plan leaves
-/// nothing behind.
-fn in_new_dir<T>(dir: &Path, work: impl FnOnce() -> Result<T>) -> Result<T> {
-    let existed = dir.is_dir();
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let result = work();
-    if result.is_err() && !existed {
-        let _ = std::fs::remove_dir(dir);
+/// Declares the terrain file `dem` an input of `files`, with the JSON sidecar that a `.npy` grid is read with (`tiles
+/// plan t.npy -o t.json` would replace it).
+fn dem_inputs(files: &mut Outputs, dem: &Path) -> Result<()> {
+    files.input(dem)?;
+    if dem.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy")) {
+        files.input(&tin::dem::npy::sidecar_path(dem))?;
     }
-    result
+    Ok(())
+}
+
+/// Creates the folder `dir` of a plan's tile files, then runs `work`, which writes into it: when `work` fails or is
+/// interrupted (Ctrl-C) and the folder was new, it is removed again (it is then empty, the files being all or
+/// nothing), so a failed plan leaves nothing behind.
+fn in_new_dir<T>(dir: &Path, work: impl FnOnce() -> Result<T>) -> Result<T> {
+    let new = outfile::NewDir::create(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let result = work()?;
+    if let Some(new) = new {
+        new.keep();
+    }
+    Ok(result)
 }
 
 /// `tiles plan MESH`: the whole mesh is read once and cut; each tile's part is written beside the plan.
@@ -326,15 +335,25 @@ fn plan_mesh(
 
 /// Builds one tile and writes its hierarchy.
 fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: bool) -> Result<TileReport> {
-    let target = Plan::resolve(plan_path, &plan.tile(index)?.output);
+    let spec = plan.tile(index)?;
+    let target = Plan::resolve(plan_path, &spec.output);
     if let Some(dir) = target.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    outfile::check(&target)?;
+    // What the job reads is never its output (a plan edited by hand could name the DEM or a far-field file).
+    let mut files = Outputs::new();
+    files.input(plan_path)?;
+    dem_inputs(&mut files, &Plan::resolve(plan_path, &plan.source))?;
+    for read in spec.far.iter().chain(&spec.part) {
+        files.input(&Plan::resolve(plan_path, read))?;
+    }
+    files
+        .check(&target)
+        .with_context(|| format!("tile {index}: its output"))?;
     let progress = bars.then(|| stage_progress(out));
     let (h, report) = tiles::build_tile(plan, plan_path, index, progress).with_context(|| format!("tile {index}"))?;
-    let bytes = h.to_bytes()?;
-    write_one(&target, |w| w.write_all(&bytes))?;
+    files.add_bytes(&target, &h.to_bytes()?)?;
+    files.commit()?;
     Ok(report)
 }
 
@@ -343,7 +362,11 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
     let indices: Vec<usize> = if args.all {
         (0..plan.tiles.len()).collect()
     } else {
-        args.tile.clone()
+        // A tile given twice is built once (twice at once, both jobs would write the same file).
+        let mut given = args.tile.clone();
+        given.sort_unstable();
+        given.dedup();
+        given
     };
     for &i in &indices {
         plan.tile(i)?;

@@ -50,6 +50,9 @@ pub const METHODS: [&str; 8] = [
     "none",
 ];
 
+/// Most viewpoints per class: each one's ground truth takes milliseconds or more, and all are kept in memory.
+pub const MAX_VIEWPOINTS: usize = 1_000_000;
+
 /// What to evaluate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct EvalOptions {
@@ -233,6 +236,11 @@ impl GroundTruthSet {
             tin::compact_number(opts.fov_deg)
         );
         anyhow::ensure!(!opts.classes.is_empty(), "no viewpoint classes");
+        anyhow::ensure!(
+            opts.viewpoints <= MAX_VIEWPOINTS,
+            "{} viewpoints per class: at most {MAX_VIEWPOINTS}",
+            opts.viewpoints
+        );
         let truth = GroundTruth::new(tin);
         let all_around = opts.fov_deg >= 360.0;
         let groups: Vec<(ViewpointClass, Vec<DVec3>, u64)> = match &opts.eyes {

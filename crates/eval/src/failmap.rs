@@ -56,8 +56,10 @@ pub fn grid_size(tin: &Tin, cell: f64) -> Result<(usize, usize)> {
     let rows = ((b.max.y - b.min.y) / cell).ceil().max(1.0);
     ensure!(
         cols * rows <= MAX_CELLS as f64,
-        "a {} m cell gives {cols} x {rows} cells, more than {MAX_CELLS}: use a larger --cell-size",
-        tin::compact_number(cell)
+        "a {} m cell gives {} x {} cells, more than {MAX_CELLS}: use a larger --cell-size",
+        tin::compact_number(cell),
+        tin::compact_number(cols),
+        tin::compact_number(rows)
     );
     Ok((cols as usize, rows as usize))
 }

@@ -124,8 +124,9 @@ impl SweepSpec {
                         params.crystal.seeds = seeds;
                         params.crystal.rng_seed = rng_seed;
                         if let Err(e) = params.crystal.validate() {
+                            let seeds = seeds.map_or("default".to_string(), |n| n.to_string());
                             notes.push(format!(
-                                "skipped sectors {s} x subsectors {k}, seeds {seeds:?}, rng seed {rng_seed}: {e}"
+                                "skipped sectors {s} x subsectors {k}, seeds {seeds}, rng seed {rng_seed}: {e}"
                             ));
                             continue;
                         }

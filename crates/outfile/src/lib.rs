@@ -26,7 +26,8 @@
 //!    Two targets of one batch that resolve to the same file are refused.
 //! 6. **Interrupted, nothing left behind.** Every temporary file is registered while it exists;
 //!    [`remove_temporaries`] removes them all, for a command's interrupt handler (Ctrl-C, `SIGTERM`) to call before it
-//!    exits (a process killed outright, `SIGKILL`, cannot clean up: its `.tincull-*.tmp` files stay).
+//!    exits (a process killed outright, `SIGKILL`, cannot clean up: its `.tincull-*.tmp` files stay). A folder
+//!    created for the outputs with [`NewDir`] is removed with them when it is then empty.
 //! 7. **Inputs are never outputs.** The files a command reads, declared with [`Batch::input`], cannot be its
 //!    outputs: a target that is the same file as an input (the same path once links are followed, or, on Unix, the
 //!    same device and inode, which also catches hard links) is refused before anything is written, whichever of the
@@ -48,14 +49,71 @@ fn live() -> MutexGuard<'static, Vec<PathBuf>> {
     LIVE.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Removes every temporary file this process is writing or has not renamed yet (rule 6), and keeps the registry
-/// locked until the process ends, so that no new one is started: for an interrupt handler, which then exits.
+/// The directories that commands created for their outputs and may still remove: see [`NewDir`].
+static NEW_DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn new_dirs() -> MutexGuard<'static, Vec<PathBuf>> {
+    NEW_DIRS.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes every temporary file this process is writing or has not renamed yet (rule 6), then every directory
+/// created with [`NewDir`] and not yet kept that is empty, and keeps the registries locked until the process ends,
+/// so that no new one is started: for an interrupt handler, which then exits.
 pub fn remove_temporaries() {
     let paths = live();
     for p in paths.iter() {
         let _ = fs::remove_file(p);
     }
     std::mem::forget(paths);
+    let dirs = new_dirs();
+    for d in dirs.iter().rev() {
+        let _ = fs::remove_dir(d);
+    }
+    std::mem::forget(dirs);
+}
+
+/// A directory created for a command's outputs (a tiling plan's folder of tile files): removed again, when empty,
+/// if the command fails (this is dropped without [`NewDir::keep`]) or is interrupted ([`remove_temporaries`]), so a
+/// failed command leaves no empty folder behind either.
+pub struct NewDir {
+    path: PathBuf,
+    keep: bool,
+}
+
+impl NewDir {
+    /// Creates the directory `path` (its parent must exist); `None` when a directory is there already (it is then
+    /// never removed).
+    pub fn create(path: &Path) -> io::Result<Option<NewDir>> {
+        let mut dirs = new_dirs();
+        match fs::create_dir(path) {
+            Ok(()) => {
+                dirs.push(path.to_path_buf());
+                Ok(Some(NewDir {
+                    path: path.to_path_buf(),
+                    keep: false,
+                }))
+            }
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists && path.is_dir() => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Keeps the directory: the command succeeded.
+    pub fn keep(mut self) {
+        self.keep = true;
+    }
+}
+
+impl Drop for NewDir {
+    fn drop(&mut self) {
+        let mut dirs = new_dirs();
+        if let Some(i) = dirs.iter().position(|p| *p == self.path) {
+            dirs.swap_remove(i);
+        }
+        if !self.keep {
+            let _ = fs::remove_dir(&self.path);
+        }
+    }
 }
 
 /// A registered temporary file: listed while this lives.

@@ -481,8 +481,11 @@ impl<'a> Pvs<'a> {
         let ny = ((hi[1] - lo[1]) / size).ceil().max(1.0);
         if nx * ny > MAX_GRID_CELLS as f64 {
             return Err(PvsError::BadCell(format!(
-                "a grid of {size} m gives {nx} x {ny} cells, more than {MAX_GRID_CELLS} (each cell's PVS takes \
-                 milliseconds or more); give a larger size"
+                "a grid of {} m gives {} x {} cells, more than {MAX_GRID_CELLS} (each cell's PVS takes \
+                 milliseconds or more); give a larger size",
+                tin::compact_number(size),
+                tin::compact_number(nx),
+                tin::compact_number(ny)
             )));
         }
         let mut cells = Vec::new();

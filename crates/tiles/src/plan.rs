@@ -199,6 +199,9 @@ pub fn make_plan(
     Ok((plan, field))
 }
 
+/// Most squares a mesh's plan cuts its footprint into, for its tiles or for its far field's blocks.
+pub const MAX_MESH_SQUARES: usize = 1 << 24;
+
 /// Cuts a mesh into tiles of `options.tile` metres (see [`crate::part`]); returns the plan and each tile's part,
 /// to be written to the tile's [`TileSpec::part`] beside the plan.
 pub fn make_mesh_plan(
@@ -208,6 +211,21 @@ pub fn make_mesh_plan(
     tiles_dir: &Path,
 ) -> Result<(Plan, Vec<crate::part::MeshPart>), TilesError> {
     options.validate()?;
+    // Both cuts keep a list per square in memory, the empty ones too: refused before they are made when too many.
+    let size = tin.bbox().size();
+    for (what, flag, side) in [
+        ("tile side", "--tile", options.tile),
+        ("far-field block", "--far-block", options.far_block),
+    ] {
+        let squares = (size.x / side as f64).ceil().max(1.0) * (size.y / side as f64).ceil().max(1.0);
+        if squares > MAX_MESH_SQUARES as f64 {
+            return Err(TilesError::Parameter(format!(
+                "a {what} of {side} m cuts the mesh's {:.0} x {:.0} m into {squares} squares, more than \
+                 {MAX_MESH_SQUARES}: give a larger {flag}",
+                size.x, size.y
+            )));
+        }
+    }
     let parts = crate::part::mesh_parts(
         tin,
         options.tile as f64,
@@ -245,7 +263,7 @@ pub fn make_mesh_plan(
 impl Plan {
     /// Reads and checks a plan file.
     pub fn load(path: &Path) -> Result<Plan, TilesError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TilesError::Io {
+        let bytes = std::fs::read(path).map_err(|source| TilesError::Io {
             path: path.to_path_buf(),
             source,
         })?;
@@ -253,6 +271,9 @@ impl Plan {
             path: path.to_path_buf(),
             reason,
         };
+        // A binary file (a hierarchy, a tile's far field, an image): said as such, not as bytes that are not UTF-8.
+        let text = String::from_utf8(bytes)
+            .map_err(|_| bad("a binary file, not the JSON text that `tincull tiles plan` writes".into()))?;
         // The version first: a plan of another version may not parse as this one.
         #[derive(Deserialize)]
         struct Versioned {
@@ -266,8 +287,26 @@ impl Plan {
             )));
         }
         let plan: Plan = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        plan.options.validate()?;
+        plan.options.validate().map_err(|e| bad(e.to_string()))?;
+        if plan.tiles.is_empty() {
+            return Err(bad("it has no tiles".into()));
+        }
+        // A tile's place in the tile grid (the merge builds its quadtree of tiles over them): one tile a place, within
+        // the 2^32 x 2^32 places of the merge's Morton order.
+        let mut places = std::collections::HashSet::new();
         for (i, t) in plan.tiles.iter().enumerate() {
+            if u32::try_from(t.tile_row).is_err() || u32::try_from(t.tile_col).is_err() {
+                return Err(bad(format!(
+                    "tile {i} is at row {}, column {} of the tile grid, beyond the 2^32 a side a plan can have",
+                    t.tile_row, t.tile_col
+                )));
+            }
+            if !places.insert((t.tile_row, t.tile_col)) {
+                return Err(bad(format!(
+                    "tile {i} is at row {}, column {} of the tile grid, as an earlier tile is",
+                    t.tile_row, t.tile_col
+                )));
+            }
             let ok = t.index == i
                 && match &plan.grid {
                     Some(g) => {
@@ -334,11 +373,11 @@ impl Plan {
         (
             [
                 spec.rows[0].saturating_sub(h),
-                (spec.rows[1] + h).min(rows.saturating_sub(1)),
+                spec.rows[1].saturating_add(h).min(rows.saturating_sub(1)),
             ],
             [
                 spec.cols[0].saturating_sub(h),
-                (spec.cols[1] + h).min(cols.saturating_sub(1)),
+                spec.cols[1].saturating_add(h).min(cols.saturating_sub(1)),
             ],
         )
     }

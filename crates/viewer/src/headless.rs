@@ -139,10 +139,16 @@ pub struct RenderOutput {
 pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
     let bad = |m: String| Err(ViewerError::Invalid(m));
     if !(o.fov_deg > 0.0 && o.fov_deg <= 360.0) {
-        return bad(format!("--fov must be in (0, 360], got {}", o.fov_deg));
+        return bad(format!(
+            "--fov must be in (0, 360], got {}",
+            tin::compact_number(o.fov_deg)
+        ));
     }
     if !(o.cull_fov_deg > 0.0 && o.cull_fov_deg <= 360.0) {
-        return bad(format!("--cull-fov must be in (0, 360], got {}", o.cull_fov_deg));
+        return bad(format!(
+            "--cull-fov must be in (0, 360], got {}",
+            tin::compact_number(o.cull_fov_deg)
+        ));
     }
     for (name, v) in [("--yaw", o.yaw_deg), ("--pitch", o.pitch_deg)] {
         if v.is_some_and(|v| !v.is_finite()) {
