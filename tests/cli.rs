@@ -927,6 +927,19 @@ fn contradictory_or_empty_options_are_errors() {
         &["eval", s(&tch), "--viewpoints", "18446744073709551615"],
         "--viewpoints 18446744073709551615: at most 1000000 per class",
     );
+    fails_with(
+        &["stress", s(&mesh("jacksboro-2k.obj")), "--viewpoints", "0"],
+        "--viewpoints must be at least 1",
+    );
+    fails_with(
+        &[
+            "stress",
+            s(&mesh("jacksboro-2k.obj")),
+            "--viewpoints",
+            "18446744073709551615",
+        ],
+        "at most 1000000 per class",
+    );
     // A failure map of too many cells says how many compactly (not in 300 digits).
     fails_with(
         &["failmap", s(&tch), "--cell-size", "1e-300", "--json"],

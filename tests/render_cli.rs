@@ -169,6 +169,18 @@ fn render_rejects_bad_options_with_clear_messages() {
         assert!(err.contains(needle), "{extra:?}: {err}");
     }
     assert!(!png.exists(), "no image is written on error");
+    // The output is checked before the terrain is read (and its PVS computed): a missing input is not even opened.
+    let out = tincull(&[
+        "render",
+        p(&dir.path().join("missing.tch")),
+        "--out",
+        p(&dir.path().join("x.jpg")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("x.jpg: render writes a PNG image"),
+        "{err}"
+    );
 }
 
 /// Culling parameters that a render does not use are refused, as `cull` refuses them, before anything is drawn.

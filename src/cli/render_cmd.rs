@@ -130,6 +130,18 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     if args.compare && view != ViewKind::Eye {
         bail!("--compare works with --view eye");
     }
+    // The outputs are checked before the terrain is read and its PVS computed.
+    let mut files = Outputs::new();
+    files.input(&args.input)?;
+    anyhow::ensure!(
+        args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
+        "{}: render writes a PNG image; name it .png",
+        args.out.display()
+    );
+    files.check(&args.out)?;
+    if args.compare {
+        files.check(&diff_path(&args.out))?;
+    }
     let terrain = load_terrain(&args.input, &args.import, out)?;
     let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
         Some(rect) => {
@@ -199,17 +211,6 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
                  --colour visibility)"
             );
         }
-    }
-    let mut files = Outputs::new();
-    files.input(&args.input)?;
-    anyhow::ensure!(
-        args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
-        "{}: render writes a PNG image; name it .png",
-        args.out.display()
-    );
-    files.check(&args.out)?;
-    if args.compare {
-        files.check(&diff_path(&args.out))?;
     }
     let gpu = Gpu::headless()?;
     let result = viewer::render(&gpu, &terrain, &options)?;

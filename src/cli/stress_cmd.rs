@@ -16,7 +16,7 @@ pub struct StressArgs {
     /// The terrain mesh and how to import it.
     #[command(flatten)]
     pub mesh: MeshArgs,
-    /// Viewpoints per class (six classes) for each case, and per kind for the degenerate viewpoints.
+    /// Viewpoints per class (six classes) for each case, and per kind for the degenerate viewpoints, 1 to 1000000.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
     /// Smaller synthetic terrains, 5 crystal seeds instead of 20, a smaller Crater Lake.
@@ -33,6 +33,7 @@ pub struct StressArgs {
 
 /// Runs `tincull stress`.
 pub fn run(args: &StressArgs, out: Output) -> Result<()> {
+    super::eval_cmd::check_viewpoints(args.viewpoints)?;
     let (tin, _) = args.mesh.load(out)?;
     if let Some(dir) = &args.dem_dir
         && !dir.join("crater_lake.npy").exists()
