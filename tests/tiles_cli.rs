@@ -170,6 +170,21 @@ fn errors_name_what_is_wrong() {
     fails_with(&["tiles", "merge", s(&plan), "-o", s(&merged)], &first);
     assert!(!merged.exists(), "a failed merge leaves no file");
     fails_with(&["tiles", "build", s(&plan), "--tile", "9"], "tile 9 does not exist");
+    // Plan options out of range name their option.
+    let grid = dir.path().join("t.npy");
+    let other = dir.path().join("other.json");
+    for (flag, value, said) in [
+        ("--tile", "1", "--tile 1: the tile side must be at least 2"),
+        (
+            "--far-block",
+            "0",
+            "--far-block 0: the far field's blocks must be at least 1",
+        ),
+        ("--max-error", "inf", "--max-error inf: the error bound must be finite"),
+    ] {
+        fails_with(&["tiles", "plan", s(&grid), "-o", s(&other), flag, value], said);
+    }
+    assert!(!other.exists(), "a refused plan writes nothing");
     // A tile given twice is built once, and the tiles in index order.
     let v = json(&[
         "tiles",

@@ -105,16 +105,20 @@ impl PlanOptions {
     /// Checks the values.
     pub fn validate(&self) -> Result<(), TilesError> {
         let bad = |m: String| Err(TilesError::Parameter(m));
+        // Each message names the `tiles plan` option that sets the value.
         if self.tile < 2 {
-            return bad(format!("the tile side must be at least 2 samples, got {}", self.tile));
+            return bad(format!(
+                "--tile {}: the tile side must be at least 2 (sample intervals; metres for a mesh)",
+                self.tile
+            ));
         }
         if self.far_block < 1 {
-            return bad("the far-field block must be at least 1 sample".into());
+            return bad("--far-block 0: the far field's blocks must be at least 1 (samples; metres for a mesh)".into());
         }
         if !(self.max_error.is_finite() && self.max_error >= 0.0) {
             return bad(format!(
-                "the error bound must be finite and non-negative, got {}",
-                self.max_error
+                "--max-error {}: the error bound must be finite and non-negative",
+                tin::compact_number(self.max_error)
             ));
         }
         Ok(())
