@@ -239,18 +239,6 @@ fn errors_name_what_is_wrong() {
         &["tiles", "build", s(&dir.path().join("bad.json")), "--all"],
         "not a tincull tile plan",
     );
-    fails_with(
-        &[
-            "tiles",
-            "plan",
-            s(&dir.path().join("t.npy")),
-            "-o",
-            s(&dir.path().join("q.json")),
-            "--tile",
-            "1",
-        ],
-        "at least 2",
-    );
 }
 
 #[test]
