@@ -951,6 +951,24 @@ fn contradictory_or_empty_options_are_errors() {
         "j2k.tch: a binary file, not a text file of eye positions",
     );
 
+    // Eyes from which nothing is hidden: no mean of the occlusion captured (it printed the empty sum's "-0.000").
+    let png = dir.path().join("high.png");
+    let o = ok(&[
+        "failmap",
+        s(&tch),
+        "--cell-size",
+        "10000",
+        "--eye-height",
+        "1e300",
+        "-o",
+        s(&png),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        text.contains("occlusion captured none (no cell hides any triangle)"),
+        "{text}"
+    );
+
     let v = String::from_utf8_lossy(&run(&["failmap", s(&tch), "--cell-size", "1e9", "--json"]).stdout).into_owned();
     assert!(v.is_empty(), "{v}");
     fails_with(

@@ -114,13 +114,16 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     let scored: Vec<&failmap::Cell> = map.scored().collect();
     let with_fc = scored.iter().filter(|c| c.metrics.false_culls > 0).count();
     let occ: Vec<f64> = scored.iter().filter_map(|c| c.metrics.occlusion_captured).collect();
-    let captured = occ.iter().sum::<f64>() / occ.len().max(1) as f64;
+    // No cell with anything hidden (e.g. eyes far above the terrain): no mean, not the empty sum's −0.
+    let captured = (!occ.is_empty()).then(|| occ.iter().sum::<f64>() / occ.len() as f64);
     out.say(format!(
-        "{} x {} cells, {} on the terrain: {with_fc} with false culls (worst {worst}), occlusion captured {captured:.3} \
-         on average",
+        "{} x {} cells, {} on the terrain: {with_fc} with false culls (worst {worst}), occlusion captured {}",
         map.cols,
         map.rows,
         scored.len(),
+        captured.map_or("none (no cell hides any triangle)".to_string(), |c| format!(
+            "{c:.3} on average"
+        )),
     ));
     out.json(&serde_json::json!({
         "method": args.method.name(),
@@ -129,6 +132,6 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         "cells_on_terrain": scored.len(),
         "cells_with_false_culls": with_fc,
         "worst_false_culls": worst,
-        "occlusion_captured_mean": (!occ.is_empty()).then_some(captured),
+        "occlusion_captured_mean": captured,
     }))
 }
