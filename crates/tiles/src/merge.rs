@@ -10,6 +10,9 @@
 //!   grid to one root: a tile is a node near the top. Tile and quadtree nodes store no region (never hidden by the
 //!   region test; the safe culler tests their bounds like any node), so they add no claim of occlusion.
 //!
+//! Each tile read is first checked to be its plan's tile where the plan knows its footprint
+//! ([`Plan::check_built_tile`]: a DEM tile's vertices lie within its samples).
+//!
 //! [`merge_with`] reads the tiles one at a time and keeps only their nodes, so the merge holds the merged hierarchy
 //! and one tile's mesh.
 
@@ -127,6 +130,7 @@ pub fn merge_with(
     let mut seeds = 0;
     for &i in &order {
         let mut t = load(i)?;
+        plan.check_built_tile(i, &t)?;
         if t.sectors != sectors {
             return Err(TilesError::Parameter(format!(
                 "tile {i} has {} sectors, the plan {sectors}",

@@ -413,6 +413,43 @@ impl Plan {
         far_from_bytes(&crate::framed::read(&path)?, [grid.rows, grid.cols], &path)
     }
 
+    /// Checks that a built hierarchy can be tile `index` of this plan: for a DEM's plan, every vertex lies within the
+    /// tile's samples (the corners by [`GridInfo::position`], the formula every tile uses, so its own vertices are
+    /// never outside). A file of another tile copied over this tile's output is refused, naming both. A mesh's plan
+    /// keeps no footprint of its tiles, so its tiles are not checked here (the merge's manifold check still refuses
+    /// tiles that do not join).
+    pub fn check_built_tile(&self, index: usize, built: &cull::Hierarchy) -> Result<(), TilesError> {
+        let (Some(grid), Ok(spec)) = (&self.grid, self.tile(index)) else {
+            return Ok(());
+        };
+        let nw = grid.position(spec.rows[0], spec.cols[0], 0.0);
+        let se = grid.position(spec.rows[1], spec.cols[1], 0.0);
+        let (lo, hi) = (
+            [nw[0].min(se[0]), nw[1].min(se[1])],
+            [nw[0].max(se[0]), nw[1].max(se[1])],
+        );
+        let outside = built
+            .mesh
+            .positions
+            .iter()
+            .position(|p| !(p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1]));
+        match outside {
+            None => Ok(()),
+            Some(v) => Err(TilesError::Parameter(format!(
+                "tile {index} ({}): vertex {v} at x {}, y {} lies outside the tile's samples (rows {} to {}, columns \
+                 {} to {}): the file is not this tile's (another tile's copied over it?); build it again with \
+                 `tincull tiles build PLAN --tile {index}`",
+                spec.output.display(),
+                built.mesh.positions[v][0],
+                built.mesh.positions[v][1],
+                spec.rows[0],
+                spec.rows[1],
+                spec.cols[0],
+                spec.cols[1],
+            ))),
+        }
+    }
+
     /// Tile `index`, or an error naming the range.
     pub fn tile(&self, index: usize) -> Result<&TileSpec, TilesError> {
         self.tiles.get(index).ok_or_else(|| {

@@ -373,6 +373,34 @@ fn the_merge_reads_one_tile_at_a_time() {
     assert_eq!(calls, 3, "no tile is read after the one that failed");
 }
 
+/// A tile's file replaced by another tile's (copied over it) is refused by the merge, naming the tile, its file and a
+/// vertex outside its samples; before, the joined mesh was reported as not manifold, naming neither.
+#[test]
+fn another_tiles_file_in_a_tiles_place_is_named() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(33 * 33, 3);
+    let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
+    let tiles: Vec<Hierarchy> = (0..plan.tiles.len())
+        .map(|i| tiles::build_tile(&plan, &path, i, None).expect("tile").0)
+        .collect();
+    for (i, t) in tiles.iter().enumerate() {
+        plan.check_built_tile(i, t).expect("every tile lies within its samples");
+    }
+    let mut swapped = tiles.clone();
+    swapped[5] = tiles[6].clone();
+    let e = tiles::merge(&plan, &swapped)
+        .expect_err("tile 6 in tile 5's place")
+        .to_string();
+    let file = plan.tiles[5].output.display().to_string();
+    assert!(
+        e.contains("tile 5 (")
+            && e.contains(&file)
+            && e.contains("outside the tile's samples")
+            && e.contains("--tile 5"),
+        "{e}"
+    );
+}
+
 #[test]
 fn voids_across_tile_sides_still_join() {
     let dir = tempfile::tempdir().expect("tempdir");
