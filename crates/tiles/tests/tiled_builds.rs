@@ -59,11 +59,15 @@ fn plan_grid_grouped(
 }
 
 /// Builds every tile and merges them.
-fn build_all(plan: &Plan, path: &Path) -> Hierarchy {
-    let tiles: Vec<Hierarchy> = (0..plan.tiles.len())
+/// Every tile of the plan, built here.
+fn build_tiles(plan: &Plan, path: &Path) -> Vec<Hierarchy> {
+    (0..plan.tiles.len())
         .map(|i| tiles::build_tile(plan, path, i, None).expect("tile").0)
-        .collect();
-    tiles::merge(plan, &tiles).expect("merge")
+        .collect()
+}
+
+fn build_all(plan: &Plan, path: &Path) -> Hierarchy {
+    tiles::merge(plan, &build_tiles(plan, path)).expect("merge")
 }
 
 fn synth(samples: usize, seed: u64) -> Grid {
@@ -345,9 +349,7 @@ fn the_merge_reads_one_tile_at_a_time() {
     let dir = tempfile::tempdir().expect("tempdir");
     let grid = synth(33 * 33, 3);
     let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
-    let tiles: Vec<Hierarchy> = (0..plan.tiles.len())
-        .map(|i| tiles::build_tile(&plan, &path, i, None).expect("tile").0)
-        .collect();
+    let tiles = build_tiles(&plan, &path);
     let mut read = Vec::new();
     let streamed = tiles::merge::merge_with(&plan, |i| {
         read.push((plan.tiles[i].tile_row, plan.tiles[i].tile_col));
@@ -380,9 +382,7 @@ fn another_tiles_file_in_a_tiles_place_is_named() {
     let dir = tempfile::tempdir().expect("tempdir");
     let grid = synth(33 * 33, 3);
     let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
-    let tiles: Vec<Hierarchy> = (0..plan.tiles.len())
-        .map(|i| tiles::build_tile(&plan, &path, i, None).expect("tile").0)
-        .collect();
+    let tiles = build_tiles(&plan, &path);
     for (i, t) in tiles.iter().enumerate() {
         plan.check_built_tile(i, t).expect("every tile lies within its samples");
     }
