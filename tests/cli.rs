@@ -986,21 +986,6 @@ fn contradictory_or_empty_options_are_errors() {
         "--export-gltf -: glTF is written as a binary .glb",
     );
     fails_with(
-        &["eval", s(&tch), "--viewpoints", "1", "--export-json", "-"],
-        "--export-json -: standard output carries the evaluation's table",
-    );
-    fails_with(
-        &[
-            "build",
-            s(&mesh("jacksboro-2k.obj")),
-            "-o",
-            s(&tch),
-            "--export-json",
-            "-",
-        ],
-        "--export-json -: standard output carries build's report",
-    );
-    fails_with(
         &[
             "build",
             s(&mesh("jacksboro-2k.obj")),

@@ -62,6 +62,49 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
     let v: serde_json::Value = serde_json::from_slice(&text).expect("the horizons' JSON on stdout");
     assert_eq!(v["sectors"], 4);
     fails_with(&["horizon", s(&m), "--export-json", "-", "--json"], "standard output");
+    // `build --export-json -` too: the hierarchy's JSON on stdout, instead of the report.
+    let built = dir.path().join("b.tch");
+    let text = ok(&["build", s(&m), "-o", s(&built), "--export-json", "-"]).stdout;
+    let v: serde_json::Value = serde_json::from_slice(&text).expect("the built hierarchy's JSON on stdout");
+    assert!(v["nodes"].is_array());
+    assert_eq!(
+        cull::Hierarchy::load(&built).expect("the .tch").nodes.len(),
+        v["nodes"].as_array().map_or(0, Vec::len)
+    );
+    fails_with(
+        &["build", s(&m), "-o", "-", "--export-json", "-"],
+        "only one output can go to standard output",
+    );
+    // `eval --export-json -` and `--csv -`: the evaluation on stdout instead of the table; one of them only.
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "eval",
+            s(&tch),
+            "--viewpoints",
+            "1",
+            "--classes",
+            "ground",
+            "--no-safe-regions",
+        ];
+        a.extend_from_slice(extra);
+        a
+    };
+    let text = ok(&args(&["--export-json", "-"])).stdout;
+    let v: serde_json::Value = serde_json::from_slice(&text).expect("the evaluation's JSON on stdout");
+    assert!(v["rows"].is_array());
+    let csv = String::from_utf8(ok(&args(&["--csv", "-"])).stdout).expect("UTF-8");
+    assert!(csv.starts_with("method,class,"), "{csv}");
+    assert!(
+        csv.lines()
+            .skip(1)
+            .all(|l| l.split(',').count() == csv.lines().next().map_or(0, |h| h.split(',').count())),
+        "{csv}"
+    );
+    fails_with(
+        &args(&["--csv", "-", "--export-json", "-"]),
+        "only one output can go to standard output",
+    );
+    fails_with(&args(&["--csv", "-", "--json"]), "standard output");
 }
 
 #[test]

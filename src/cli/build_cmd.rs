@@ -154,7 +154,7 @@ pub struct BuildArgs {
     /// from it.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
-    /// Also write the hierarchy's JSON form here.
+    /// Also write the hierarchy's JSON form here (`-` for standard output, instead of the report).
     #[arg(long, value_name = "FILE")]
     pub export_json: Option<PathBuf>,
     /// Also write the mesh as OBJ with one group per leaf and the orphans, with a .mtl beside it.
@@ -246,12 +246,7 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     files.check_or_stdout(&args.out, &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     if let Some(path) = &args.export_json {
-        files.check_file(
-            path,
-            "--export-json",
-            "standard output carries build's report (or the .tch, with `-o -`), and `tincull export FILE.tch \
-             --export-json -` prints a built hierarchy's JSON there",
-        )?;
+        files.check_or_stdout(path, &mut out)?;
         super::files::refuse_other_format(path, "a hierarchy's JSON", "json")?;
     }
     if let Some(path) = &args.export_obj {

@@ -40,6 +40,7 @@ pub struct DemoArgs {
 
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
+    let mut out = out;
     let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
     super::eval_cmd::check_viewpoints(args.viewpoints)?;
     if args.out_dir == Path::new("-") {
@@ -69,7 +70,12 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     files.check(&path(".tch"))?;
     files.check(&path(".json"))?;
     files.check_grouped_obj(&path("-groups.obj"), "--out-dir")?;
-    check_outputs(&mut files, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
+    check_outputs(
+        &mut files,
+        Some(&path("-eval.json")),
+        Some(&path("-eval.csv")),
+        &mut out,
+    )?;
     // The renders come after the rest (they need a GPU adapter, and are left out without one), but a path that
     // cannot take them is refused before any work as the others are.
     files.check(&path("-map.png"))?;

@@ -41,10 +41,11 @@ pub struct EvalArgs {
     /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
     #[command(flatten)]
     pub safe: SafeArgs,
-    /// Write the whole evaluation (rows and every viewpoint) as JSON here.
+    /// Write the whole evaluation (rows and every viewpoint) as JSON here (`-` for standard output, instead of the
+    /// table).
     #[arg(long, value_name = "FILE")]
     pub export_json: Option<PathBuf>,
-    /// Write one CSV line per method and class here.
+    /// Write one CSV line per method and class here (`-` for standard output, instead of the table).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Output flags.
@@ -64,15 +65,20 @@ pub fn check_classes(classes: &[ViewpointClass]) -> Result<()> {
     Ok(())
 }
 
-/// Checks the evaluation's outputs (before the work).
-pub fn check_outputs(files: &mut Outputs, json: Option<&std::path::Path>, csv: Option<&std::path::Path>) -> Result<()> {
-    let why = "standard output carries the evaluation's table (or its --json summary)";
-    for (path, flag, what, own) in json
-        .map(|p| (p, "--export-json", "the evaluation as JSON", "json"))
+/// Checks the evaluation's outputs (before the work). One of them may be `-` (standard output): the table is then not
+/// printed, and `--json` is refused.
+pub fn check_outputs(
+    files: &mut Outputs,
+    json: Option<&std::path::Path>,
+    csv: Option<&std::path::Path>,
+    out: &mut Output,
+) -> Result<()> {
+    for (path, what, own) in json
+        .map(|p| (p, "the evaluation as JSON", "json"))
         .into_iter()
-        .chain(csv.map(|p| (p, "--csv", "the evaluation as CSV", "csv")))
+        .chain(csv.map(|p| (p, "the evaluation as CSV", "csv")))
     {
-        files.check_file(path, flag, why)?;
+        files.check_or_stdout(path, out)?;
         super::files::refuse_other_format(path, what, own)?;
     }
     Ok(())
@@ -106,6 +112,7 @@ pub(crate) fn check_viewpoints(n: usize) -> Result<()> {
 
 /// Runs `tincull eval`.
 pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
+    let mut out = out;
     check_viewpoints(args.viewpoints)?;
     check_classes(&args.classes)?;
     let safe = args.safe.params()?;
@@ -115,7 +122,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     if let Some(eyes) = &args.eyes {
         files.input(eyes)?;
     }
-    check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref())?;
+    check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref(), &mut out)?;
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
