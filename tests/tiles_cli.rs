@@ -216,7 +216,15 @@ fn errors_name_what_is_wrong() {
     std::fs::write(&far, &flipped).expect("flip");
     fails_with(&["tiles", "build", s(&plan), "--tile", "4"], "checksum");
     std::fs::remove_file(&far).expect("remove");
-    fails_with(&["tiles", "build", s(&plan), "--tile", "4"], "far-00004.bin");
+    fails_with(
+        &["tiles", "build", s(&plan), "--tile", "4"],
+        "far-00004.bin is missing (the plan writes it beside itself): plan again",
+    );
+    // With the whole folder of far fields and tiles gone, a job says what is missing and makes no empty folder.
+    let tiles_dir = dir.path().join("plan.tiles");
+    std::fs::remove_dir_all(&tiles_dir).expect("remove the folder");
+    fails_with(&["tiles", "build", s(&plan), "--tile", "0"], "far-00000.bin is missing");
+    assert!(!tiles_dir.exists(), "the job does not make the folder again");
     fails_with(
         &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
         "directory",

@@ -337,6 +337,16 @@ fn plan_mesh(
 fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: bool) -> Result<TileReport> {
     let spec = plan.tile(index)?;
     let target = Plan::resolve(plan_path, &spec.output);
+    // The files the plan wrote for this job first: when they are gone (the tiles' folder deleted), nothing is made.
+    for read in spec.far.iter().chain(&spec.part) {
+        let path = Plan::resolve(plan_path, read);
+        if !path.exists() {
+            bail!(
+                "tile {index}: {} is missing (the plan writes it beside itself): plan again with `tincull tiles plan`",
+                path.display()
+            );
+        }
+    }
     if let Some(dir) = target.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
