@@ -57,6 +57,29 @@ fn tch_load_corpus_never_panics() {
     replay("tch_load", targets::tch_load);
 }
 
+#[test]
+fn tile_files_corpus_never_panics() {
+    replay("tile_files", targets::tile_files);
+}
+
+/// The tile files' seeds are valid (a plan of each kind, a part, a far field), so the fuzzer starts from the deep code.
+#[test]
+fn valid_tile_file_seeds_parse() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/tile_files");
+    let read = |name: &str| std::fs::read(dir.join(name)).expect("seed");
+    for (name, mesh) in [("mesh_plan.json", true), ("dem_plan.json", false)] {
+        let plan = tiles::Plan::parse(read(name), Path::new(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(plan.grid.is_none(), mesh, "{name}");
+    }
+    let part = tiles::part::MeshPart::from_bytes(&read("mesh_part.bin"), Path::new("mesh_part.bin")).expect("part");
+    assert!(!part.triangles.is_empty() && !part.halo.is_empty() && !part.far.is_empty());
+    let far = tiles::far_field::far_from_bytes(&read("dem_far_field.bin"), [80, 80], Path::new("far")).expect("far");
+    assert!(!far.is_empty());
+    let e = tiles::part::MeshPart::from_bytes(&read("truncated_part.bin"), Path::new("truncated_part.bin"))
+        .expect_err("a truncated part");
+    assert!(e.to_string().contains("truncated_part.bin"), "{e}");
+}
+
 /// The valid seeds really are valid: they load (so the fuzzer starts from files that reach the deep code).
 #[test]
 fn valid_seeds_load() {

@@ -6,6 +6,10 @@
 //!   with no band and with band 2 chosen; a grid that loads is simplified a little.
 //! - `tch_load`: [`cull::Hierarchy::from_bytes`]; a file that loads is culled from a few cameras, degenerate ones
 //!   included (inside a node, far away, non-finite).
+//! - `tile_files`: what a tiled build's jobs read: a plan ([`tiles::Plan::parse`]), a mesh tile's part
+//!   ([`tiles::part::MeshPart::from_bytes`]) and a DEM tile's far field ([`tiles::far_field::far_from_bytes`]), the
+//!   framed ones also resealed; a part that decodes is made into its tile's TIN and triangulated with its halo and
+//!   far points, as its job does.
 
 use std::path::Path;
 
@@ -161,5 +165,27 @@ fn cull_all(culler: &AnyCuller, cameras: &[Camera], total: usize) {
                 "draw range {r:?} out of 0..{total}"
             );
         }
+    }
+}
+
+/// A tiled build's job inputs on `data` (see the module docs): a plan, a mesh tile's part (its TIN and the sweep's
+/// points built when it decodes) and a DEM tile's far field, the framed files also with their header resealed.
+pub fn tile_files(data: &[u8]) {
+    let data = &data[..data.len().min(MAX_INPUT)];
+    let name = Path::new("fuzz.bin");
+    let _ = tiles::Plan::parse(data.to_vec(), Path::new("fuzz.json"));
+    for bytes in std::iter::once(data.to_vec()).chain(reseal(data)) {
+        if let Ok(part) = tiles::part::MeshPart::from_bytes(&bytes, name)
+            && part.positions.len() + part.halo.len() + part.far.len() <= 4096
+        {
+            let to_points = |v: &[[f64; 3]]| v.iter().map(|p| glam::DVec3::from_array(*p)).collect::<Vec<_>>();
+            if tin::Tin::from_parts(to_points(&part.positions), part.triangles.clone()).is_ok() {
+                let mut points = to_points(&part.positions);
+                points.extend(to_points(&part.halo));
+                points.extend(to_points(&part.far));
+                let _ = tin::triangulate(&points, DedupePolicy::Reject);
+            }
+        }
+        let _ = tiles::far_field::far_from_bytes(&bytes, [1201, 1201], name);
     }
 }

@@ -271,6 +271,11 @@ impl Plan {
             path: path.to_path_buf(),
             source,
         })?;
+        Plan::parse(bytes, path)
+    }
+
+    /// Checks and parses the content of a plan file; `path` names it in errors.
+    pub fn parse(bytes: Vec<u8>, path: &Path) -> Result<Plan, TilesError> {
         let bad = |reason: String| TilesError::Plan {
             path: path.to_path_buf(),
             reason,
