@@ -209,7 +209,8 @@ fn mesh_input(plan_path: &Path, part: &Path) -> Result<TileInput, TilesError> {
     let tin = Tin::from_parts(
         part.positions.iter().map(|p| DVec3::from_array(*p)).collect(),
         part.triangles,
-    )?;
+    )
+    .map_err(|e| TilesError::Parameter(format!("{}: not a valid mesh part: {e}", path.display())))?;
     let halo_points = part.halo.len();
     let beyond = part
         .halo

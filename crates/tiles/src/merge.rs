@@ -10,8 +10,8 @@
 //!   grid to one root: a tile is a node near the top. Tile and quadtree nodes store no region (never hidden by the
 //!   region test; the safe culler tests their bounds like any node), so they add no claim of occlusion.
 //!
-//! Each tile read is first checked to be its plan's tile where the plan knows its footprint
-//! ([`Plan::check_built_tile`]: a DEM tile's vertices lie within its samples).
+//! Each tile read is first checked to be its plan's tile ([`Plan::check_built_tile`]: a DEM tile's vertices lie
+//! within its samples; a mesh tile has its part's counts and lies within its part's bounding box).
 //!
 //! [`merge_with`] reads the tiles one at a time and keeps only their nodes, so the merge holds the merged hierarchy
 //! and one tile's mesh.

@@ -77,8 +77,44 @@ pub struct TileSpec {
     /// A DEM's tile: its far-field file ([`crate::far_field::far_to_bytes`]), relative to the plan's folder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub far: Option<PathBuf>,
+    /// A mesh's tile: what its part holds, which the merge checks each built tile against.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extent: Option<MeshExtent>,
     /// The tile's partial hierarchy, relative to the plan's folder.
     pub output: PathBuf,
+}
+
+/// What a mesh tile's part holds: its vertices' bounding box in x,y and its counts. A tile's hierarchy keeps the
+/// part's vertices and triangles, so a built tile that differs is not this tile's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MeshExtent {
+    /// Least x and y of the tile's vertices.
+    pub min: [f64; 2],
+    /// Largest x and y of the tile's vertices.
+    pub max: [f64; 2],
+    /// The tile's vertices.
+    pub vertices: usize,
+    /// The tile's triangles.
+    pub triangles: usize,
+}
+
+impl MeshExtent {
+    /// The extent of `part`.
+    pub fn of(part: &crate::part::MeshPart) -> MeshExtent {
+        let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &part.positions {
+            for k in 0..2 {
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+            }
+        }
+        MeshExtent {
+            min,
+            max,
+            vertices: part.positions.len(),
+            triangles: part.triangles.len(),
+        }
+    }
 }
 
 /// How to cut a terrain into tiles. Lengths are in samples for a DEM, in metres for a mesh.
@@ -187,6 +223,7 @@ pub fn make_plan(
                 cols: [cc[tc], cc[tc + 1]],
                 part: None,
                 far: Some(tiles_dir.join(format!("far-{index:05}.bin"))),
+                extent: None,
                 output: tiles_dir.join(format!("tile-{index:05}.tch")),
             });
         }
@@ -248,6 +285,7 @@ pub fn make_mesh_plan(
             cols: [0, 0],
             part: Some(tiles_dir.join(format!("part-{index:05}.bin"))),
             far: None,
+            extent: Some(MeshExtent::of(&part)),
             output: tiles_dir.join(format!("tile-{index:05}.tch")),
         });
         out.push(part);
@@ -418,21 +456,51 @@ impl Plan {
         far_from_bytes(&crate::framed::read(&path)?, [grid.rows, grid.cols], &path)
     }
 
-    /// Checks that a built hierarchy can be tile `index` of this plan: for a DEM's plan, every vertex lies within the
-    /// tile's samples (the corners by [`GridInfo::position`], the formula every tile uses, so its own vertices are
-    /// never outside). A file of another tile copied over this tile's output is refused, naming both. A mesh's plan
-    /// keeps no footprint of its tiles, so its tiles are not checked here (the merge's manifold check still refuses
-    /// tiles that do not join).
+    /// Checks that a built hierarchy can be tile `index` of this plan, so that a file of another tile copied over
+    /// this tile's output is refused, naming both:
+    /// - for a DEM's plan, every vertex lies within the tile's samples (the corners by [`GridInfo::position`], the
+    ///   formula every tile uses, so its own vertices are never outside);
+    /// - for a mesh's plan, the tile has its part's counts of vertices and triangles, and every vertex lies within
+    ///   the part's bounding box ([`TileSpec::extent`]; a plan without it is not checked).
     pub fn check_built_tile(&self, index: usize, built: &cull::Hierarchy) -> Result<(), TilesError> {
-        let (Some(grid), Ok(spec)) = (&self.grid, self.tile(index)) else {
-            return Ok(());
+        let spec = self.tile(index)?;
+        let not_this_tile = |what: String| {
+            Err(TilesError::Parameter(format!(
+                "tile {index} ({}): {what}: the file is not this tile's (another tile's copied over it?); build it \
+                 again with `tincull tiles build PLAN --tile {index}`",
+                spec.output.display(),
+            )))
         };
-        let nw = grid.position(spec.rows[0], spec.cols[0], 0.0);
-        let se = grid.position(spec.rows[1], spec.cols[1], 0.0);
-        let (lo, hi) = (
-            [nw[0].min(se[0]), nw[1].min(se[1])],
-            [nw[0].max(se[0]), nw[1].max(se[1])],
-        );
+        let (lo, hi, within) = match (&self.grid, &spec.extent) {
+            (Some(grid), _) => {
+                let nw = grid.position(spec.rows[0], spec.cols[0], 0.0);
+                let se = grid.position(spec.rows[1], spec.cols[1], 0.0);
+                let within = format!(
+                    "the tile's samples (rows {} to {}, columns {} to {})",
+                    spec.rows[0], spec.rows[1], spec.cols[0], spec.cols[1]
+                );
+                (
+                    [nw[0].min(se[0]), nw[1].min(se[1])],
+                    [nw[0].max(se[0]), nw[1].max(se[1])],
+                    within,
+                )
+            }
+            (None, Some(extent)) => {
+                let (v, t) = (built.mesh.positions.len(), built.mesh.triangles.len());
+                if (v, t) != (extent.vertices, extent.triangles) {
+                    return not_this_tile(format!(
+                        "it has {v} vertices and {t} triangles, its part {} and {}",
+                        extent.vertices, extent.triangles
+                    ));
+                }
+                let within = format!(
+                    "the tile's part (x {} to {}, y {} to {})",
+                    extent.min[0], extent.max[0], extent.min[1], extent.max[1]
+                );
+                (extent.min, extent.max, within)
+            }
+            (None, None) => return Ok(()),
+        };
         let outside = built
             .mesh
             .positions
@@ -440,18 +508,10 @@ impl Plan {
             .position(|p| !(p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1]));
         match outside {
             None => Ok(()),
-            Some(v) => Err(TilesError::Parameter(format!(
-                "tile {index} ({}): vertex {v} at x {}, y {} lies outside the tile's samples (rows {} to {}, columns \
-                 {} to {}): the file is not this tile's (another tile's copied over it?); build it again with \
-                 `tincull tiles build PLAN --tile {index}`",
-                spec.output.display(),
-                built.mesh.positions[v][0],
-                built.mesh.positions[v][1],
-                spec.rows[0],
-                spec.rows[1],
-                spec.cols[0],
-                spec.cols[1],
-            ))),
+            Some(v) => {
+                let p = built.mesh.positions[v];
+                not_this_tile(format!("vertex {v} at x {}, y {} lies outside {within}", p[0], p[1]))
+            }
         }
     }
 

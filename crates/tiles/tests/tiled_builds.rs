@@ -491,6 +491,42 @@ fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
     a.sort_unstable();
     b.sort_unstable();
     assert!(a == b, "the merged mesh differs from the mesh that was cut");
+    // Another tile's file in a tile's place is refused, naming the tile and its file.
+    let mut tiles = build_tiles(&plan, &path);
+    for (i, t) in tiles.iter().enumerate() {
+        plan.check_built_tile(i, t).expect("every tile is its part's");
+    }
+    tiles[5] = tiles[6].clone();
+    let e = tiles::merge(&plan, &tiles)
+        .expect_err("tile 6 in tile 5's place")
+        .to_string();
+    let file = plan.tiles[5].output.display().to_string();
+    assert!(
+        e.contains("tile 5 (") && e.contains(&file) && e.contains("--tile 5"),
+        "{e}"
+    );
+    // Even one whose counts match is refused by its bounding box.
+    let mut moved = tiles[6].clone();
+    let extent = plan.tiles[5].extent.clone().expect("a mesh tile's extent");
+    (moved.mesh.positions, moved.mesh.triangles) = (parts[5].positions.clone(), parts[5].triangles.clone());
+    moved.mesh.positions[0][0] = extent.max[0] + 1.0;
+    let e = plan
+        .check_built_tile(5, &moved)
+        .expect_err("a vertex outside")
+        .to_string();
+    assert!(e.contains("vertex 0") && e.contains("outside the tile's part"), "{e}");
+    // A part whose triangles are invalid is refused with its name.
+    let p1 = dir.path().join(plan.tiles[1].part.as_ref().expect("part"));
+    let mut bad = parts[1].clone();
+    bad.triangles[0][0] = bad.positions.len() as u32;
+    std::fs::write(&p1, bad.to_bytes().expect("bytes")).expect("write");
+    let err = tiles::build_tile(&plan, &path, 1, None)
+        .expect_err("bad part")
+        .to_string();
+    assert!(
+        err.contains("part-00001.bin") && err.contains("not a valid mesh part"),
+        "{err}"
+    );
     // A damaged part is refused with its name.
     let p0 = dir.path().join(plan.tiles[0].part.as_ref().expect("part"));
     let mut bytes = std::fs::read(&p0).expect("read");
