@@ -209,7 +209,7 @@ fn lower(a: &FarPoint, b: &FarPoint) -> bool {
     (a.z, a.row, a.col) < (b.z, b.row, b.col)
 }
 
-/// About how many samples [`FarField::read`] reads at a time.
+/// About how many samples [`FarField::read_each_strip`] reads at a time.
 const STRIP_SAMPLES: usize = 1 << 22;
 
 /// Folds the samples `z` of the rows from `first` on (row-major, `cols` columns; `first` a multiple of `block`) into
@@ -273,25 +273,26 @@ impl FarField {
 
     /// The far field of the DEM at `path` (read with `opts`), as [`FarField::new`] computes it from the whole grid,
     /// reading the DEM in strips of rows ([`tin::read_dem_strips`]): memory is the level-0 blocks (a `block²`-th of
-    /// the samples) and one strip. `progress(rows read, rows)` follows the reading. Returns the grid's shape too.
-    pub fn read(
+    /// the samples) and one strip, which is handed to `each_strip(first row, samples of whole rows)` as it is read.
+    /// Returns the grid's shape too.
+    pub fn read_each_strip(
         path: &Path,
         opts: &tin::DemOptions,
         block: usize,
         max_error: f64,
-        progress: impl FnMut(usize, usize),
+        each_strip: impl FnMut(usize, &[f64]),
     ) -> Result<(FarField, tin::GridShape), TilesError> {
-        FarField::read_in_strips(path, opts, block, max_error, STRIP_SAMPLES, progress)
+        FarField::read_in_strips(path, opts, block, max_error, STRIP_SAMPLES, each_strip)
     }
 
-    /// [`FarField::read`] in strips of about `strip_samples` samples (tests vary it).
+    /// [`FarField::read_each_strip`] in strips of about `strip_samples` samples (tests vary it).
     fn read_in_strips(
         path: &Path,
         opts: &tin::DemOptions,
         block: usize,
         max_error: f64,
         strip_samples: usize,
-        mut progress: impl FnMut(usize, usize),
+        mut each_strip: impl FnMut(usize, &[f64]),
     ) -> Result<(FarField, tin::GridShape), TilesError> {
         let block = block.max(1);
         let shape = tin::read_dem_header(path, opts)?;
@@ -300,7 +301,7 @@ impl FarField {
         let strip = block * (strip_samples / (block * shape.cols).max(1)).max(1);
         let shape = tin::read_dem_strips(path, opts, strip, |first, z| {
             lowest_in_blocks(&mut level0, block, shape.cols, first, z, max_error);
-            progress(first + z.len() / shape.cols, shape.rows);
+            each_strip(first, z);
             Ok(())
         })?;
         Ok((FarField::of_level0([shape.rows, shape.cols], block, level0), shape))
@@ -488,8 +489,9 @@ mod tests {
             std::fs::write(&npy, bytes).expect("write");
             std::fs::write(tin::dem::npy::sidecar_path(&npy), tin::dem::npy::sidecar_json(&g)).expect("sidecar");
             let mut last = 0;
-            let (f, shape) = FarField::read_in_strips(&npy, &tin::DemOptions::default(), block, 0.25, strip, |done, all| {
-                assert!(done > last && all == g.rows);
+            let (f, shape) = FarField::read_in_strips(&npy, &tin::DemOptions::default(), block, 0.25, strip, |first, z| {
+                let done = first + z.len() / g.cols;
+                assert!(first == last && done > last && z.len() % g.cols == 0);
                 last = done;
             }).expect("read");
             prop_assert_eq!(last, g.rows);

@@ -166,6 +166,20 @@ fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput
     let (source, info) = check_grid(plan, plan_path)?;
     let (win_r, win_c) = plan.halo_window(spec);
     let halo = tin::dem::read_dem_window(&source, &plan.dem, win_r, win_c)?;
+    if let Some(planned) = spec.window_digest
+        && crate::plan::window_digest(&halo.z) != planned
+    {
+        return Err(TilesError::Parameter(format!(
+            "{}: the samples of tile {}'s window (rows {} to {}, columns {} to {}) changed since the plan was made: \
+             plan again",
+            source.display(),
+            spec.index,
+            win_r[0],
+            win_r[1],
+            win_c[0],
+            win_c[1]
+        )));
+    }
     let tile = window(info, &halo, [win_r[0], win_c[0]], spec.rows, spec.cols)?;
     let read_seconds = start.elapsed().as_secs_f64();
 

@@ -1,9 +1,11 @@
 //! Joining the tiles' partial hierarchies into one hierarchy over the whole terrain.
 //!
-//! - **Mesh.** Vertices are merged by exact position (shared side vertices are bit-identical, [`crate::job`]; only
-//!   a tile's boundary vertices are looked up, as only they can be shared);
+//! - **Mesh.** Vertices are merged by exact x,y (shared side vertices are bit-identical, [`crate::job`]; only a
+//!   tile's boundary vertices are looked up, as only they can be shared); two tiles with a vertex at the same x,y but
+//!   not the same z were built from different terrains (the DEM changed between their jobs) and are refused, as the
+//!   joined mesh would have a crack there;
 //!   the tiles' grouped triangles come first, tile after tile in Morton order of the tile grid, then every tile's
-//!   always-visible triangles. The joined mesh is checked to be an edge-manifold height field ([`tin::Tin`]).
+//!   always-visible triangles. The joined mesh is checked to be edge-manifold ([`tin::Tin`]).
 //! - **Nodes.** Every tile's nodes keep their children, levels and regions, re-expressed relative to the merged
 //!   origin with [`cull::StoredRegion::from_f64`] (which only shrinks a region) and circles that only grow. Each
 //!   tile becomes one node whose children are the tile's roots, and tiles are joined 2 × 2 up a quadtree of the tile
@@ -120,9 +122,9 @@ pub fn merge_with(
     let mut order: Vec<usize> = (0..plan.tiles.len()).collect();
     order.sort_by_key(|&i| morton(plan.tiles[i].tile_row, plan.tiles[i].tile_col));
 
-    // The mesh: vertices merged by exact position, grouped triangles tile by tile, then all orphans.
+    // The mesh: vertices merged by exact x,y, grouped triangles tile by tile, then all orphans.
     let mut positions: Vec<DVec3> = Vec::new();
-    let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut index: HashMap<[u64; 2], (u32, usize)> = HashMap::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut orphans: Vec<[u32; 3]> = Vec::new();
     let mut kept: Vec<TileNodes> = Vec::with_capacity(order.len());
@@ -139,23 +141,33 @@ pub fn merge_with(
         }
         // Only a vertex on the tile's boundary can be another tile's too: the others are added as they are.
         let shared = boundary_vertices(&t.mesh.triangles, t.mesh.positions.len());
-        let remap: Vec<u32> = t
-            .mesh
-            .positions
-            .iter()
-            .zip(shared)
-            .map(|(p, shared)| {
-                let mut add = || {
-                    positions.push(DVec3::from_array(*p));
-                    (positions.len() - 1) as u32
-                };
-                if shared {
-                    *index.entry(p.map(f64::to_bits)).or_insert_with(add)
-                } else {
-                    add()
-                }
-            })
-            .collect();
+        let mut remap: Vec<u32> = Vec::with_capacity(t.mesh.positions.len());
+        for (p, shared) in t.mesh.positions.iter().zip(shared) {
+            let mut add = || {
+                positions.push(DVec3::from_array(*p));
+                (positions.len() - 1) as u32
+            };
+            if !shared {
+                remap.push(add());
+                continue;
+            }
+            // Shared vertices are joined by x,y; neighbours built from the same samples agree on z to the bit.
+            let (v, first) = *index
+                .entry([p[0].to_bits(), p[1].to_bits()])
+                .or_insert_with(|| (add(), i));
+            let z = positions[v as usize].z;
+            if z.to_bits() != p[2].to_bits() {
+                return Err(TilesError::Parameter(format!(
+                    "tiles {first} and {i} ({}) disagree on the terrain's height at x {}, y {} ({z} and {}): they were \
+                     not built from the same terrain (the DEM changed between their builds?); plan and build them again",
+                    plan.tiles[i].output.display(),
+                    p[0],
+                    p[1],
+                    p[2]
+                )));
+            }
+            remap.push(v);
+        }
         let tri_base = triangles.len() as u32;
         let [a, b] = t.always_visible;
         let moved = |tri: &[u32; 3]| tri.map(|v| remap[v as usize]);

@@ -77,6 +77,10 @@ pub struct TileSpec {
     /// A DEM's tile: its far-field file ([`crate::far_field::far_to_bytes`]), relative to the plan's folder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub far: Option<PathBuf>,
+    /// A DEM's tile: the digest of the samples of its halo window as the plan read them ([`window_digest`]); its job
+    /// refuses a DEM whose window now reads otherwise. `None` in a plan made before it was kept (not checked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window_digest: Option<u32>,
     /// A mesh's tile: what its part holds, which the merge checks each built tile against.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extent: Option<MeshExtent>,
@@ -188,6 +192,40 @@ pub struct Plan {
     pub tiles_dir: PathBuf,
 }
 
+/// The halo window of `spec` in a grid of `shape` (rows, columns): its samples and `halo` more on every side, within
+/// the grid (rows, then columns, both ends inclusive).
+fn halo_window(halo: usize, shape: [usize; 2], spec: &TileSpec) -> ([usize; 2], [usize; 2]) {
+    let [rows, cols] = shape;
+    (
+        [
+            spec.rows[0].saturating_sub(halo),
+            spec.rows[1].saturating_add(halo).min(rows.saturating_sub(1)),
+        ],
+        [
+            spec.cols[0].saturating_sub(halo),
+            spec.cols[1].saturating_add(halo).min(cols.saturating_sub(1)),
+        ],
+    )
+}
+
+/// Adds samples to a window's digest ([`TileSpec::window_digest`]): each sample's f64 bits, little-endian, every
+/// NaN (a void) as the one canonical NaN.
+pub(crate) fn digest_samples(hasher: &mut crc32fast::Hasher, z: &[f64]) {
+    let mut bytes = Vec::with_capacity(8 * z.len());
+    for v in z {
+        let v = if v.is_nan() { f64::NAN } else { *v };
+        bytes.extend_from_slice(&v.to_bits().to_le_bytes());
+    }
+    hasher.update(&bytes);
+}
+
+/// The digest of a window's samples in row-major order ([`TileSpec::window_digest`]).
+pub(crate) fn window_digest(z: &[f64]) -> u32 {
+    let mut hasher = crc32fast::Hasher::new();
+    digest_samples(&mut hasher, z);
+    hasher.finalize()
+}
+
 /// The first sample of each of `k` even spans over `n` samples, and the last sample.
 fn cuts(n: usize, k: usize) -> Vec<usize> {
     (0..=k)
@@ -195,9 +233,9 @@ fn cuts(n: usize, k: usize) -> Vec<usize> {
         .collect()
 }
 
-/// Reads the DEM at `source` (with `dem`) in strips of rows, computing its far field ([`FarField::read`]; memory
-/// bounded by a strip and the far field's blocks, not the grid; `progress(rows read, rows)`), and cuts it into
-/// tiles. `tiles_dir` is where the jobs will write, relative to the plan's folder. Each tile's far-field file
+/// Reads the DEM at `source` (with `dem`) in strips of rows, computing its far field ([`FarField::read_each_strip`];
+/// memory bounded by a strip and the far field's blocks, not the grid; `progress(rows read, rows)`) and every tile's
+/// window digest, and cuts it into tiles. `tiles_dir` is where the jobs will write, relative to the plan's folder. Each tile's far-field file
 /// ([`TileSpec::far`]) is to be written beside the plan with [`Plan::far_file`].
 pub fn make_plan(
     source: &Path,
@@ -207,10 +245,10 @@ pub fn make_plan(
     progress: impl FnMut(usize, usize),
 ) -> Result<(Plan, FarField), TilesError> {
     options.validate()?;
-    let (field, grid) = FarField::read(source, &dem, options.far_block, options.max_error, progress)?;
-    let kr = (grid.rows - 1).div_ceil(options.tile).max(1);
-    let kc = (grid.cols - 1).div_ceil(options.tile).max(1);
-    let (rc, cc) = (cuts(grid.rows, kr), cuts(grid.cols, kc));
+    let header = tin::read_dem_header(source, &dem)?;
+    let kr = (header.rows - 1).div_ceil(options.tile).max(1);
+    let kc = (header.cols - 1).div_ceil(options.tile).max(1);
+    let (rc, cc) = (cuts(header.rows, kr), cuts(header.cols, kc));
     let mut tiles = Vec::with_capacity(kr * kc);
     for tr in 0..kr {
         for tc in 0..kc {
@@ -223,10 +261,47 @@ pub fn make_plan(
                 cols: [cc[tc], cc[tc + 1]],
                 part: None,
                 far: Some(tiles_dir.join(format!("far-{index:05}.bin"))),
+                window_digest: None,
                 extent: None,
                 output: tiles_dir.join(format!("tile-{index:05}.tch")),
             });
         }
+    }
+    // Each tile's window digest, fed row by row as the strips come (windows of a tile row share their rows).
+    let windows: Vec<_> = tiles
+        .iter()
+        .map(|t| halo_window(options.halo, [header.rows, header.cols], t))
+        .collect();
+    let row_windows: Vec<[usize; 2]> = (0..kr).map(|tr| windows[tr * kc].0).collect();
+    let mut digests = vec![crc32fast::Hasher::new(); tiles.len()];
+    let mut progress = progress;
+    let (field, grid) = FarField::read_each_strip(source, &dem, options.far_block, options.max_error, |first, z| {
+        let cols = header.cols;
+        for (k, row) in z.chunks_exact(cols).enumerate() {
+            let r = first + k;
+            // Tile rows whose windows hold row `r`: from the first whose window ends at or after it.
+            let from = row_windows.partition_point(|w| w[1] < r);
+            for tr in (from..kr).take_while(|&tr| row_windows[tr][0] <= r) {
+                for i in tr * kc..(tr + 1) * kc {
+                    let c = windows[i].1;
+                    digest_samples(&mut digests[i], &row[c[0]..=c[1]]);
+                }
+            }
+        }
+        progress(first + z.len() / cols, header.rows);
+    })?;
+    if [grid.rows, grid.cols] != [header.rows, header.cols] {
+        return Err(TilesError::Parameter(format!(
+            "{}: read {} x {} samples, its header says {} x {}",
+            source.display(),
+            grid.rows,
+            grid.cols,
+            header.rows,
+            header.cols
+        )));
+    }
+    for (t, d) in tiles.iter_mut().zip(digests) {
+        t.window_digest = Some(d.finalize());
     }
     let plan = Plan {
         version: PLAN_VERSION,
@@ -285,6 +360,7 @@ pub fn make_mesh_plan(
             cols: [0, 0],
             part: Some(tiles_dir.join(format!("part-{index:05}.bin"))),
             far: None,
+            window_digest: None,
             extent: Some(MeshExtent::of(&part)),
             output: tiles_dir.join(format!("tile-{index:05}.tch")),
         });
@@ -415,18 +491,8 @@ impl Plan {
     /// The halo window of a DEM's tile: its samples and `halo` more on every side, within the grid (rows, then
     /// columns, both ends inclusive).
     pub fn halo_window(&self, spec: &TileSpec) -> ([usize; 2], [usize; 2]) {
-        let h = self.options.halo;
-        let (rows, cols) = self.grid.as_ref().map_or((0, 0), |g| (g.rows, g.cols));
-        (
-            [
-                spec.rows[0].saturating_sub(h),
-                spec.rows[1].saturating_add(h).min(rows.saturating_sub(1)),
-            ],
-            [
-                spec.cols[0].saturating_sub(h),
-                spec.cols[1].saturating_add(h).min(cols.saturating_sub(1)),
-            ],
-        )
+        let shape = self.grid.as_ref().map_or([0, 0], |g| [g.rows, g.cols]);
+        halo_window(self.options.halo, shape, spec)
     }
 
     /// The far-field points of a DEM's tile: `field`'s cut outside its halo window ([`FarField::select`]).

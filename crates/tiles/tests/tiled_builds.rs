@@ -401,6 +401,67 @@ fn another_tiles_file_in_a_tiles_place_is_named() {
     );
 }
 
+/// Writes `grid` over the plan's DEM (`terrain.npy` beside `path`).
+fn rewrite_dem(path: &Path, grid: &Grid) {
+    let mut bytes = Vec::new();
+    tin::dem::npy::write_npy_to(grid, &mut bytes).expect("npy");
+    std::fs::write(path.with_file_name("terrain.npy"), bytes).expect("rewrite the DEM");
+}
+
+#[test]
+fn a_dem_changed_after_planning_is_refused_by_the_job_and_the_merge() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grid = synth(33 * 33, 5);
+    let (plan, path) = plan_grid(dir.path(), &grid, 16, 2, 0.0);
+    assert_eq!(plan.tiles.len(), 4);
+    let tiles = build_tiles(&plan, &path);
+    // A sample on the side that tiles 0 and 1 share (column 16): both tiles keep a vertex there.
+    let (r, c) = (5, plan.tiles[0].cols[1]);
+    assert_eq!(plan.tiles[1].cols[0], c);
+    let at = grid.sample(r, c).expect("a valid sample");
+    let has = |h: &Hierarchy| h.mesh.positions.iter().any(|p| p[0] == at.x && p[1] == at.y);
+    assert!(
+        has(&tiles[0]) && has(&tiles[1]),
+        "the tiles keep the changed sample as a vertex"
+    );
+    let mut changed = grid.clone();
+    changed.z[r * grid.cols + c] -= 150.0;
+    rewrite_dem(&path, &changed);
+    // The job reads its window and refuses it: every tile whose window holds the sample, no other.
+    for (i, spec) in plan.tiles.iter().enumerate() {
+        let (wr, wc) = plan.halo_window(spec);
+        let holds = (wr[0]..=wr[1]).contains(&r) && (wc[0]..=wc[1]).contains(&c);
+        match tiles::build_tile(&plan, &path, i, None) {
+            Ok(_) => assert!(!holds, "tile {i} was built from a changed window"),
+            Err(e) => {
+                let e = e.to_string();
+                assert!(
+                    holds && e.contains("terrain.npy") && e.contains("changed since the plan"),
+                    "{e}"
+                );
+            }
+        }
+    }
+    // A plan without window digests (made before they were kept) builds tile 0 from the changed DEM; the merge
+    // refuses the crack between it and tile 1, built before the change.
+    let mut old = plan.clone();
+    for t in &mut old.tiles {
+        t.window_digest = None;
+    }
+    let mut mixed = tiles.clone();
+    mixed[0] = tiles::build_tile(&old, &path, 0, None).expect("tile 0, unchecked").0;
+    let e = tiles::merge(&old, &mixed).expect_err("a crack").to_string();
+    assert!(
+        e.contains("tiles 0 and 1")
+            && e.contains("disagree on the terrain's height")
+            && e.contains(&format!("y {}", at.y)),
+        "{e}"
+    );
+    // Back to the planned DEM, every tile builds again, identical to the first time.
+    rewrite_dem(&path, &grid);
+    assert_eq!(build_tiles(&plan, &path), tiles);
+}
+
 #[test]
 fn voids_across_tile_sides_still_join() {
     let dir = tempfile::tempdir().expect("tempdir");
