@@ -375,7 +375,24 @@ fn cull_above_ground() {
     assert_eq!(rel["ranges"], abs["ranges"]);
     fails_with(
         &["cull", s(&tch), "--eye", "-5000,0,2", "--above-ground"],
-        "eye 1 (-5000, 0) is outside the terrain's footprint",
+        "eye 1 (--eye) at x -5000, y 0 is outside the terrain's footprint",
+    );
+    // An eye below the ground is refused, naming it (its line in a file of eyes), by cull and eval alike; one on
+    // the ground (0 m above it, as --above-ground reports it) is not.
+    let on = json(&["cull", s(&tch), "--eye", "10000,12000,0", "--above-ground", "--json"]);
+    let ground = on["eye"][2].as_f64().expect("z");
+    ok(&["cull", s(&tch), "--eye", &format!("10000,12000,{ground}"), "-q"]);
+    let below = format!("10000,12000,{}", ground - 0.01);
+    fails_with(&["cull", s(&tch), "--eye", &below], "eye 1 (--eye) at x 10000, y 12000");
+    fails_with(&["cull", s(&tch), "--eye", &below], "0.010 m below the ground");
+    let eyes = dir.path().join("eyes.txt");
+    std::fs::write(&eyes, format!("# a path\n-5000,0,2\n{below}\n")).expect("eyes");
+    let line = format!("eye 2 ({}:3)", eyes.display());
+    fails_with(&["cull", s(&tch), "--eyes", s(&eyes)], &line);
+    fails_with(&["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"], &line);
+    fails_with(
+        &["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"],
+        "below the ground",
     );
 }
 
@@ -577,7 +594,7 @@ fn build_cull_export_eval_round_trip() {
         (bbox["min"][0].as_f64().expect("x") + bbox["max"][0].as_f64().expect("x")) / 2.0,
         (bbox["min"][1].as_f64().expect("y") + bbox["max"][1].as_f64().expect("y")) / 2.0,
     );
-    let eye = format!("{cx},{cy},500");
+    let eye = format!("{cx},{cy},1000");
     let c = json(&["cull", s(&tch), "--eye", &eye, "--json"]);
     let triangles = report["triangles"].as_u64().expect("triangles");
     let drawn: u64 = c["ranges"]
@@ -919,6 +936,10 @@ fn contradictory_or_empty_options_are_errors() {
     fails_with(
         &["eval", s(&tch), "--eyes", s(&eyes), "--viewpoints", "3"],
         "--viewpoints",
+    );
+    fails_with(
+        &["eval", s(&tch), "--eyes", s(&eyes), "--view-seed", "5"],
+        "at 360° it has nothing to seed",
     );
     let help = String::from_utf8_lossy(&ok(&["eval", "--help"]).stdout).into_owned();
     assert!(help.contains("not with --classes or --viewpoints"), "{help}");

@@ -8,9 +8,9 @@ use clap::Args;
 use cull::{AnyCuller, Camera, CullMethod, DrawList};
 use serde_json::json;
 
-use super::culling_args::{SafeArgs, read_eyes};
+use super::culling_args::{Eyes, SafeArgs};
 use super::{Output, OutputArgs};
-use eval::evaluate::{hierarchy_tin, timed_cull};
+use eval::evaluate::timed_cull;
 
 /// Arguments of `tincull cull`.
 #[derive(Debug, Args)]
@@ -86,40 +86,18 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
         .check(&h)
         .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
     let culler = AnyCuller::with_params(&h, args.method, args.safe.params()?);
-    let mut eyes: Vec<[f64; 3]> = match (&args.eye, &args.eyes) {
-        (Some(e), _) => vec![*e],
-        (None, Some(path)) => read_eyes(path)?,
+    let mut eyes = match (&args.eye, &args.eyes) {
+        (Some(e), _) => Eyes::given(*e),
+        (None, Some(path)) => Eyes::read(path)?,
         (None, None) => bail!("give --eye x,y,z or --eyes FILE"),
     };
     if args.above_ground {
-        if let Some((i, eye)) = eyes.iter().enumerate().find(|(_, e)| e[2] < 0.0) {
-            bail!(
-                "eye {} ({}, {}, {}): with --above-ground, z is a height above the ground and must be 0 or more (an eye \
-                 below the ground sees none of the terrain)",
-                i + 1,
-                eye[0],
-                eye[1],
-                eye[2]
-            );
-        }
-        let tin = hierarchy_tin(&h)?;
-        let locator = truth::Locator::new(&tin);
-        for (i, eye) in eyes.iter_mut().enumerate() {
-            let ground = locator
-                .ground_height(&tin, glam::DVec2::new(eye[0], eye[1]))
-                .with_context(|| {
-                    format!(
-                        "eye {} ({}, {}) is outside the terrain's footprint: --above-ground has no ground there",
-                        i + 1,
-                        eye[0],
-                        eye[1]
-                    )
-                })?;
-            eye[2] += ground;
-        }
+        eyes.lift_above_ground(&h)?;
+    } else {
+        eyes.check_not_below_ground(&h)?;
     }
     let mut list = DrawList::default();
-    for eye in eyes {
+    for eye in eyes.points {
         let camera = Camera::from_degrees(eye, args.yaw, args.fov)?;
         let ns = timed_cull(&culler, &camera, &mut list);
         let s = list.stats;

@@ -103,22 +103,115 @@ impl SafeArgs {
     }
 }
 
-/// Reads a file of eye positions, one `x,y,z` per line (blank lines and `#` comments skipped); errors name the file
-/// and the 1-based line.
-pub fn read_eyes(path: &Path) -> Result<Vec<[f64; 3]>> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let text = String::from_utf8(bytes).map_err(|_| {
-        anyhow::anyhow!(
-            "{}: a binary file, not a text file of eye positions (one x,y,z a line)",
-            path.display()
-        )
-    })?;
-    let eyes: Vec<[f64; 3]> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-        .map(|(i, l)| parse_point(l).map_err(|e| anyhow::anyhow!("{}:{}: {e}", path.display(), i + 1)))
-        .collect::<Result<_>>()?;
-    anyhow::ensure!(!eyes.is_empty(), "{}: no eye positions", path.display());
-    Ok(eyes)
+/// Eye positions, each with where it was given, to name it in errors.
+#[derive(Clone, Debug)]
+pub struct Eyes {
+    /// The positions, in order.
+    pub points: Vec<[f64; 3]>,
+    /// Where each was given: `--eye`, or `FILE:LINE`.
+    sources: Vec<String>,
+}
+
+/// An eye this far below the ground under it, or less, is taken to be on it (the rounding of the ground's height
+/// from its triangle's plane, for an eye put exactly on the terrain).
+fn ground_tolerance(ground: f64) -> f64 {
+    1e-9 * (1.0 + ground.abs())
+}
+
+impl Eyes {
+    /// The one eye of `--eye`.
+    pub fn given(eye: [f64; 3]) -> Eyes {
+        Eyes {
+            points: vec![eye],
+            sources: vec!["--eye".into()],
+        }
+    }
+
+    /// Reads a file of eye positions: one `x,y,z` a line; blank lines and lines starting with `#` are skipped.
+    pub fn read(path: &Path) -> Result<Eyes> {
+        let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let text = String::from_utf8(bytes).map_err(|_| {
+            anyhow::anyhow!(
+                "{}: a binary file, not a text file of eye positions (one x,y,z a line)",
+                path.display()
+            )
+        })?;
+        let mut eyes = Eyes {
+            points: Vec::new(),
+            sources: Vec::new(),
+        };
+        for (i, line) in text.lines().enumerate() {
+            if line.trim().is_empty() || line.trim_start().starts_with('#') {
+                continue;
+            }
+            let source = format!("{}:{}", path.display(), i + 1);
+            eyes.points
+                .push(parse_point(line).map_err(|e| anyhow::anyhow!("{source}: {e}"))?);
+            eyes.sources.push(source);
+        }
+        anyhow::ensure!(!eyes.points.is_empty(), "{}: no eye positions", path.display());
+        Ok(eyes)
+    }
+
+    /// How errors name eye `i`: `eye 2 (eyes.txt:3)`.
+    pub fn name(&self, i: usize) -> String {
+        format!("eye {} ({})", i + 1, self.sources[i])
+    }
+
+    /// The ground's height under each eye on `h`'s mesh, `None` outside its footprint ([`truth::ground_heights`]).
+    fn grounds(&self, h: &cull::Hierarchy) -> Vec<Option<f64>> {
+        let xy: Vec<glam::DVec2> = self.points.iter().map(|e| glam::DVec2::new(e[0], e[1])).collect();
+        truth::ground_heights(&h.mesh.positions, &h.mesh.triangles, &xy)
+    }
+
+    /// Refuses an eye below the ground of `h`'s mesh (by more than the rounding of the ground's height): it sees none
+    /// of the terrain. Eyes outside the footprint, on the ground or above it are fine.
+    pub fn check_not_below_ground(&self, h: &cull::Hierarchy) -> Result<()> {
+        for (i, ground) in self.grounds(h).into_iter().enumerate() {
+            let z = self.points[i][2];
+            if let Some(g) = ground
+                && z < g - ground_tolerance(g)
+            {
+                anyhow::bail!(
+                    "{} at x {}, y {}, z {} is {} m below the ground (at z {g} there): an eye below the ground sees \
+                     none of the terrain (for heights above the ground, use --above-ground where offered)",
+                    self.name(i),
+                    self.points[i][0],
+                    self.points[i][1],
+                    z,
+                    if g - z >= 1e-3 {
+                        format!("{:.3}", g - z)
+                    } else {
+                        format!("{:.1e}", g - z)
+                    }
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads each eye's z as a height above the ground of `h`'s mesh (`--above-ground`) and turns it into a world z;
+    /// refuses negative heights and eyes outside the footprint.
+    pub fn lift_above_ground(&mut self, h: &cull::Hierarchy) -> Result<()> {
+        if let Some(i) = self.points.iter().position(|e| e[2] < 0.0) {
+            anyhow::bail!(
+                "{}: with --above-ground, z is a height above the ground and must be 0 or more (an eye below the \
+                 ground sees none of the terrain), got {}",
+                self.name(i),
+                self.points[i][2]
+            );
+        }
+        for (i, ground) in self.grounds(h).into_iter().enumerate() {
+            let ground = ground.with_context(|| {
+                format!(
+                    "{} at x {}, y {} is outside the terrain's footprint: --above-ground has no ground there",
+                    self.name(i),
+                    self.points[i][0],
+                    self.points[i][1]
+                )
+            })?;
+            self.points[i][2] += ground;
+        }
+        Ok(())
+    }
 }

@@ -6,7 +6,7 @@ use anyhow::{Result, ensure};
 use clap::Args;
 use truth::ViewpointClass;
 
-use super::culling_args::{SafeArgs, read_eyes};
+use super::culling_args::{Eyes, SafeArgs};
 use super::files::Outputs;
 use super::{Output, OutputArgs};
 use eval::evaluate::{EvalOptions, Evaluation, MAX_VIEWPOINTS, evaluate, hierarchy_tin};
@@ -22,9 +22,10 @@ pub struct EvalArgs {
     /// Viewpoint classes, comma-separated, each once: ground, low, high, valley, ridge, sky (not with --eyes).
     #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
     pub classes: Vec<ViewpointClass>,
-    /// Seed of the viewpoint generator (`--view-seed` everywhere; `--rng-seed` seeds the grouping).
-    #[arg(long, default_value_t = 1)]
-    pub view_seed: u64,
+    /// Seed of the viewpoint generator, and of each viewpoint's yaw below 360° (`--view-seed` everywhere;
+    /// `--rng-seed` seeds the grouping) [default: 1]. With --eyes only the yaws are seeded: not at 360°.
+    #[arg(long, value_name = "SEED")]
+    pub view_seed: Option<u64>,
     /// Horizontal field of view in degrees (360 = all around); below 360 each viewpoint gets a seeded yaw.
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
@@ -116,7 +117,12 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     check_viewpoints(args.viewpoints)?;
     check_classes(&args.classes)?;
     let safe = args.safe.params()?;
-    let eyes = args.eyes.as_deref().map(read_eyes).transpose()?;
+    ensure!(
+        !(args.eyes.is_some() && args.fov >= 360.0 && args.view_seed.is_some()),
+        "--view-seed: with --eyes it seeds only the yaws of a view narrower than 360° (--fov); at 360° it has \
+         nothing to seed"
+    );
+    let eyes = args.eyes.as_deref().map(Eyes::read).transpose()?;
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
     if let Some(eyes) = &args.eyes {
@@ -124,16 +130,19 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     }
     check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref(), &mut out)?;
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
+    if let Some(eyes) = &eyes {
+        eyes.check_not_below_ground(&h)?;
+    }
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
         viewpoints: args.viewpoints,
         classes: args.classes.clone(),
-        view_seed: args.view_seed,
+        view_seed: args.view_seed.unwrap_or(1),
         fov_deg: args.fov,
         per_triangle: !args.no_per_triangle,
         safe,
         safe_regions: !args.no_safe_regions,
-        eyes,
+        eyes: eyes.map(|e| e.points),
     };
     let total = opts
         .eyes

@@ -143,6 +143,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         files.check(&diff_path(&args.out))?;
     }
     let terrain = load_terrain(&args.input, &args.import, out)?;
+    if let (Some(eye), Some(h)) = (args.eye, &terrain.hierarchy) {
+        super::culling_args::Eyes::given(eye).check_not_below_ground(h)?;
+    }
     let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
         Some(rect) => {
             let h = terrain

@@ -64,6 +64,9 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     let source = if is_tch {
         args.import.mesh(&args.input).refuse_for_hierarchy()?;
         let h = super::mesh_input::load_hierarchy(&args.input)?;
+        if let Some(eye) = args.eye {
+            super::culling_args::Eyes::given(eye).check_not_below_ground(&h)?;
+        }
         let b = &h.build;
         let p = &args.params;
         params.sectors = p.sectors.unwrap_or(h.sectors);

@@ -20,7 +20,7 @@ pub mod visible;
 pub mod walk;
 
 pub use error::{Result, TruthError};
-pub use locate::Locator;
+pub use locate::{Locator, ground_heights};
 pub use metrics::{Stat, Summary, ViewMetrics, summarize, view_metrics};
 pub use viewpoints::{ViewpointClass, viewpoints};
 pub use visible::{GroundTruth, MAX_LEVELS, NUDGE, SAMPLE_ANGLE_DEG, visible_triangles};

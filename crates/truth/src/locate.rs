@@ -44,6 +44,35 @@ pub(crate) fn corners_contain(c: &[DVec3; 3], p: DVec2) -> bool {
     orient(a, b, p) >= 0.0 && orient(b, c, p) >= 0.0 && orient(c, a, p) >= 0.0
 }
 
+/// The terrain's height under each of `points` (x,y), or `None` outside the mesh, from a mesh given as its vertex
+/// positions and counter-clockwise triangles (a [`Tin`]'s, or a hierarchy's): the plane of a closed triangle that
+/// holds the point (exactly, [`tin::orient2d`]; the first such triangle in mesh order). One pass over the triangles,
+/// with the points sorted by x: O(triangles · log points + matches), without building a [`Locator`], for the few
+/// points of a command line (an eye to check against the ground).
+pub fn ground_heights(positions: &[[f64; 3]], triangles: &[[u32; 3]], points: &[DVec2]) -> Vec<Option<f64>> {
+    let mut by_x: Vec<u32> = (0..points.len() as u32)
+        .filter(|&i| points[i as usize].is_finite())
+        .collect();
+    by_x.sort_by(|&a, &b| points[a as usize].x.total_cmp(&points[b as usize].x));
+    let mut out = vec![None; points.len()];
+    for tri in triangles {
+        let [Some(a), Some(b), Some(c)] = tri.map(|v| positions.get(v as usize).map(|p| DVec3::from_array(*p))) else {
+            continue;
+        };
+        let c = [a, b, c];
+        let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+        let first = by_x.partition_point(|&i| points[i as usize].x < lo.x);
+        for &i in by_x[first..].iter().take_while(|&&i| points[i as usize].x <= hi.x) {
+            let p = points[i as usize];
+            if out[i as usize].is_none() && p.y >= lo.y && p.y <= hi.y && corners_contain(&c, p) {
+                // A triangle of zero area (none in a valid mesh) gives no height.
+                out[i as usize] = Some(plane_height(&c, p)).filter(|h| h.is_finite());
+            }
+        }
+    }
+    out
+}
+
 /// One triangle as the walk sees it: corner positions, vertex ids (of the [`Tin`]) and neighbours (walk indices,
 /// [`NO_NEIGHBOUR`] on the boundary), in one record so that a walk step touches one place in memory.
 #[derive(Clone, Copy, Debug)]
@@ -416,6 +445,33 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// The one-pass heights agree with the locator's: the same footprint (`None` exactly outside it, the L's notch
+        /// included) and the same plane up to rounding (on a shared edge both triangles' planes hold the point).
+        #[test]
+        fn ground_heights_agree_with_the_locator(
+            n in 2usize..9,
+            points in proptest::collection::vec((-1.0f64..9.0, -1.0f64..9.0), 1..40),
+        ) {
+            let tin = grid_tin(n);
+            let loc = Locator::new(&tin);
+            let mut xy: Vec<DVec2> = points.iter().map(|&(x, y)| DVec2::new(x, y)).collect();
+            // Vertices and edge midpoints too, and a NaN.
+            xy.extend(tin.positions().iter().take(5).map(|p| p.truncate()));
+            xy.push(DVec2::new(0.5, 0.0));
+            xy.push(DVec2::new(f64::NAN, 1.0));
+            let positions: Vec<[f64; 3]> = tin.positions().iter().map(|p| p.to_array()).collect();
+            let heights = ground_heights(&positions, tin.triangles(), &xy);
+            for (p, h) in xy.iter().zip(heights) {
+                match (h, loc.ground_height(&tin, *p)) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) => proptest::prop_assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{p}: {a} {b}"),
+                    (a, b) => proptest::prop_assert!(false, "{p}: {a:?} {b:?}"),
+                }
+            }
+        }
+    }
+
     #[test]
     fn l_shape_is_not_convex() {
         // An L made of three unit squares.
@@ -428,5 +484,11 @@ mod tests {
         assert!(!loc.footprint_is_convex());
         assert_eq!(loc.locate(&tin, DVec2::new(1.5, 1.5)), None);
         assert_eq!(loc.locate(&tin, DVec2::new(1.5, 0.5)), Some(2));
+        let positions: Vec<[f64; 3]> = tin.positions().iter().map(|p| p.to_array()).collect();
+        let notch = [DVec2::new(1.5, 1.5), DVec2::new(1.5, 0.5), DVec2::new(1.0, 2.0)];
+        assert_eq!(
+            ground_heights(&positions, tin.triangles(), &notch),
+            vec![None, Some(0.0), Some(0.0)]
+        );
     }
 }
