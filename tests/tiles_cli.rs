@@ -210,7 +210,10 @@ fn errors_name_what_is_wrong() {
     let far = dir.path().join("plan.tiles").join("far-00004.bin");
     let bytes = std::fs::read(&far).expect("the plan writes every tile's far field");
     std::fs::write(&far, &bytes[..bytes.len() - 3]).expect("truncate");
-    fails_with(&["tiles", "build", s(&plan), "--tile", "4"], "far-00004.bin");
+    fails_with(
+        &["tiles", "build", s(&plan), "--tile", "4"],
+        "far-00004.bin: not a valid far field file: truncated",
+    );
     let mut flipped = bytes.clone();
     *flipped.last_mut().expect("bytes") ^= 1;
     std::fs::write(&far, &flipped).expect("flip");
@@ -228,6 +231,24 @@ fn errors_name_what_is_wrong() {
     fails_with(
         &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(dir.path())],
         "directory",
+    );
+    // A file where the plan's tiles folder goes: refused before the work, and left as it was.
+    std::fs::write(dir.path().join("p2.tiles"), "mine").expect("a file");
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&dir.path().join("t.npy")),
+            "-o",
+            s(&dir.path().join("p2.json")),
+        ],
+        "something that is not a folder is there",
+    );
+    assert!(!dir.path().join("p2.json").exists());
+    assert_eq!(std::fs::read(dir.path().join("p2.tiles")).expect("kept"), b"mine");
+    fails_with(
+        &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(&plan), "--halo", "2.5"],
+        "\"2.5\" is not a whole number",
     );
     // The plan of t.npy named t.json would replace the grid's sidecar, which holds its spacing: refused.
     let sidecar = std::fs::read(dir.path().join("t.json")).expect("sidecar");

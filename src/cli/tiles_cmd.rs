@@ -60,17 +60,17 @@ pub struct PlanArgs {
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
     #[arg(short, long)]
     pub out: PathBuf,
-    /// Largest tile side, in sample intervals (a mesh: metres) [default: 512 samples; a mesh: 512 times its mean
-    /// vertex spacing, the side of a square of its area over its vertices]
-    #[arg(long)]
+    /// Largest tile side, in sample intervals (a mesh: whole metres) [default: 512 samples; a mesh: 512 times its
+    /// mean vertex spacing, the side of a square of its area over its vertices]
+    #[arg(long, value_name = "N", value_parser = parse_whole)]
     pub tile: Option<usize>,
     /// Width of the full-resolution halo around each tile whose samples its horizons see, in samples (a mesh:
-    /// metres, its vertices) [default: 16 samples; a mesh: 16 mean vertex spacings]
-    #[arg(long)]
+    /// whole metres, its vertices) [default: 16 samples; a mesh: 16 mean vertex spacings]
+    #[arg(long, value_name = "N", value_parser = parse_whole)]
     pub halo: Option<usize>,
     /// Side of the far field's blocks in samples: each contributes its lowest sample, lowered by --max-error (a
-    /// mesh: metres, its lowest vertex) [default: 16 samples; a mesh: 16 mean vertex spacings]
-    #[arg(long)]
+    /// mesh: whole metres, its lowest vertex) [default: 16 samples; a mesh: 16 mean vertex spacings]
+    #[arg(long, value_name = "N", value_parser = parse_whole)]
     pub far_block: Option<usize>,
     /// Far-field blocks double in size with distance, keeping each within about 1/R radian seen from the tile, so
     /// a tile's far field grows with the logarithm of the terrain, not its area; 0 keeps every block at
@@ -162,6 +162,15 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let tiles_dir = PathBuf::from(format!("{stem}.tiles"));
+    // The tiles' folder is made after the work: something else in its place is refused before it.
+    let dir = Plan::resolve(&args.out, &tiles_dir);
+    if dir.exists() && !dir.is_dir() {
+        bail!(
+            "{}: the plan's tiles go into this folder, and something that is not a folder is there; move it, or name \
+             the plan otherwise (-o)",
+            dir.display()
+        );
+    }
     let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
     if !is_dem(&args.dem) {
         super::mesh_input::refuse_dem_flags_for_mesh(&args.dem, &args.read, DEFAULT_DEM_VERTICES)?;
@@ -228,6 +237,13 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "far_points": far_points,
         "tiles_dir": dir,
     }))
+}
+
+/// Parses a length of a plan: a whole number of samples (a DEM) or metres (a mesh).
+fn parse_whole(s: &str) -> Result<usize, String> {
+    s.trim().parse::<usize>().map_err(|_| {
+        format!("{s:?} is not a whole number (0 or more): samples of a DEM, or whole metres of a mesh")
+    })
 }
 
 /// Declares the terrain file `dem` an input of `files`, with the JSON sidecar that a `.npy` grid is read with (`tiles

@@ -64,8 +64,9 @@ pub fn far_from_bytes(bytes: &[u8], grid: [usize; 2], name: &Path) -> Result<Vec
         .enumerate()
         .find(|(_, p)| p.row as usize >= grid[0] || p.col as usize >= grid[1] || !p.z.is_finite())
     {
-        return Err(TilesError::Plan {
+        return Err(TilesError::TileFile {
             path: name.to_path_buf(),
+            what: "far field",
             reason: format!(
                 "far-field point {} (row {}, column {}, 1-based; height {}) is not a sample of the {} x {} grid",
                 i + 1,

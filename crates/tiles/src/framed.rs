@@ -26,10 +26,11 @@ pub(crate) fn decode<T: DeserializeOwned>(
     magic: &[u8; 8],
     version: u32,
     path: &Path,
-    what: &str,
+    what: &'static str,
 ) -> Result<T, TilesError> {
-    let bad = |reason: String| TilesError::Plan {
+    let bad = |reason: String| TilesError::TileFile {
         path: path.to_path_buf(),
+        what,
         reason,
     };
     let (found, payload) = cull::file::unframe(bytes, magic).map_err(|e| bad(e.to_string()))?;

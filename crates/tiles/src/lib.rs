@@ -54,6 +54,16 @@ pub enum TilesError {
         /// What is wrong.
         reason: String,
     },
+    /// A file a plan wrote for its jobs (a mesh tile's part, a DEM tile's far field) is damaged or foreign.
+    #[error("{}: not a valid {what} file: {reason}", path.display())]
+    TileFile {
+        /// The file.
+        path: PathBuf,
+        /// What kind of file it should be ("part", "far field").
+        what: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
     /// Reading or simplifying the terrain failed.
     #[error(transparent)]
     Tin(#[from] tin::TinError),
