@@ -478,6 +478,13 @@ fn bad_input_gives_clear_errors() {
     fails_with(&["info", s(&write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1"))], "cut.obj:3");
     let nonmanifold = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3\nf 1 2 4\nf 1 2 5\n";
     fails_with(&["info", "--keep-faces", s(&write("nm.obj", nonmanifold))], "nm.obj");
+    // Faces cut short: the vertices no face uses are dropped, with a warning naming the file.
+    let cut = write("short.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3\n");
+    let warned = String::from_utf8_lossy(&ok(&["info", "--keep-faces", s(&cut)]).stderr).into_owned();
+    assert!(
+        warned.contains("short.obj: dropped 2 vertices that no face uses"),
+        "{warned}"
+    );
     fails_with(
         &["info", s(&write("foreign.obj", "\u{0}\u{1}binary garbage\n"))],
         "foreign.obj",

@@ -247,7 +247,15 @@ fn errors_name_what_is_wrong() {
     assert!(!dir.path().join("p2.json").exists());
     assert_eq!(std::fs::read(dir.path().join("p2.tiles")).expect("kept"), b"mine");
     fails_with(
-        &["tiles", "plan", s(&dir.path().join("t.npy")), "-o", s(&plan), "--halo", "2.5"],
+        &[
+            "tiles",
+            "plan",
+            s(&dir.path().join("t.npy")),
+            "-o",
+            s(&plan),
+            "--halo",
+            "2.5",
+        ],
         "\"2.5\" is not a whole number",
     );
     // The plan of t.npy named t.json would replace the grid's sidecar, which holds its spacing: refused.

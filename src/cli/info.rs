@@ -10,6 +10,10 @@ use super::{Output, OutputArgs};
 
 /// Arguments of `tincull info`.
 #[derive(Debug, Args)]
+#[command(mut_arg("mesh", |a| a.help(
+    "The terrain mesh (OBJ), a DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to --dem-vertices, or a \
+     hierarchy (.tch)"
+)))]
 pub struct InfoArgs {
     /// The mesh and how to import it.
     #[command(flatten)]

@@ -391,9 +391,13 @@ pub fn file_kind(path: &std::path::Path) -> FileKind {
     }
 }
 
-/// `path` with the extension `.tch`, for the command suggested to build a hierarchy of it.
-fn tch_beside(path: &std::path::Path) -> String {
-    path.with_extension("tch").display().to_string()
+/// The name `STEM.tch` (in the working folder) for the command suggested to build a hierarchy of `path`.
+fn tch_name(path: &std::path::Path) -> String {
+    // In the working folder: the terrain's own folder may be read-only data.
+    let name = path
+        .file_stem()
+        .map_or_else(|| "terrain".into(), |s| s.to_string_lossy().into_owned());
+    format!("{name}.tch")
 }
 
 /// Reads the hierarchy that a command takes as its input (`cull`, `eval`, `export`, `pvs`, `failmap`, `info`,
@@ -423,11 +427,11 @@ pub fn load_hierarchy(path: &std::path::Path) -> Result<cull::Hierarchy> {
         ),
         FileKind::ObjText => bail!(
             "{p} is an OBJ mesh, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
-            tch_beside(path)
+            tch_name(path)
         ),
         _ if is_dem(path) => bail!(
             "{p} is a DEM grid, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
-            tch_beside(path)
+            tch_name(path)
         ),
         _ if path
             .extension()
@@ -436,7 +440,7 @@ pub fn load_hierarchy(path: &std::path::Path) -> Result<cull::Hierarchy> {
         {
             bail!(
                 "{p} is named as an OBJ mesh, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
-                tch_beside(path)
+                tch_name(path)
             )
         }
         _ => Err(error.into()),
@@ -512,6 +516,14 @@ impl MeshArgs {
             out.warn(format!(
                 "dropped {} lower vertices sharing x,y with a higher one (--dedupe keep-highest)",
                 report.dropped_lower
+            ));
+        }
+        if report.unreferenced_dropped > 0 {
+            out.warn(format!(
+                "{}: dropped {} vertices that no face uses (--keep-faces keeps the file's triangles only; a file cut \
+                 short loses the faces after the cut)",
+                self.mesh.display(),
+                report.unreferenced_dropped
             ));
         }
         warn_if_y_up(&tin, &self.mesh, out);

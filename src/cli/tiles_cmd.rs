@@ -87,7 +87,8 @@ pub struct PlanArgs {
     /// Build parameters of every tile.
     #[command(flatten)]
     pub params: ParamArgs,
-    /// Read build parameters from this TOML file (keys as the long options, with underscores).
+    /// Read the build parameters (`--sectors`, `--seeds`, …) from this TOML file, keys as their long options with
+    /// underscores; the plan's own options (`--tile`, `--halo`, `--max-error`, …) are given on the command line.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Output flags.
@@ -241,9 +242,9 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
 
 /// Parses a length of a plan: a whole number of samples (a DEM) or metres (a mesh).
 fn parse_whole(s: &str) -> Result<usize, String> {
-    s.trim().parse::<usize>().map_err(|_| {
-        format!("{s:?} is not a whole number (0 or more): samples of a DEM, or whole metres of a mesh")
-    })
+    s.trim()
+        .parse::<usize>()
+        .map_err(|_| format!("{s:?} is not a whole number (0 or more): samples of a DEM, or whole metres of a mesh"))
 }
 
 /// Declares the terrain file `dem` an input of `files`, with the JSON sidecar that a `.npy` grid is read with (`tiles

@@ -798,7 +798,7 @@ fn read_georef<R: Read + Seek>(
             let Some((dx, dy)) = spacing else {
                 return Err(err(
                     "no GeoKeyDirectory tag (34735): a plain TIFF has no georeference; give the \
-                     sample spacing (`--spacing dx,dy` in metres: `tincull tin`, `tiles plan`) or write it as a GeoTIFF"
+                     sample spacing (`--spacing dx,dy`, in metres) or write it as a GeoTIFF"
                         .into(),
                 ));
             };

@@ -172,7 +172,7 @@ fn placement(path: &Path, rows: usize, cols: usize, opts: &DemOptions) -> Result
                 )
             } else {
                 format!(
-                    "no grid spacing: put a JSON sidecar {} with spacing_x_m and spacing_y_m (metres) next to it, or give `--spacing dx,dy` (`tincull tin`, `tiles plan`)",
+                    "no grid spacing: put a JSON sidecar {} with spacing_x_m and spacing_y_m (metres) next to it, or give `--spacing dx,dy` (metres)",
                     sidecar_path.display()
                 )
             },
