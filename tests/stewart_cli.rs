@@ -234,6 +234,33 @@ fn quadtree_build_eval_and_cull() {
         ],
         "method `thesis` does not use it",
     );
+    // Even at its default value: given, it would be ignored.
+    fails_with(
+        &[
+            "cull",
+            s(&crystal),
+            "--method",
+            "thesis",
+            "--work-budget",
+            "200000",
+            "--eye",
+            eye,
+        ],
+        "--work-budget 200000 is a parameter of the `safe` culler; method `thesis` does not use it",
+    );
+    fails_with(
+        &[
+            "cull",
+            s(&crystal),
+            "--method",
+            "stewart",
+            "--columns",
+            "256",
+            "--eye",
+            eye,
+        ],
+        "--columns 256 is a parameter of the `safe` and `lloyd-egbert` cullers",
+    );
     ok(&[
         "cull",
         s(&crystal),

@@ -14,12 +14,12 @@ use super::cull_cmd::parse_point;
 #[derive(Clone, Debug, Args)]
 pub struct SafeArgs {
     /// Safe and lloyd-egbert cullers: horizon columns per 90° face, a power of two from 2 to 65536 (more: finer
-    /// horizon, slower).
-    #[arg(long, default_value_t = 256, value_name = "N")]
-    pub columns: usize,
-    /// Safe culler: largest patch (triangles) it tests and draws below the hierarchy's leaves, 1 to 64.
-    #[arg(long, default_value_t = 16, value_name = "N")]
-    pub patch: usize,
+    /// horizon, slower) [default: 256].
+    #[arg(long, value_name = "N")]
+    pub columns: Option<usize>,
+    /// Safe culler: largest patch (triangles) it tests and draws below the hierarchy's leaves, 1 to 64 [default: 16].
+    #[arg(long, value_name = "N")]
+    pub patch: Option<usize>,
     /// Safe culler: most occluder edges written per cull, nearest first (bounds the cost of views that see
     /// much terrain; fewer occluders cull less, never wrongly). Unlimited by default.
     #[arg(long, value_name = "N")]
@@ -29,20 +29,21 @@ pub struct SafeArgs {
     /// stands, largest first, split up to N/8 more times and otherwise drawn whole: the cost of a cull is bounded
     /// whatever the view, at the price of drawing more in views that see much terrain (never of culling a visible
     /// triangle). The default caps views that see most of a 1M-vertex terrain (from the sky) and is not reached by
-    /// smaller or less open views; about 5000 kept a cull of a 1M-vertex terrain near 1 ms, drawing much more.
-    #[arg(long, default_value_t = cull::DEFAULT_WORK_BUDGET, value_name = "N")]
-    pub work_budget: usize,
+    /// smaller or less open views; about 5000 kept a cull of a 1M-vertex terrain near 1 ms, drawing much more
+    /// [default: 200000].
+    #[arg(long, value_name = "N")]
+    pub work_budget: Option<usize>,
     /// Safe culler: a visible node whose circle spans fewer than N horizon columns is drawn whole instead of being
     /// refined down to its patches, and writes only its two crests (bottleneck paths of its TIN edges, across x and
     /// across y) as occluders: cheaper culls of views that see much distant terrain, drawing more. 0 (the default)
     /// refines every visible node.
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub coarse_columns: usize,
+    #[arg(long, value_name = "N")]
+    pub coarse_columns: Option<usize>,
 }
 
 impl SafeArgs {
     /// An error when a parameter is given that `method` does not use (`--columns` by `thesis` and `stewart`, the
-    /// others by every method but `safe`), rather than ignoring it; a parameter at its default counts as not given.
+    /// others by every method but `safe`), rather than ignoring it, even at its default value.
     pub fn check_method(&self, method: CullMethod) -> Result<()> {
         let (columns, safe_only) = self.given();
         let unused = match method {
@@ -61,8 +62,7 @@ impl SafeArgs {
         Ok(())
     }
 
-    /// The first parameter given (not at its default), as written on the command line: `--columns`, then the safe
-    /// culler's own.
+    /// The first parameter given, as written on the command line: `--columns`, then the safe culler's own.
     pub fn first_given(&self) -> Option<String> {
         let (columns, safe_only) = self.given();
         columns.or(safe_only)
@@ -70,35 +70,34 @@ impl SafeArgs {
 
     /// `--columns` when given, and the first of the safe culler's own parameters given.
     fn given(&self) -> (Option<String>, Option<String>) {
-        let d = SafeParams::default();
-        let columns = (self.columns != d.columns_per_face).then(|| format!("--columns {}", self.columns));
+        let columns = self.columns.map(|n| format!("--columns {n}"));
         let safe_only = [
-            (self.patch != d.patch).then(|| format!("--patch {}", self.patch)),
+            self.patch.map(|n| format!("--patch {n}")),
             self.occluder_budget.map(|n| format!("--occluder-budget {n}")),
-            (self.work_budget != d.work_budget).then(|| format!("--work-budget {}", self.work_budget)),
-            (self.coarse_columns != d.coarse_columns).then(|| format!("--coarse-columns {}", self.coarse_columns)),
+            self.work_budget.map(|n| format!("--work-budget {n}")),
+            self.coarse_columns.map(|n| format!("--coarse-columns {n}")),
         ];
         (columns, safe_only.into_iter().flatten().next())
     }
 
     /// The parameters, checked.
     pub fn params(&self) -> Result<SafeParams> {
-        anyhow::ensure!(
-            self.columns.is_power_of_two() && (2..=65536).contains(&self.columns),
-            "--columns must be a power of two from 2 to 65536, got {}",
-            self.columns
+        let d = SafeParams::default();
+        let (columns, patch) = (
+            self.columns.unwrap_or(d.columns_per_face),
+            self.patch.unwrap_or(d.patch),
         );
         anyhow::ensure!(
-            (1..=64).contains(&self.patch),
-            "--patch must be from 1 to 64, got {}",
-            self.patch
+            columns.is_power_of_two() && (2..=65536).contains(&columns),
+            "--columns must be a power of two from 2 to 65536, got {columns}"
         );
+        anyhow::ensure!((1..=64).contains(&patch), "--patch must be from 1 to 64, got {patch}");
         Ok(SafeParams {
-            columns_per_face: self.columns,
-            patch: self.patch,
-            occluder_budget: self.occluder_budget.unwrap_or(usize::MAX),
-            work_budget: self.work_budget,
-            coarse_columns: self.coarse_columns,
+            columns_per_face: columns,
+            patch,
+            occluder_budget: self.occluder_budget.unwrap_or(d.occluder_budget),
+            work_budget: self.work_budget.unwrap_or(d.work_budget),
+            coarse_columns: self.coarse_columns.unwrap_or(d.coarse_columns),
         })
     }
 }
