@@ -142,7 +142,7 @@ pub struct BuildArgs {
     /// The mesh and how to import it.
     #[command(flatten)]
     pub mesh: MeshArgs,
-    /// Output hierarchy file (.tch).
+    /// Output hierarchy file (.tch; `-` for standard output, instead of the report, when it is not a terminal).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Build parameters.
@@ -243,7 +243,7 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     if let Some(config) = &args.config {
         files.input(config)?;
     }
-    files.check_or_stdout(&args.out, &mut out)?;
+    files.check_binary_or_stdout(&args.out, &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     if let Some(path) = &args.export_json {
         files.check_or_stdout(path, &mut out)?;

@@ -4,7 +4,7 @@
 //! its outputs. `-` is standard output where a command allows it (one output, and then the command's own text goes
 //! to stderr or nowhere).
 
-use std::io::{self, Write};
+use std::io::{self, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
@@ -61,6 +61,15 @@ impl Outputs {
         self.stdout_checked = true;
         out.quiet_text = true;
         Ok(())
+    }
+
+    /// [`Outputs::check_or_stdout`] for a binary output (a `.tch`): `-` is refused when standard output is a
+    /// terminal, which binary bytes would garble.
+    pub fn check_binary_or_stdout(&mut self, path: &Path, out: &mut Output) -> Result<()> {
+        if path == Path::new("-") && io::stdout().is_terminal() {
+            bail!("-: a hierarchy is binary and standard output is a terminal; redirect it (`-o - > FILE`) or give a file");
+        }
+        self.check_or_stdout(path, out)
     }
 
     /// Checks a grouped OBJ output (given with `flag`) and its `.mtl` (refused when the OBJ is named like its

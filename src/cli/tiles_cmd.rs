@@ -122,7 +122,7 @@ pub struct TileBuildArgs {
 pub struct MergeArgs {
     /// The plan whose tiles were built.
     pub plan: PathBuf,
-    /// The merged hierarchy (.tch).
+    /// The merged hierarchy (.tch; `-` for standard output, instead of the report, when it is not a terminal).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Output flags.
@@ -474,7 +474,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     for t in &plan.tiles {
         files.input(&Plan::resolve(&args.plan, &t.output))?;
     }
-    files.check_or_stdout(&args.out, &mut out)?;
+    files.check_binary_or_stdout(&args.out, &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     let start = Instant::now();
     // Every tile must be built before any is read.
