@@ -92,6 +92,9 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
     let text = ok(&args(&["--export-json", "-"])).stdout;
     let v: serde_json::Value = serde_json::from_slice(&text).expect("the evaluation's JSON on stdout");
     assert!(v["rows"].is_array());
+    // No occluder budget is `null`, not 2^64 − 1 (which a JSON reader in JavaScript cannot hold exactly).
+    assert!(v["options"]["safe"]["occluder_budget"].is_null(), "{}", v["options"]);
+    assert_eq!(v["options"]["safe"]["work_budget"], 200_000);
     let csv = String::from_utf8(ok(&args(&["--csv", "-"])).stdout).expect("UTF-8");
     assert!(csv.starts_with("method,class,"), "{csv}");
     assert!(

@@ -67,7 +67,9 @@ impl Outputs {
     /// terminal, which binary bytes would garble.
     pub fn check_binary_or_stdout(&mut self, path: &Path, out: &mut Output) -> Result<()> {
         if path == Path::new("-") && io::stdout().is_terminal() {
-            bail!("-: a hierarchy is binary and standard output is a terminal; redirect it (`-o - > FILE`) or give a file");
+            bail!(
+                "-: a hierarchy is binary and standard output is a terminal; redirect it (`-o - > FILE`) or give a file"
+            );
         }
         self.check_or_stdout(path, out)
     }

@@ -118,7 +118,9 @@ pub struct SafeParams {
     /// Largest patch (triangles) below the hierarchy's leaves: clamped to 1 ..= 64.
     pub patch: usize,
     /// Most occluder edges written into the horizon per cull, nearest first: bounds the cost of views that
-    /// see much of the terrain (fewer occluders only cull less, never wrongly).
+    /// see much of the terrain (fewer occluders only cull less, never wrongly). `usize::MAX`: unlimited (`null`
+    /// when serialized, which JSON readers hold exactly).
+    #[serde(with = "unlimited")]
     pub occluder_budget: usize,
     /// Most work units per cull: nodes tested while refining, occluder edges and chains written. Once spent, the
     /// culler stops refining and writing: every node still queued is tested against the horizon as it stands
@@ -127,6 +129,19 @@ pub struct SafeParams {
     /// A visible inner node whose circle spans fewer than this many columns (about `radius · columns / distance`)
     /// is drawn whole instead of refined, and writes its crests as occluders; 0 refines every visible node.
     pub coarse_columns: usize,
+}
+
+/// `usize::MAX` (no limit) serialized as `null`, and read back from `null` or a number.
+mod unlimited {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(n: &usize, s: S) -> Result<S::Ok, S::Error> {
+        (*n != usize::MAX).then_some(*n).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+        Ok(Option::<usize>::deserialize(d)?.unwrap_or(usize::MAX))
+    }
 }
 
 impl Default for SafeParams {
