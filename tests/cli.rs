@@ -1195,6 +1195,19 @@ fn messages_and_help_read_well() {
         ],
         "keep_faces",
     );
+    // A crystal key in the file with a quadtree grouping is named as the key it is, in its file.
+    std::fs::write(&config, "grouping = \"quadtree\"\nseeds = 5\n").expect("config");
+    fails_with(
+        &[
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            s(&tch),
+            "--config",
+            s(&config),
+        ],
+        &format!("`seeds` (in {}) applies to the crystal grouping", config.display()),
+    );
 }
 
 /// `info FILE.tch` checks the hierarchy's mesh as a height field, as `info MESH` does: a `.tch` whose mesh is not one

@@ -115,17 +115,33 @@ impl ParamArgs {
             Some("quadtree") => {
                 // The crystal grouping's parameters mean nothing to a quadtree: refused rather than ignored.
                 let crystal_only = [
-                    ("--seeds", self.seeds.or(from_file.seeds).is_some()),
+                    ("--seeds", self.seeds.is_some(), from_file.seeds.is_some()),
                     (
                         "--orphan-passes",
-                        self.orphan_passes.or(from_file.orphan_passes).is_some(),
+                        self.orphan_passes.is_some(),
+                        from_file.orphan_passes.is_some(),
                     ),
-                    ("--min-group", self.min_group.or(from_file.min_group).is_some()),
-                    ("--max-expanse", self.max_expanse.or(from_file.max_expanse).is_some()),
-                    ("--rng-seed", self.rng_seed.or(from_file.rng_seed).is_some()),
+                    ("--min-group", self.min_group.is_some(), from_file.min_group.is_some()),
+                    (
+                        "--max-expanse",
+                        self.max_expanse.is_some(),
+                        from_file.max_expanse.is_some(),
+                    ),
+                    ("--rng-seed", self.rng_seed.is_some(), from_file.rng_seed.is_some()),
                 ];
-                if let Some((flag, _)) = crystal_only.iter().find(|(_, given)| *given) {
-                    anyhow::bail!("{flag} applies to the crystal grouping; --grouping quadtree has no seeds to grow");
+                if let Some(&(flag, on_command_line, _)) = crystal_only.iter().find(|(_, cli, f)| *cli || *f) {
+                    // Named as the user gave it: a flag, or a key of the --config file.
+                    let given = match file {
+                        Some(path) if !on_command_line => {
+                            format!(
+                                "`{}` (in {})",
+                                flag.trim_start_matches('-').replace('-', "_"),
+                                path.display()
+                            )
+                        }
+                        _ => flag.to_string(),
+                    };
+                    anyhow::bail!("{given} applies to the crystal grouping; a quadtree grouping has no seeds to grow");
                 }
                 quadtree.validate()?;
                 p.grouping = Grouping::Quadtree(quadtree);
