@@ -158,8 +158,9 @@ pub fn merge_with(
             let z = positions[v as usize].z;
             if z.to_bits() != p[2].to_bits() {
                 return Err(TilesError::Parameter(format!(
-                    "tiles {first} and {i} ({}) disagree on the terrain's height at x {}, y {} ({z} and {}): they were \
-                     not built from the same terrain (the DEM changed between their builds?); plan and build them again",
+                    "tiles {first} and {i} ({}) disagree on the terrain's height at x {}, y {} ({z} and {}): they \
+                     were not built from the same terrain (the DEM changed between their builds?); plan and build \
+                     them again",
                     plan.tiles[i].output.display(),
                     p[0],
                     p[1],

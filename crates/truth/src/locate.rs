@@ -465,7 +465,9 @@ mod tests {
             for (p, h) in xy.iter().zip(heights) {
                 match (h, loc.ground_height(&tin, *p)) {
                     (None, None) => {}
-                    (Some(a), Some(b)) => proptest::prop_assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{p}: {a} {b}"),
+                    (Some(a), Some(b)) => {
+                        proptest::prop_assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{p}: {a} {b}")
+                    }
                     (a, b) => proptest::prop_assert!(false, "{p}: {a:?} {b:?}"),
                 }
             }
