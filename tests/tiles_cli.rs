@@ -76,7 +76,13 @@ fn tiles_of_an_earlier_plan_are_never_merged() {
             "-q",
         ])
     };
-    replan();
+    // The earlier plan's tiles stay (the user's to remove), with a warning.
+    let warned = String::from_utf8_lossy(&replan().stderr).into_owned();
+    assert!(
+        warned.contains(&format!("{} files of an earlier plan remain", before.len())),
+        "{warned}"
+    );
+    assert!(before.iter().all(|p| p.is_file()));
     let after = tile_outputs(&plan);
     assert_eq!(after.len(), before.len());
     assert!(before.iter().zip(&after).all(|(a, b)| a != b), "other names");

@@ -211,6 +211,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         files.commit()?;
         Ok(far_points)
     })?;
+    warn_of_earlier_files(&plan, &args.out, &dir, out);
     let (rows, cols) = plan
         .tiles
         .iter()
@@ -238,6 +239,43 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "far_points": far_points,
         "tiles_dir": dir,
     }))
+}
+
+/// Warns of the files of an earlier plan left in the tiles' folder `dir` (far fields, parts and tiles named as a plan
+/// names them, that `plan` does not name): the new plan never reads them, and they are the user's to remove (tiles
+/// may have taken hours to build, so nothing is deleted).
+fn warn_of_earlier_files(plan: &Plan, plan_path: &Path, dir: &Path, out: Output) {
+    let ours: std::collections::HashSet<PathBuf> = plan
+        .tiles
+        .iter()
+        .flat_map(|t| t.far.iter().chain(&t.part).chain(std::iter::once(&t.output)))
+        .filter_map(|p| Plan::resolve(plan_path, p).file_name().map(PathBuf::from))
+        .collect();
+    let planned_name = |name: &str| {
+        let digits = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_digit());
+        let hex = |s: &str| s.len() == 8 && s.bytes().all(|b| b.is_ascii_hexdigit());
+        let stem = |prefix: &str, ext: &str| name.strip_prefix(prefix).and_then(|r| r.strip_suffix(ext));
+        stem("far-", ".bin").is_some_and(|n| digits(n, 5))
+            || stem("part-", ".bin").is_some_and(|n| digits(n, 5))
+            || stem("tile-", ".tch")
+                .is_some_and(|n| digits(n, 5) || n.split_once('-').is_some_and(|(i, d)| digits(i, 5) && hex(d)))
+    };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut earlier: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| planned_name(n) && !ours.contains(Path::new(n)))
+        .collect();
+    earlier.sort();
+    if let Some(first) = earlier.first() {
+        out.warn(format!(
+            "{}: {} of an earlier plan remain (first {first}); this plan does not read them: remove them once their \
+             tiles are not needed",
+            dir.display(),
+            count(earlier.len(), "file")
+        ));
+    }
 }
 
 /// Parses a length of a plan: a whole number of samples (a DEM) or metres (a mesh).
@@ -323,6 +361,7 @@ fn plan_mesh(
         files.add_bytes(&args.out, plan.to_json()?.as_bytes())?;
         files.commit()
     })?;
+    warn_of_earlier_files(&plan, &args.out, &dir, out);
     let (rows, cols) = plan
         .tiles
         .iter()
