@@ -77,8 +77,9 @@ pub struct TileSpec {
     /// A DEM's tile: its far-field file ([`crate::far_field::far_to_bytes`]), relative to the plan's folder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub far: Option<PathBuf>,
-    /// A DEM's tile: the digest of the samples of its halo window as the plan read them ([`window_digest`]); its job
-    /// refuses a DEM whose window now reads otherwise. `None` in a plan made before it was kept (not checked).
+    /// A DEM's tile: the CRC-32 of the samples of its halo window as the plan read them (row by row, each sample's
+    /// f64 bits little-endian, every NaN as one NaN); its job refuses a DEM whose window now reads otherwise. `None`
+    /// in a plan made before it was kept (not checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub window_digest: Option<u32>,
     /// A mesh's tile: what its part holds, which the merge checks each built tile against.
