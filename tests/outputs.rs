@@ -245,7 +245,7 @@ fn text_to_a_reader_that_goes_away_ends_quietly_too() {
     let tch = dir.path().join("h.tch");
     ok(&["build", "-q", p(&mesh(SMALL)), "-o", p(&tch)]);
     let eyes = dir.path().join("eyes.txt");
-    let lines: String = (0..20_000).map(|i| format!("{},{},500\n", i % 900, i / 900)).collect();
+    let lines: String = (0..20_000).map(|i| format!("{},{},5000\n", i % 900, i / 900)).collect();
     fs::write(&eyes, lines).expect("eyes");
     // Like `tincull cull h.tch --eyes eyes.txt | head -1`: one line of text per eye.
     let mut child = Command::new(env!("CARGO_BIN_EXE_tincull"))
