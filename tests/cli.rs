@@ -194,6 +194,10 @@ fn a_y_up_mesh_gets_a_hint() {
     // And the DEM-only flags for a mesh.
     let obj = mesh("jacksboro-2k.obj");
     fails_with(&["info", s(&obj), "--z-scale", "3"], "--z-scale 3 applies to DEM grids");
+    // A height scale that would flatten or poison the terrain is refused by name, before anything is read.
+    for bad in ["0", "-0", "NaN", "inf"] {
+        fails_with(&["info", s(&obj), "--z-scale", bad], "'--z-scale <Z_SCALE>'");
+    }
     fails_with(&["info", s(&obj), "--band", "2"], "--band 2 applies to DEM grids");
     fails_with(
         &["build", s(&obj), "--spacing", "1,1", "-o", s(&dir.path().join("g.tch"))],

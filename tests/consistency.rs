@@ -33,6 +33,11 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
         "--json",
     ]);
     assert_eq!(v["viewpoints_per_class"], 1);
+    // The culler's parameters are reported, the defaults included, with the unlimited occluder budget as null.
+    let d = cull::SafeParams::default();
+    assert_eq!(v["culler_params"]["columns_per_face"], d.columns_per_face, "{v}");
+    assert_eq!(v["culler_params"]["work_budget"], d.work_budget, "{v}");
+    assert!(v["culler_params"]["occluder_budget"].is_null(), "{v}");
     assert!(v["rows"].as_array().is_some_and(|r| !r.is_empty()));
     let file: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).expect("file")).expect("JSON file");
     assert!(file["rows"].is_array());
@@ -40,6 +45,22 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
     let hj = dir.path().join("h.json");
     let v = json(&["export", s(&tch), "--export-json", s(&hj), "--json"]);
     assert_eq!(v["json"], s(&hj));
+    // Formats not asked for are null, whatever their kind; the files written beside one are named.
+    assert!(v["obj"].is_null() && v["mtl"].is_null() && v["gltf"].is_null(), "{v}");
+    let (obj, gltf) = (dir.path().join("g.obj"), dir.path().join("g.gltf"));
+    let v = json(&[
+        "export",
+        s(&tch),
+        "--export-obj",
+        s(&obj),
+        "--export-gltf",
+        s(&gltf),
+        "--json",
+    ]);
+    assert_eq!(v["obj"], s(&obj));
+    assert_eq!(v["mtl"], s(&dir.path().join("g.mtl")));
+    assert_eq!(v["gltf"], serde_json::json!([s(&gltf), s(&dir.path().join("g.bin"))]));
+    assert!(v["json"].is_null(), "{v}");
     // `-` puts the hierarchy's JSON on stdout; with --json both would go there.
     let text = ok(&["export", s(&tch), "--export-json", "-"]).stdout;
     let h: serde_json::Value = serde_json::from_slice(&text).expect("the hierarchy's JSON on stdout");

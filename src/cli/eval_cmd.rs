@@ -164,6 +164,9 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         "viewpoints_per_class": opts.viewpoints,
         "view_seed": opts.view_seed,
         "fov_deg": opts.fov_deg,
+        // The horizon cullers' parameters (`columns_per_face` is `lloyd-egbert`'s too), as in `--export-json`'s
+        // `options.safe`.
+        "culler_params": opts.safe,
         "ground_truth_seconds_per_viewpoint": e.ground_truth_seconds_per_viewpoint,
         "rows": e.rows,
     }))

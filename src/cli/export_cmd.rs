@@ -80,10 +80,12 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     if let Some(path) = &args.export_obj {
         out.say(format!("wrote {} and its .mtl", path.display()));
     }
+    // Every format is `null` when not asked for; the OBJ's `.mtl` and the glTF's `.bin` are named beside it.
     out.json(&serde_json::json!({
         "hierarchy": args.hierarchy,
         "json": args.export_json,
         "obj": args.export_obj,
-        "gltf": gltf_written,
+        "mtl": args.export_obj.as_deref().map(pipeline::export::mtl_path).transpose()?.map(|(mtl, _)| mtl),
+        "gltf": args.export_gltf.as_ref().map(|_| gltf_written),
     }))
 }

@@ -149,8 +149,9 @@ pub struct DemArgs {
     /// for .png and a plain TIFF).
     #[arg(long, value_parser = parse_spacing)]
     pub spacing: Option<(f64, f64)>,
-    /// Multiply a DEM grid's heights by this (for .png: metres per grey level).
-    #[arg(long, default_value_t = 1.0)]
+    /// Multiply a DEM grid's heights by this (for .png: metres per grey level); finite and non-zero (negative
+    /// flips the terrain).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_z_scale, allow_hyphen_values = true)]
     pub z_scale: f64,
     /// The elevation band (1-based) of a multi-band GeoTIFF.
     #[arg(long)]
@@ -176,6 +177,14 @@ impl DemArgs {
             z_scale: self.z_scale,
             band: self.band,
         }
+    }
+}
+
+fn parse_z_scale(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(z) if z.is_finite() && z != 0.0 => Ok(z),
+        Ok(_) => Err(format!("{s}: the height scale must be finite and non-zero")),
+        Err(_) => Err(format!("{s:?} is not a number")),
     }
 }
 

@@ -125,7 +125,7 @@ pub struct Mesh {
 pub struct BuildInfo {
     /// Subsectors per sector used for the horizons.
     pub subsectors: u32,
-    /// Crystal seeds of the first pass.
+    /// Crystal seeds of the first pass (this and the next four fields are the crystal grouping's: 0 for a quadtree).
     pub seeds: u32,
     /// Orphan passes allowed.
     pub orphan_passes: u32,
@@ -145,7 +145,11 @@ pub struct BuildInfo {
 
 /// How a hierarchy's nodes were formed; it decides which region test the nodes are meant for
 /// ([`crate::CullMethod::Thesis`] or [`crate::CullMethod::Stewart`]).
+///
+/// In JSON it is named as on the command line: `"crystal"`, or `{"quadtree": {"built_depth": …, "stored_depth": …}}`
+/// (the binary `.tch` stores the variant's index, not its name).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Grouping {
     /// Crystal groups and their merge hierarchy (the thesis, 5.2.3 and 6.3). Must stay variant 0: see
     /// [`crate::file`].

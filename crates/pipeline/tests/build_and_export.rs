@@ -28,6 +28,21 @@ fn build_report_matches_the_hierarchy() {
 fn json_round_trip_is_identity() {
     let h = built().hierarchy;
     assert_eq!(from_json(&to_json(&h).expect("json")).expect("parses"), h);
+    // The grouping is named as on the command line, and both kinds round trip.
+    let v: serde_json::Value = serde_json::from_str(&to_json(&h).expect("json")).expect("JSON");
+    assert_eq!(v["build"]["grouping"], "crystal");
+    let mut quad = h.clone();
+    quad.build.grouping = cull::Grouping::Quadtree {
+        built_depth: 3,
+        stored_depth: 2,
+    };
+    let text = to_json(&quad).expect("json");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(
+        v["build"]["grouping"],
+        serde_json::json!({"quadtree": {"built_depth": 3, "stored_depth": 2}})
+    );
+    assert_eq!(from_json(&text).expect("parses").build.grouping, quad.build.grouping);
     let mut broken = h.clone();
     broken.roots.push(broken.nodes.len() as u32);
     let text = to_json(&broken).expect("json");
