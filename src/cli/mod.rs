@@ -68,7 +68,8 @@ pub enum Command {
     Horizon(horizon_cmd::HorizonArgs),
     /// Build the occlusion hierarchy of a terrain: horizons, regions, crystal groups, merge hierarchy (.tch).
     Build(build_cmd::BuildArgs),
-    /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing.
+    /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing (the median
+    /// of 15 culls after a warm-up, each viewpoint).
     Cull(cull_cmd::CullArgs),
     /// Evaluate every culling method against ground truth from seeded viewpoints: false culls, occlusion captured.
     Eval(eval_cmd::EvalArgs),
