@@ -164,6 +164,101 @@ fn sweep_without_per_triangle_has_five_methods() {
     assert!(!text.contains("per_triangle"));
 }
 
+/// A resume never takes a damaged file's combinations for finished ones: a lost line, or a last line cut short
+/// (an interrupted write), runs that combination again (with a warning) and restores the file; a field that is not
+/// a number and a repeated line are refused by line, and the file is left as it is.
+#[test]
+fn sweep_resume_reruns_incomplete_combinations_and_refuses_damaged_lines() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("s.csv");
+    let args = ["--sectors", "4,8", "--subsectors", "1", "--no-per-triangle"];
+    assert_eq!(sweep(&csv, &args)["ran"], 2);
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 2 * 5 * 3);
+    // Timings differ from run to run: compare the lines without them.
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let timing: Vec<usize> = ["horizon_seconds", "regions_seconds", "grouping_seconds", "cull_ns"]
+        .iter()
+        .map(|n| header.iter().position(|h| h == n).expect("timing column"))
+        .collect();
+    let strip = |t: &str| -> Vec<String> {
+        t.lines()
+            .map(|l| {
+                let f: Vec<&str> = l
+                    .split(',')
+                    .enumerate()
+                    .filter(|(i, _)| !timing.contains(i))
+                    .map(|(_, f)| f)
+                    .collect();
+                f.join(",")
+            })
+            .collect()
+    };
+    let resume = |damaged: &str| {
+        std::fs::write(&csv, damaged).expect("write");
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_tincull"));
+        cmd.args(["sweep", mesh("jacksboro-2k.obj").to_str().expect("path")])
+            .args(["--viewpoints", "1", "--classes", "low,ridge", "--json", "-o"])
+            .arg(&csv)
+            .args(args);
+        cmd.output().expect("runs")
+    };
+
+    // A line lost (the last one, and one in the middle of the first combination): that combination runs again.
+    for lost in [lines.len() - 1, 3] {
+        let kept: Vec<&str> = lines
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != lost)
+            .map(|(_, l)| *l)
+            .collect();
+        let o = resume(&(kept.join("\n") + "\n"));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{stderr}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        assert_eq!(
+            (v["ran"].as_u64(), v["skipped"].as_u64()),
+            (Some(1), Some(1)),
+            "line {lost} lost"
+        );
+        assert!(stderr.contains("incomplete: run again"), "{stderr}");
+        let sectors = if lost == 3 { "sectors 4" } else { "sectors 8" };
+        assert!(stderr.contains(sectors), "{stderr}");
+        assert_eq!(strip(&std::fs::read_to_string(&csv).expect("csv")), strip(&text));
+    }
+    // The last line cut short, without its newline: left out with a warning, its combination run again.
+    let cut = &text[..text.len() - 8];
+    let o = resume(cut);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("line {} is cut short", lines.len())),
+        "{stderr}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["ran"], 1);
+    assert_eq!(strip(&std::fs::read_to_string(&csv).expect("csv")), strip(&text));
+
+    // A field that is not a number, and a repeated line: refused by line (and column), the file untouched.
+    let column = timing[0];
+    let mut fields: Vec<&str> = lines[2].split(',').collect();
+    fields[column] = "abc";
+    let bad_field = fields.join(",");
+    let not_a_number = text.replacen(lines[2], &bad_field, 1);
+    let repeated = format!("{text}{}\n", lines[5]);
+    for (damaged, says) in [
+        (not_a_number, format!("line 3, column {} (horizon_seconds)", column + 1)),
+        (repeated, format!("line {}: a second line", lines.len() + 1)),
+    ] {
+        let o = resume(&damaged);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{says}: resumed");
+        assert!(stderr.contains(&says) && stderr.contains("s.csv"), "{says}: {stderr}");
+        assert_eq!(std::fs::read_to_string(&csv).expect("csv"), damaged);
+    }
+}
+
 #[test]
 fn sweep_rejects_bad_lists() {
     let dir = tempfile::tempdir().expect("temp dir");

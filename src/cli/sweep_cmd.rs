@@ -1,7 +1,8 @@
 //! `tincull sweep`: build and evaluate every combination of sectors, subsectors, seeds and random seeds; one CSV
 //! line per combination, method and class (see [`eval::sweep`]). Resumable: combinations already in the file are
 //! skipped, and the file is rewritten atomically after each combination; a file written for another setup (mesh,
-//! build options, evaluation) is refused ([`eval::sweep::setup_digest`]).
+//! build options, evaluation) is refused ([`eval::sweep::setup_digest`]), and so is one with a malformed field or a
+//! repeated line. A combination that lost lines (or a last line cut short) is reported and run again.
 
 use super::output::count;
 use std::path::PathBuf;
@@ -17,7 +18,7 @@ use super::files::write_one;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
 use eval::evaluate::{EvalOptions, GroundTruthSet};
-use eval::sweep::{SweepSpec, SweepTable, parse_list, run_combo, setup_digest};
+use eval::sweep::{SweepSpec, SweepTable, expected_rows, parse_list, run_combo, setup_digest};
 
 /// Arguments of `tincull sweep`.
 #[derive(Debug, Args)]
@@ -198,6 +199,32 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     let (combos, notes) = spec.combos(tin.num_triangles());
     for n in &notes {
         out.warn(n);
+    }
+    if let Some(line) = table.truncated_line() {
+        out.warn(format!(
+            "{}: line {line} is cut short (an interrupted write?): left out, its combination is incomplete",
+            args.out.display()
+        ));
+    }
+    // A combination that lost a line (or holds another evaluation's) is run again when this run's ranges hold it,
+    // else kept as it is for a run that does.
+    for key in table.incomplete(&expected_rows(&spec.base, &eval)) {
+        let name = format!(
+            "{}: sectors {} x subsectors {} (seeds {}, rng seed {})",
+            args.out.display(),
+            key.sectors,
+            key.subsectors,
+            key.seeds,
+            key.rng_seed
+        );
+        if combos.iter().any(|c| c.key == key) {
+            table.remove(&key);
+            out.warn(format!("{name}: its lines are incomplete: run again"));
+        } else {
+            out.warn(format!(
+                "{name}: its lines are incomplete, and it is not in this run's ranges: kept as it is"
+            ));
+        }
     }
     let todo: Vec<_> = combos.iter().filter(|c| !table.contains(&c.key)).collect();
     let skipped = combos.len() - todo.len();

@@ -321,6 +321,23 @@ pub fn frustum_only(h: &Hierarchy) -> Hierarchy {
     f
 }
 
+/// The names of the methods [`standard_methods`] gives, in [`METHODS`] order: the region test is `stewart` for a
+/// quadtree build and `thesis` otherwise, and `per_triangle` is scored only when asked for. [`score`] writes one row
+/// per name and class, in this order.
+pub fn standard_method_names(quadtree: bool, per_triangle: bool) -> Vec<&'static str> {
+    let regions = if quadtree {
+        CullMethod::Stewart
+    } else {
+        CullMethod::Thesis
+    };
+    let mut names = vec![CullMethod::Safe.name(), CullMethod::LloydEgbert.name(), regions.name()];
+    if per_triangle {
+        names.push("per_triangle");
+    }
+    names.extend(["frustum_only", "none"]);
+    names
+}
+
 /// The methods of [`METHODS`] for a hierarchy `h` whose triangle `i` is triangle `order[i]` of the scored TIN
 /// (`None`: same order), and an optional per-triangle hierarchy in the TIN's own order.
 pub fn standard_methods<'a>(

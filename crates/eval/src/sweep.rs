@@ -10,7 +10,8 @@
 //! - The results are a CSV table, one line per combination × method × class (the classes, then `all`). Lines are
 //!   kept sorted by the combination's key `(sectors, subsectors, seeds, rng_seed, viewpoints)`, then in the
 //!   evaluation's method and class order, so the file's order does not depend on the order the combinations ran in.
-//! - A sweep resumes: combinations whose key is already in the file are not run again. The key leaves out the
+//! - A sweep resumes: combinations whose key is already in the file with every line are not run again (one that
+//!   lost a line is run again; a malformed field or a repeated line is refused). The key leaves out the
 //!   viewpoint classes, the viewpoint seed and the field of view: resume only with the same ones.
 //! - Combinations the horizon sweep rejects (fewer than 4 sectors, no subsectors, `s·k` above the limit) are skipped
 //!   with a note rather than failing the sweep.
@@ -26,7 +27,9 @@ use anyhow::{Context, Result, bail};
 use horizon::SectorConfig;
 use tin::Tin;
 
-use crate::evaluate::{EvalOptions, Evaluation, GroundTruthSet, Leaves, score, standard_methods};
+use crate::evaluate::{
+    EvalOptions, Evaluation, GroundTruthSet, Leaves, score, standard_method_names, standard_methods,
+};
 use pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
 
 /// The header line of a sweep CSV (without the newline).
@@ -225,6 +228,58 @@ pub fn csv_lines(key: &SweepKey, report: &BuildReport, e: &Evaluation) -> Vec<St
         .collect()
 }
 
+/// The (method, class) of each line a combination of a sweep writes, in the file's order: the methods of
+/// [`standard_method_names`] for the sweep's grouping, each with the evaluation's classes then `all`.
+pub fn expected_rows(base: &BuildParams, eval: &EvalOptions) -> Vec<(String, String)> {
+    let classes: Vec<String> = eval
+        .classes
+        .iter()
+        .map(|c| c.name().to_string())
+        .chain(["all".to_string()])
+        .collect();
+    standard_method_names(
+        matches!(base.grouping, pipeline::Grouping::Quadtree(_)),
+        eval.per_triangle,
+    )
+    .into_iter()
+    .flat_map(|m| classes.iter().map(move |c| (m.to_string(), c.clone())))
+    .collect()
+}
+
+/// The index of the `method` column in [`HEADER`] (`class` follows it).
+const METHOD_COLUMN: usize = 17;
+
+/// What a column of a sweep file holds, for checking a file read back.
+#[derive(Clone, Copy, PartialEq)]
+enum Column {
+    /// A whole number.
+    Count,
+    /// A number.
+    Number,
+    /// A number, or empty where the evaluation has none (e.g. no hidden triangle).
+    MaybeNumber,
+    /// A method or class name.
+    Name,
+}
+
+/// The kind of each column of [`HEADER`], by name.
+fn column_kind(name: &str) -> Column {
+    match name {
+        "horizon_seconds" | "regions_seconds" | "grouping_seconds" | "cull_ns" | "visible_fraction"
+        | "drawn_fraction" => Column::Number,
+        "false_culls_mean"
+        | "false_culls_max"
+        | "false_cull_area_mean"
+        | "occlusion_captured_mean"
+        | "occlusion_captured_p50"
+        | "overdraw_mean"
+        | "triangles_drawn_mean"
+        | "leaf_limit" => Column::MaybeNumber,
+        "method" | "class" | "setup" => Column::Name,
+        _ => Column::Count,
+    }
+}
+
 /// The lines of a sweep file, grouped by combination.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SweepTable {
@@ -232,12 +287,18 @@ pub struct SweepTable {
     rows: BTreeMap<SweepKey, Vec<String>>,
     /// The setup of every line ([`setup_digest`]); `None` for an empty table.
     setup: Option<String>,
+    /// The number of a last line that was cut short (no newline: a write that was interrupted), left out of the
+    /// table.
+    truncated: Option<usize>,
 }
 
 impl SweepTable {
-    /// Reads a sweep file's text; the header must be [`HEADER`]. Errors name the offending line.
+    /// Reads a sweep file's text; the header must be [`HEADER`], every field must hold what its column does, and a
+    /// combination may not have two lines for one method and class. Errors name the offending line and column. A
+    /// last line cut short (no final newline) is left out and reported by
+    /// [`SweepTable::truncated_line`]: its combination is then incomplete ([`SweepTable::incomplete`]).
     pub fn parse(text: &str) -> Result<SweepTable> {
-        let mut lines = text.lines().enumerate();
+        let mut lines = text.lines().enumerate().peekable();
         let mut table = SweepTable::default();
         match lines.next() {
             None => return Ok(table),
@@ -248,15 +309,41 @@ impl SweepTable {
                 h.chars().take(60).collect::<String>()
             ),
         }
-        let columns = HEADER.split(',').count();
-        for (i, line) in lines {
+        let names: Vec<&str> = HEADER.split(',').collect();
+        let columns = names.len();
+        // Where each (combination, method, class) was first seen, to name both lines of a repeat.
+        let mut seen: BTreeMap<(SweepKey, String, String), usize> = BTreeMap::new();
+        while let Some((i, line)) = lines.next() {
             let line = line.trim_end();
             if line.is_empty() {
                 continue;
             }
+            // Every line is written with its newline (and the file replaced at once): a last line without one was
+            // cut short, even where what is left of it would parse (a cut inside a number).
+            if lines.peek().is_none() && !text.ends_with('\n') {
+                table.truncated = Some(i + 1);
+                break;
+            }
             let fields: Vec<&str> = line.split(',').collect();
             if fields.len() != columns {
                 bail!("line {}: {} fields, expected {columns}", i + 1, fields.len());
+            }
+            for (j, (field, name)) in fields.iter().zip(&names).enumerate() {
+                let ok = match column_kind(name) {
+                    Column::Count => field.parse::<u64>().is_ok(),
+                    Column::Number => field.parse::<f64>().is_ok_and(f64::is_finite),
+                    Column::MaybeNumber => field.is_empty() || field.parse::<f64>().is_ok_and(f64::is_finite),
+                    Column::Name => !field.is_empty(),
+                };
+                if !ok {
+                    let what = match column_kind(name) {
+                        Column::Count => "a whole number",
+                        Column::Number => "a finite number",
+                        Column::MaybeNumber => "a finite number or empty",
+                        Column::Name => "a name",
+                    };
+                    bail!("line {}, column {} ({name}): {field:?} is not {what}", i + 1, j + 1);
+                }
             }
             let setup = fields[columns - 1];
             match &table.setup {
@@ -279,10 +366,52 @@ impl SweepTable {
                 rng_seed: field(3)?,
                 viewpoints: field(4)? as usize,
             };
+            let row = (
+                key,
+                fields[METHOD_COLUMN].to_string(),
+                fields[METHOD_COLUMN + 1].to_string(),
+            );
+            if let Some(first) = seen.insert(row.clone(), i + 1) {
+                bail!(
+                    "line {}: a second line for method {} and class {} of sectors {} x subsectors {} (the first is \
+                     line {first}); remove one",
+                    i + 1,
+                    row.1,
+                    row.2,
+                    key.sectors,
+                    key.subsectors
+                );
+            }
             let data = &line[..line.len() - setup.len() - 1];
             table.rows.entry(key).or_default().push(data.to_string());
         }
         Ok(table)
+    }
+
+    /// The line number of a last line that was cut short and left out by [`SweepTable::parse`], if any.
+    pub fn truncated_line(&self) -> Option<usize> {
+        self.truncated
+    }
+
+    /// The combinations whose lines are not exactly `expected`, the (method, class) of each line in order (as
+    /// [`expected_rows`] gives them): a line lost or cut short, or lines of another evaluation.
+    pub fn incomplete(&self, expected: &[(String, String)]) -> Vec<SweepKey> {
+        self.rows
+            .iter()
+            .filter(|(_, lines)| {
+                lines.len() != expected.len()
+                    || lines.iter().zip(expected).any(|(line, (method, class))| {
+                        let mut f = line.split(',').skip(METHOD_COLUMN);
+                        f.next() != Some(method.as_str()) || f.next() != Some(class.as_str())
+                    })
+            })
+            .map(|(k, _)| *k)
+            .collect()
+    }
+
+    /// Drops the lines of the combination `key` (to run it again).
+    pub fn remove(&mut self, key: &SweepKey) {
+        self.rows.remove(key);
     }
 
     /// Takes `setup` as this table's: refused when its lines were written for another one.
@@ -419,6 +548,13 @@ mod tests {
         }
     }
 
+    /// A line of the combination `8,2,10,1,2` for `method` and `class`, without its setup column.
+    fn line(method: &str, class: &str) -> String {
+        format!(
+            "8,2,10,1,2,100,180,0.1,0.2,0.3,720,4,1,2,9,3,2,{method},{class},2,0,0,0,0,0.5,0.5,1.2,90,1500,0.1,0.5,"
+        )
+    }
+
     #[test]
     fn table_round_trips_and_rejects_foreign_files() {
         let key = SweepKey {
@@ -429,12 +565,16 @@ mod tests {
             viewpoints: 2,
         };
         // A combination's lines hold every column but the last, the setup, which the table writes.
-        let line = format!("8,2,10,1,2{}", ",x".repeat(HEADER.split(',').count() - 6));
+        let one = line("safe", "all");
+        assert_eq!(one.split(',').count(), HEADER.split(',').count() - 1);
         let mut t = SweepTable::default();
-        t.insert(key, vec![line.clone()]);
+        t.insert(key, vec![one.clone()]);
         t.adopt("0badcafe").unwrap();
         let text = t.to_csv();
-        assert!(text.ends_with(",x,0badcafe\n"), "{text}");
+        assert!(
+            text.ends_with(",all,2,0,0,0,0,0.5,0.5,1.2,90,1500,0.1,0.5,,0badcafe\n"),
+            "{text}"
+        );
         let mut back = SweepTable::parse(&text).unwrap();
         assert_eq!(back, t);
         assert!(back.contains(&key));
@@ -447,16 +587,84 @@ mod tests {
                 .contains("another sweep setup")
         );
         back.adopt("0badcafe").unwrap();
-        let mixed = format!(
-            "{text}{}\n",
-            text.lines().nth(1).unwrap().replace("0badcafe", "12345678")
+        let mixed = format!("{text}{}\n", line("none", "all") + ",12345678");
+        assert!(
+            SweepTable::parse(&mixed)
+                .unwrap_err()
+                .to_string()
+                .contains("line 3: setup")
         );
-        assert!(SweepTable::parse(&mixed).unwrap_err().to_string().contains("line 3"));
         assert!(SweepTable::parse("a,b\n").unwrap_err().to_string().contains("line 1"));
         let short = format!("{HEADER}\n1,2,3\n");
         assert!(SweepTable::parse(&short).unwrap_err().to_string().contains("line 2"));
-        let bad = format!("{HEADER}\n{}\n", line.replacen('8', "eight", 1));
+        let bad = format!("{HEADER}\n{}x\n", one.replacen('8', "eight", 1));
         assert!(SweepTable::parse(&bad).unwrap_err().to_string().contains("line 2"));
+    }
+
+    /// Damage a resume must not take for a finished combination: a field that is not a number is refused by line
+    /// and column, a repeated line by both its lines, a lost line makes the combination incomplete, and a last line
+    /// cut short (no newline) is left out as an interrupted write.
+    #[test]
+    fn damaged_files_are_refused_or_their_combinations_incomplete() {
+        let key = SweepKey {
+            sectors: 8,
+            subsectors: 2,
+            seeds: 10,
+            rng_seed: 1,
+            viewpoints: 2,
+        };
+        let expected: Vec<(String, String)> = [("safe", "low"), ("safe", "all"), ("none", "low"), ("none", "all")]
+            .iter()
+            .map(|(m, c)| (m.to_string(), c.to_string()))
+            .collect();
+        let lines: Vec<String> = expected.iter().map(|(m, c)| format!("{},s", line(m, c))).collect();
+        let text = format!("{HEADER}\n{}\n", lines.join("\n"));
+        let whole = SweepTable::parse(&text).unwrap();
+        assert_eq!(whole.incomplete(&expected), vec![]);
+        assert_eq!(whole.truncated_line(), None);
+
+        // A value that is not a number, in a count column and in a number column.
+        for (from, to, column) in [
+            (",720,", ",abc,", "column 11 (visibility_bytes)"),
+            (",0.1,0.2,", ",abc,0.2,", "column 8 (horizon_seconds)"),
+            (",1500,", ",inf,", "column 29 (cull_ns)"),
+        ] {
+            let bad = text.replacen(from, to, 1);
+            let e = SweepTable::parse(&bad).unwrap_err().to_string();
+            assert!(e.contains("line 2") && e.contains(column), "{to}: {e}");
+        }
+        // An empty method name.
+        let e = SweepTable::parse(&text.replacen(",safe,", ",,", 1))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2, column 18 (method)"), "{e}");
+        // A repeated line.
+        let repeated = format!("{text}{}\n", lines[1]);
+        let e = SweepTable::parse(&repeated).unwrap_err().to_string();
+        assert!(
+            e.contains("line 6") && e.contains("line 3") && e.contains("method safe and class all"),
+            "{e}"
+        );
+        // A lost line (any of them), and lines in another order.
+        for lost in 0..lines.len() {
+            let mut kept = lines.clone();
+            kept.remove(lost);
+            let t = SweepTable::parse(&format!("{HEADER}\n{}\n", kept.join("\n"))).unwrap();
+            assert_eq!(t.incomplete(&expected), vec![key], "line {lost} lost");
+        }
+        let mut swapped = lines.clone();
+        swapped.swap(0, 1);
+        let t = SweepTable::parse(&format!("{HEADER}\n{}\n", swapped.join("\n"))).unwrap();
+        assert_eq!(t.incomplete(&expected), vec![key]);
+        // A last line cut short at any point: left out, the combination incomplete; with its newline it is refused.
+        let last = &lines[3];
+        for cut in [1, 10, last.len() / 2, last.len() - 3] {
+            let cut_text = format!("{HEADER}\n{}\n{}", lines[..3].join("\n"), &last[..cut]);
+            let t = SweepTable::parse(&cut_text).unwrap();
+            assert_eq!(t.truncated_line(), Some(5), "cut at {cut}");
+            assert_eq!(t.incomplete(&expected), vec![key], "cut at {cut}");
+            assert!(SweepTable::parse(&format!("{cut_text}\n")).is_err(), "cut at {cut}");
+        }
     }
 
     /// Scoring a build against ground truth computed once on the original triangle order gives the same figures
@@ -509,6 +717,19 @@ mod tests {
         )
         .unwrap();
         assert_eq!(swept.evaluation.rows.len(), direct.rows.len());
+        // The lines of a combination are those expected_rows names, in its order.
+        let rows: Vec<(String, String)> = swept
+            .evaluation
+            .rows
+            .iter()
+            .map(|r| (r.method.clone(), r.class.clone()))
+            .collect();
+        assert_eq!(rows, expected_rows(&params, &opts));
+        let mut table = SweepTable::default();
+        table.insert(combo.key, swept.lines.clone());
+        table.adopt("0badcafe").unwrap();
+        let back = SweepTable::parse(&table.to_csv()).unwrap();
+        assert_eq!(back.incomplete(&expected_rows(&params, &opts)), vec![]);
         for (a, d) in swept.evaluation.rows.iter().zip(&direct.rows) {
             assert_eq!((&a.method, &a.class), (&d.method, &d.class));
             // Counts agree exactly; areas are summed in another triangle order, so only to rounding.
