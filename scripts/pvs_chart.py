@@ -24,7 +24,7 @@ for row, (mesh, title) in zip(axes, present):
     for path in sorted((root / "pvs").glob(f"{mesh}_*.json")):
         d = json.loads(path.read_text())
         size = f"{d['cell_size']:g}"
-        band = d["height"]["AboveGround"]
+        band = d["height"]["above_ground"]
         style = "-" if band[1] <= 2 else "--"
         label = f"{size} m, {band[0]:g}–{band[1]:g} m ({d['cells']} cells)"
         kol = [r for r in d["rows"] if r["method"] == "koltun"]

@@ -56,6 +56,7 @@ fn tin_simplifies_an_ascii_grid() {
     let obj = dir.path().join("hill.obj");
     let v = json(&["tin", s(&asc), "-o", s(&obj), "--vertices", "200", "--json"]);
     assert_eq!(v["vertices"], 200);
+    assert_eq!(v["stopped_by"], "vertex_budget");
     assert_eq!(v["voids"], 1);
     assert!(v["max_error"].as_f64().expect("error") > 0.0);
     // `-o -`: the same OBJ on standard output, and nothing else there.
@@ -67,6 +68,7 @@ fn tin_simplifies_an_ascii_grid() {
     );
     let v = json(&["tin", s(&asc), "-o", s(&obj), "--max-error", "0", "--json"]);
     assert_eq!(v["max_error"], 0.0);
+    assert!(matches!(v["stopped_by"].as_str(), Some("exact" | "error_bound")), "{v}");
     let info = json(&["info", s(&obj), "--json"]);
     assert_eq!(info["vertices"], v["vertices"]);
 }
@@ -902,7 +904,20 @@ fn messages_name_the_flag_at_fault() {
     for (args, needle) in [
         (
             vec!["tin", s(&asc), "--max-error", "-1", "-o", s(&out)],
-            "max_error must be finite and non-negative",
+            "'-1' for '--max-error <M>': -1: the error bound must be finite and non-negative",
+        ),
+        (
+            vec!["tin", s(&asc), "--max-error", "inf", "-o", s(&out)],
+            "'inf' for '--max-error <M>'",
+        ),
+        (
+            // A scale that carries the heights out of range is named with the height.
+            vec!["tin", s(&asc), "--vertices", "5", "--z-scale", "1e308", "-o", s(&out)],
+            "(the stored value times the z scale 1e308)",
+        ),
+        (
+            vec!["tin", s(&asc), "--vertices", "5", "--z-scale", "1e30", "-o", s(&out)],
+            "(the stored value times the z scale 1e30) is outside the coordinates",
         ),
         (
             vec!["tin", s(&asc), "--vertices", "-5", "-o", s(&out)],
@@ -1079,6 +1094,24 @@ fn files_of_the_wrong_kind_say_what_they_are() {
         "g.pvs is a tincull PVS file (written by `tincull pvs -o`), not a hierarchy: this command reads the .tch written",
     );
     fails_with(&["stress", s(&pvs)], "g.pvs is a tincull PVS file");
+    // JSON: a grid's sidecar names its grid; other JSON (a hierarchy's export) is named as JSON, not read as OBJ.
+    let sidecar = dir.path().join("g.json");
+    fails_with(
+        &["info", s(&sidecar)],
+        &format!("g.json is the JSON sidecar of the grid {} (give that file", s(&npy)),
+    );
+    let exported = dir.path().join("h.json");
+    std::fs::write(&exported, "\n  {\"sectors\": 16, \"nodes\": []}\n").expect("json");
+    for args in [vec!["info", s(&exported)], vec!["build", s(&exported), "-o", "x.tch"]] {
+        fails_with(
+            &args,
+            "h.json is JSON (such as a hierarchy's `export --export-json` or a tiles plan), not a terrain",
+        );
+    }
+    fails_with(
+        &["cull", s(&exported), "--eye", "1,1,1"],
+        "h.json is JSON (such as a hierarchy's `export --export-json` or a tiles plan), not a tincull hierarchy",
+    );
 }
 
 /// A `.tch` whose length field is corrupt says that the file is truncated or corrupt and what its header declares.
@@ -1211,6 +1244,19 @@ fn messages_and_help_read_well() {
             s(&config),
         ],
         &format!("`seeds` (in {}) applies to the crystal grouping", config.display()),
+    );
+    // A grouping the file misspells (as the JSON of another version might write it) is named in its file.
+    std::fs::write(&config, "grouping = \"Crystal\"\n").expect("config");
+    fails_with(
+        &[
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            s(&tch),
+            "--config",
+            s(&config),
+        ],
+        &format!("`grouping` (in {}): unknown grouping \"Crystal\"", config.display()),
     );
 }
 

@@ -64,6 +64,12 @@ fn one_cell_a_grid_and_the_binary_file_agree() {
         size < u64::from(nt),
         "a 300 m cell near the ground does not see the whole terrain"
     );
+    // The height as the flags name it, and the file's size as written.
+    assert_eq!(v["height"], serde_json::json!({"above_ground": [0.0, 20.0]}));
+    assert_eq!(
+        v["file_bytes"].as_u64(),
+        Some(std::fs::metadata(&file).expect("pvs file").len())
+    );
     let decoded = PvsFile::from_bytes(&std::fs::read(&file).expect("pvs file")).expect("a valid .pvs");
     assert_eq!(decoded.cells.len(), 1);
     assert_eq!(decoded.cells[0].ranges(), r);
@@ -80,6 +86,10 @@ fn one_cell_a_grid_and_the_binary_file_agree() {
         assert!(c["bytes"].as_u64().expect("bytes") > 0);
     }
     ok(&["pvs", s(&tch), "--grid", "4000", "-o", s(&g2), "-q"]);
+    // Without -o there is no file, and no file size.
+    let none = json(&["pvs", s(&tch), "--cell", &cell, "--height-band", "0,3000", "--json"]);
+    assert_eq!(none["file_bytes"], serde_json::Value::Null);
+    assert_eq!(none["height"], serde_json::json!({"band": [0.0, 3000.0]}));
     assert_eq!(
         std::fs::read(&g1).expect("g1"),
         std::fs::read(&g2).expect("g2"),

@@ -184,7 +184,8 @@ fn render_rejects_bad_options_with_clear_messages() {
     );
 }
 
-/// Culling parameters that a render does not use are refused, as `cull` refuses them, before anything is drawn.
+/// Culling parameters that a render does not use are refused, as `cull` refuses them, before anything is drawn; so are
+/// view flags that change nothing in the image (the map view's yaw and pitch, the eye view's field of view elsewhere).
 #[test]
 fn render_refuses_culling_flags_it_does_not_use() {
     let dir = tempfile::tempdir().unwrap();
@@ -194,7 +195,7 @@ fn render_refuses_culling_flags_it_does_not_use() {
     ok(&tincull(&["build", p(&obj), "-o", p(&tch), "-q"]));
     let png = dir.path().join("x.png");
     let eye = ["--view", "eye", "--eye", "100,100,500"];
-    let cases: [(&Path, Vec<&str>, &str); 5] = [
+    let cases: [(&Path, Vec<&str>, &str); 11] = [
         (
             &tch,
             [&eye[..], &["--method", "thesis", "--columns", "8"]].concat(),
@@ -219,6 +220,33 @@ fn render_refuses_culling_flags_it_does_not_use() {
             &tch,
             vec!["--view", "orbit", "--columns", "64"],
             "--columns 64: this render culls nothing",
+        ),
+        // View flags that change nothing in the image, likewise.
+        (
+            &tch,
+            vec!["--view", "map", "--pitch", "-30"],
+            "--pitch: the map view looks straight down",
+        ),
+        (&tch, vec!["--yaw", "30"], "--yaw: the map view looks straight down"),
+        (
+            &tch,
+            vec!["--eye", "100,100,500", "--colour", "visibility", "--yaw", "30"],
+            "(this render: --view map)",
+        ),
+        (
+            &obj,
+            vec!["--view", "orbit", "--fov", "60"],
+            "--fov is the eye view's field of view",
+        ),
+        (
+            &tch,
+            vec!["--level", "0"],
+            "--level is the level that --colour level paints",
+        ),
+        (
+            &tch,
+            vec!["--view", "orbit", "--cull-fov", "90"],
+            "--cull-fov: this render culls nothing",
         ),
     ];
     for (input, extra, needle) in cases {

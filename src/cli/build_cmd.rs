@@ -146,7 +146,13 @@ impl ParamArgs {
                 quadtree.validate()?;
                 p.grouping = Grouping::Quadtree(quadtree);
             }
-            Some(other) => anyhow::bail!("unknown grouping {other:?}; expected crystal or quadtree"),
+            Some(other) => {
+                let given = match file {
+                    Some(path) if self.grouping.is_none() => format!("`grouping` (in {})", path.display()),
+                    _ => "--grouping".to_string(),
+                };
+                anyhow::bail!("{given}: unknown grouping {other:?}; expected crystal or quadtree")
+            }
         }
         Ok(p)
     }

@@ -364,6 +364,8 @@ pub enum FileKind {
     Pvs,
     /// Text whose first line that is neither blank nor a comment is an OBJ statement (`v`, `f`, `o`, ...).
     ObjText,
+    /// Text starting (after blanks) with `{` or `[`: JSON, such as a `.npy` grid's sidecar or `export --export-json`.
+    Json,
     /// Anything else, or a file that cannot be read.
     Other,
 }
@@ -389,6 +391,9 @@ pub fn file_kind(path: &std::path::Path) -> FileKind {
         Ok(t) => t,
         Err(e) => std::str::from_utf8(&head[..e.valid_up_to()]).unwrap_or_default(),
     };
+    if text.trim_start().starts_with(['{', '[']) {
+        return FileKind::Json;
+    }
     const STATEMENTS: [&str; 10] = ["v", "vt", "vn", "f", "o", "g", "s", "l", "mtllib", "usemtl"];
     let first = text
         .lines()
@@ -397,6 +402,20 @@ pub fn file_kind(path: &std::path::Path) -> FileKind {
     match first.and_then(|l| l.split_whitespace().next()) {
         Some(word) if STATEMENTS.contains(&word) => FileKind::ObjText,
         _ => FileKind::Other,
+    }
+}
+
+/// What a JSON file given as a terrain or a hierarchy is, for the error: the sidecar of a `.npy` grid beside it
+/// (naming the grid to give instead), or JSON of another kind (a hierarchy's `export --export-json`, a tiles plan).
+fn json_kind(path: &std::path::Path) -> String {
+    let grid = path.with_extension("npy");
+    if grid.is_file() {
+        format!(
+            "is the JSON sidecar of the grid {} (give that file: its sidecar is read beside it)",
+            grid.display()
+        )
+    } else {
+        "is JSON (such as a hierarchy's `export --export-json` or a tiles plan)".to_string()
     }
 }
 
@@ -437,6 +456,10 @@ pub fn load_hierarchy(path: &std::path::Path) -> Result<cull::Hierarchy> {
         FileKind::ObjText => bail!(
             "{p} is an OBJ mesh, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
             tch_name(path)
+        ),
+        FileKind::Json => bail!(
+            "{p} {}, not a tincull hierarchy: this command reads the .tch written by `tincull build`",
+            json_kind(path)
         ),
         _ if is_dem(path) => bail!(
             "{p} is a DEM grid, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
@@ -491,6 +514,13 @@ impl MeshArgs {
                 "{} is a tincull PVS file (written by `tincull pvs -o`), not a terrain: this command reads an OBJ mesh \
                  or a DEM grid",
                 self.mesh.display()
+            );
+        }
+        if file_kind(&self.mesh) == FileKind::Json {
+            bail!(
+                "{} {}, not a terrain: this command reads an OBJ mesh or a DEM grid",
+                self.mesh.display(),
+                json_kind(&self.mesh)
             );
         }
         if is_dem(&self.mesh) {

@@ -247,7 +247,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
             "mean_seconds_per_cell": mean_s,
             "prepare_seconds": prep_s,
             "seconds": total_s,
-            "file_bytes": bytes.len(),
+            "file_bytes": args.out.as_ref().map(|_| bytes.len()),
         }))?;
     } else {
         for (c, r) in cells.iter().zip(&results).take(20) {

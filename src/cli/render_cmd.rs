@@ -45,12 +45,12 @@ pub struct RenderArgs {
     /// Pitch in degrees up from the horizontal [eye: 0, orbit: -35].
     #[arg(long, allow_hyphen_values = true)]
     pub pitch: Option<f64>,
-    /// Horizontal field of view of the eye view in degrees (drawn at most 150).
-    #[arg(long, default_value_t = 90.0)]
-    pub fov: f64,
-    /// Horizontal field of view the culler uses, in degrees (360 = occlusion only).
-    #[arg(long, default_value_t = 360.0)]
-    pub cull_fov: f64,
+    /// Horizontal field of view of the eye view in degrees (drawn at most 150) [default: 90].
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// Horizontal field of view the culler uses, in degrees (360 = occlusion only), turned by --yaw [default: 360].
+    #[arg(long)]
+    pub cull_fov: Option<f64>,
     /// Image size `WIDTHxHEIGHT` in pixels.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     pub size: [u32; 2],
@@ -189,8 +189,8 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         eye,
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
-        fov_deg: args.fov,
-        cull_fov_deg: args.cull_fov,
+        fov_deg: args.fov.unwrap_or(90.0),
+        cull_fov_deg: args.cull_fov.unwrap_or(360.0),
         size: args.size,
         colour,
         level: args.level,
@@ -204,8 +204,38 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     // A culling parameter that this render does not use is an error, as for `cull`, rather than ignored.
     let culls = terrain.hierarchy.is_some()
         && (eye.is_some() && view != ViewKind::Map || colour == Some(ColourMode::Visibility));
+    // So is a view flag that changes nothing in this image.
+    let view_name = &args.view;
+    let unused = [
+        (
+            args.pitch.is_some() && view == ViewKind::Map,
+            "--pitch: the map view looks straight down; --pitch tilts the orbit and eye cameras",
+        ),
+        (
+            args.yaw.is_some() && view == ViewKind::Map && !(culls && args.cull_fov.is_some()),
+            "--yaw: the map view looks straight down; --yaw turns the orbit and eye cameras (and the culler's field \
+             of view, --cull-fov)",
+        ),
+        (
+            args.fov.is_some() && view != ViewKind::Eye,
+            "--fov is the eye view's field of view, and this render is not one (--view eye); the culler's is \
+             --cull-fov",
+        ),
+        (
+            args.level.is_some() && colour != Some(ColourMode::Level),
+            "--level is the level that --colour level paints",
+        ),
+    ];
+    if let Some((_, why)) = unused.iter().find(|(given, _)| *given) {
+        bail!("{why} (this render: --view {view_name})");
+    }
     if culls {
         args.safe.check_method(args.method)?;
+    } else if args.cull_fov.is_some() {
+        bail!(
+            "--cull-fov: this render culls nothing (culling needs a hierarchy, and --eye with --view eye or orbit, or \
+             --colour visibility)"
+        );
     } else {
         let method = (args.method != cull::CullMethod::Safe).then(|| format!("--method {}", args.method.name()));
         if let Some(flag) = method.or_else(|| args.safe.first_given()) {

@@ -26,7 +26,7 @@ pub struct TinArgs {
     #[arg(long)]
     pub vertices: Option<usize>,
     /// Stop when the largest vertical error is at most this (m) (with --vertices: at whichever is reached first).
-    #[arg(long)]
+    #[arg(long, value_name = "M", value_parser = parse_max_error, allow_hyphen_values = true)]
     pub max_error: Option<f64>,
     /// Keep every valid sample: the full-resolution grid, Delaunay-triangulated, without simplification (unlike
     /// `--max-error 0`, which leaves out the samples that the triangles through their neighbours reproduce exactly).
@@ -127,7 +127,16 @@ fn keep_grid(args: &TinArgs, grid: &tin::Grid, mut files: Outputs, start: Instan
         "triangles": tin.num_triangles(),
         "max_error": 0.0,
         "rms_error": 0.0,
-        "stopped_by": "KeepGrid",
+        "stopped_by": "keep_grid",
         "seconds": seconds,
     }))
+}
+
+/// `--max-error`: a finite, non-negative number of metres (refused by clap, which names the flag).
+fn parse_max_error(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(e) if e.is_finite() && e >= 0.0 => Ok(e),
+        Ok(_) => Err(format!("{s}: the error bound must be finite and non-negative (m)")),
+        Err(_) => Err(format!("{s:?} is not a number")),
+    }
 }

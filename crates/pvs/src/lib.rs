@@ -54,8 +54,9 @@ pub enum PvsError {
 /// Most cells of a [`Pvs::grid`]: a million PVSs take hours on a large terrain, and the file grows with them.
 pub const MAX_GRID_CELLS: usize = 1_000_000;
 
-/// How the viewcell's height is given.
+/// How the viewcell's height is given (in JSON `{"band": [z0, z1]}` or `{"above_ground": [h0, h1]}`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Height {
     /// Absolute heights `[z0, z1]` (m).
     Band([f64; 2]),

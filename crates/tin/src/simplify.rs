@@ -103,8 +103,9 @@ impl SimplifyOptions {
     }
 }
 
-/// Why the simplification stopped.
+/// Why the simplification stopped (in JSON `vertex_budget`, `error_bound`, `exact`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// The vertex budget was reached.
     VertexBudget,

@@ -103,7 +103,7 @@ impl DemOptions {
 /// Reads a DEM, choosing the reader from the extension (`.npy`, `.asc`, `.hgt`, `.png`, `.tif`/`.tiff`, any case).
 pub fn read_dem(path: &Path, opts: &DemOptions) -> Result<Grid> {
     let grid = read_dem_unchecked(path, opts)?;
-    check_range(&grid, path)?;
+    check_range(&grid, path, opts.z_scale)?;
     Ok(grid)
 }
 
@@ -207,7 +207,7 @@ pub fn read_dem_window_heights(
     let (shape, mut z) = read_window_unchecked(path, opts, rows, cols)?;
     scale(&mut z, opts);
     check_corners(&shape, rows, cols, path)?;
-    check_heights(&z, rows[0], cols, path)?;
+    check_heights(&z, rows[0], cols, path, opts.z_scale)?;
     Ok((shape, z))
 }
 
@@ -228,7 +228,7 @@ pub fn read_dem_strips(
             let shape = read_dem_header(path, opts)?;
             let mut checked = |first: usize, z: &mut Vec<f64>| {
                 scale(z, opts);
-                check_heights(z, first, [0, shape.cols - 1], path)?;
+                check_heights(z, first, [0, shape.cols - 1], path, opts.z_scale)?;
                 each(first, z)
             };
             match ext {
@@ -356,17 +356,18 @@ fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &P
 
 /// Refuses heights no stage can handle in the window whose north-west sample is in row `row0` and whose columns
 /// are `cols` of the whole grid, naming the file and the 1-based row and column in the whole grid.
-fn check_heights(z: &[f64], row0: usize, cols: [usize; 2], path: &Path) -> Result<()> {
+fn check_heights(z: &[f64], row0: usize, cols: [usize; 2], path: &Path, z_scale: f64) -> Result<()> {
     let width = cols[1] - cols[0] + 1;
     for (i, &h) in z.iter().enumerate() {
         if !h.is_nan() && !crate::predicates::coordinate_in_range(h) {
             return Err(TinError::format(
                 path,
                 format!(
-                    "row {}, column {}: height {h:e} is outside the coordinates every stage accepts (0 or 2^-100 to \
-                     2^100 in magnitude)",
+                    "row {}, column {}: height {h:e}{} is outside the coordinates every stage accepts (0 or 2^-100 \
+                     to 2^100 in magnitude)",
                     row0 + i / width + 1,
-                    cols[0] + i % width + 1
+                    cols[0] + i % width + 1,
+                    scaled_note(z_scale)
                 ),
             ));
         }
@@ -376,10 +377,10 @@ fn check_heights(z: &[f64], row0: usize, cols: [usize; 2], path: &Path) -> Resul
 
 /// Refuses a grid with a sample whose coordinates no stage can handle ([`crate::COORDINATE_LIMIT`]), naming the
 /// file and the 1-based row and column (row 1 is the northern edge).
-fn check_range(g: &Grid, path: &Path) -> Result<()> {
+fn check_range(g: &Grid, path: &Path, z_scale: f64) -> Result<()> {
     let (rows, cols) = ([0, g.rows.saturating_sub(1)], [0, g.cols.saturating_sub(1)]);
     check_corners(&GridShape::of(g), rows, cols, path)?;
-    check_heights(&g.z, 0, cols, path)
+    check_heights(&g.z, 0, cols, path, z_scale)
 }
 
 fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
@@ -426,9 +427,25 @@ fn finish(
 ) -> Result<Grid> {
     scale(&mut z, opts);
     Grid::new(rows, cols, dx, dy, origin, z).map_err(|e| match e {
+        TinError::InvalidParameter(m) if m.ends_with("the height is infinite") => {
+            TinError::format(path, format!("{m}{}", scaled_note(opts.z_scale)))
+        }
         TinError::InvalidParameter(m) => TinError::format(path, m),
         e => e,
     })
+}
+
+/// What a height error adds when the heights were scaled: that the height is the stored value times the z scale
+/// (a large scale can carry a stored value out of range).
+fn scaled_note(z_scale: f64) -> String {
+    if z_scale == 1.0 {
+        String::new()
+    } else {
+        format!(
+            " (the stored value times the z scale {})",
+            crate::compact_number(z_scale)
+        )
+    }
 }
 
 /// Multiplies the heights by [`DemOptions::z_scale`] (voids stay NaN).
