@@ -145,6 +145,13 @@ fn failmap_takes_out() {
     assert_eq!(v["method"], "safe");
     assert_eq!(v["cells_with_false_culls"], 0);
     assert!(v["cells_on_terrain"].as_u64().expect("cells") > 0, "{v}");
+    // Without an output the text summary is the result, as for `pvs`; quietened too, there would be nothing.
+    let text = String::from_utf8_lossy(&ok(&["failmap", s(&tch), "--cell-size", "4000"]).stdout).into_owned();
+    assert!(text.contains("0 with false culls"), "{text}");
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "4000", "-q"],
+        "nothing to write: -q hides the summary",
+    );
 }
 
 /// `--cell-size` is the side of square cells wherever cells have a size (`build --grouping quadtree`, `failmap`,

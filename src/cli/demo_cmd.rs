@@ -41,7 +41,10 @@ pub struct DemoArgs {
 /// Runs `tincull demo`.
 pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     let mut out = out;
-    let mesh = args.mesh.clone().unwrap_or_else(default_mesh);
+    let mesh = match &args.mesh {
+        Some(m) => m.clone(),
+        None => default_mesh()?,
+    };
     super::eval_cmd::check_viewpoints(args.viewpoints)?;
     if args.out_dir == Path::new("-") {
         anyhow::bail!(
@@ -155,11 +158,44 @@ fn write_renders(_: &Hierarchy, _: &Tin, _: &Path, _: &Path) -> Result<[f64; 3]>
     Err(super::no_viewer("the demo's renders"))
 }
 
-/// The bundled terrain, found relative to the working directory or to the source tree.
-fn default_mesh() -> PathBuf {
-    let local = Path::new(DEFAULT_MESH);
-    if local.exists() {
-        return local.to_path_buf();
+/// The bundled terrain, found relative to the working directory or to the source tree the binary was built from;
+/// an error saying so when neither holds it (a binary copied elsewhere).
+fn default_mesh() -> Result<PathBuf> {
+    bundled_mesh(
+        Path::new(DEFAULT_MESH),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_MESH),
+    )
+}
+
+/// The first of `local` and `source` that is a file, or the error of [`default_mesh`].
+fn bundled_mesh(local: &Path, source: &Path) -> Result<PathBuf> {
+    match [local, source].into_iter().find(|p| p.is_file()) {
+        Some(found) => Ok(found.to_path_buf()),
+        None => anyhow::bail!(
+            "the bundled terrain {DEFAULT_MESH} is neither in the working folder nor at {} (the source tree this \
+             binary was built from): run the demo from the repository, or give a mesh (`tincull demo MESH.obj`)",
+            source.display()
+        ),
     }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_MESH)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A binary copied away from its source tree, run outside the repository, says where it looked and what to do.
+    #[test]
+    fn a_missing_bundled_mesh_is_a_clear_error() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (local, source) = (dir.path().join("a.obj"), dir.path().join("b.obj"));
+        let e = bundled_mesh(&local, &source).unwrap_err().to_string();
+        assert!(
+            e.contains(&source.display().to_string()) && e.contains("give a mesh"),
+            "{e}"
+        );
+        std::fs::write(&source, "v 0 0 0\n").expect("write");
+        assert_eq!(bundled_mesh(&local, &source).expect("found"), source);
+        std::fs::write(&local, "v 0 0 0\n").expect("write");
+        assert_eq!(bundled_mesh(&local, &source).expect("found"), local);
+    }
 }
