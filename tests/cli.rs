@@ -1220,42 +1220,29 @@ fn messages_and_help_read_well() {
         assert!(help.contains(key), "{key}: {help}");
     }
     let config = dir.path().join("p.toml");
-    std::fs::write(&config, "keep_faces = true\n").expect("config");
-    fails_with(
-        &[
-            "build",
-            s(&mesh("jacksboro-2k.obj")),
-            "-o",
-            s(&tch),
-            "--config",
-            s(&config),
-        ],
-        "keep_faces",
-    );
+    let build_with = |text: &str, needle: &str| {
+        std::fs::write(&config, text).expect("config");
+        fails_with(
+            &[
+                "build",
+                s(&mesh("jacksboro-2k.obj")),
+                "-o",
+                s(&tch),
+                "--config",
+                s(&config),
+            ],
+            needle,
+        );
+    };
+    build_with("keep_faces = true\n", "keep_faces");
     // A crystal key in the file with a quadtree grouping is named as the key it is, in its file.
-    std::fs::write(&config, "grouping = \"quadtree\"\nseeds = 5\n").expect("config");
-    fails_with(
-        &[
-            "build",
-            s(&mesh("jacksboro-2k.obj")),
-            "-o",
-            s(&tch),
-            "--config",
-            s(&config),
-        ],
+    build_with(
+        "grouping = \"quadtree\"\nseeds = 5\n",
         &format!("`seeds` (in {}) applies to the crystal grouping", config.display()),
     );
     // A grouping the file misspells (as the JSON of another version might write it) is named in its file.
-    std::fs::write(&config, "grouping = \"Crystal\"\n").expect("config");
-    fails_with(
-        &[
-            "build",
-            s(&mesh("jacksboro-2k.obj")),
-            "-o",
-            s(&tch),
-            "--config",
-            s(&config),
-        ],
+    build_with(
+        "grouping = \"Crystal\"\n",
         &format!("`grouping` (in {}): unknown grouping \"Crystal\"", config.display()),
     );
 }

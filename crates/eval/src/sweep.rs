@@ -548,7 +548,16 @@ mod tests {
         }
     }
 
-    /// A line of the combination `8,2,10,1,2` for `method` and `class`, without its setup column.
+    /// The combination of [`line`].
+    const KEY: SweepKey = SweepKey {
+        sectors: 8,
+        subsectors: 2,
+        seeds: 10,
+        rng_seed: 1,
+        viewpoints: 2,
+    };
+
+    /// A line of the combination [`KEY`] for `method` and `class`, without its setup column.
     fn line(method: &str, class: &str) -> String {
         format!(
             "8,2,10,1,2,100,180,0.1,0.2,0.3,720,4,1,2,9,3,2,{method},{class},2,0,0,0,0,0.5,0.5,1.2,90,1500,0.1,0.5,"
@@ -557,13 +566,7 @@ mod tests {
 
     #[test]
     fn table_round_trips_and_rejects_foreign_files() {
-        let key = SweepKey {
-            sectors: 8,
-            subsectors: 2,
-            seeds: 10,
-            rng_seed: 1,
-            viewpoints: 2,
-        };
+        let key = KEY;
         // A combination's lines hold every column but the last, the setup, which the table writes.
         let one = line("safe", "all");
         assert_eq!(one.split(',').count(), HEADER.split(',').count() - 1);
@@ -606,13 +609,7 @@ mod tests {
     /// cut short (no newline) is left out as an interrupted write.
     #[test]
     fn damaged_files_are_refused_or_their_combinations_incomplete() {
-        let key = SweepKey {
-            sectors: 8,
-            subsectors: 2,
-            seeds: 10,
-            rng_seed: 1,
-            viewpoints: 2,
-        };
+        let key = KEY;
         let expected: Vec<(String, String)> = [("safe", "low"), ("safe", "all"), ("none", "low"), ("none", "all")]
             .iter()
             .map(|(m, c)| (m.to_string(), c.to_string()))
