@@ -457,7 +457,7 @@ pub fn load_hierarchy(path: &std::path::Path) -> Result<cull::Hierarchy> {
             "{p} is an OBJ mesh, not a tincull hierarchy: build one with `tincull build {p} -o {}`",
             tch_name(path)
         ),
-        FileKind::Json => bail!(
+        FileKind::Json if !is_dem(path) => bail!(
             "{p} {}, not a tincull hierarchy: this command reads the .tch written by `tincull build`",
             json_kind(path)
         ),
@@ -516,7 +516,8 @@ impl MeshArgs {
                 self.mesh.display()
             );
         }
-        if file_kind(&self.mesh) == FileKind::Json {
+        // A DEM's extension wins: raw heights (`.hgt`) may begin with the byte of `{`.
+        if !is_dem(&self.mesh) && file_kind(&self.mesh) == FileKind::Json {
             bail!(
                 "{} {}, not a terrain: this command reads an OBJ mesh or a DEM grid",
                 self.mesh.display(),
