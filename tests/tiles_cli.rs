@@ -313,6 +313,16 @@ fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
     let info = json(&["info", s(&mesh("jacksboro-2k.obj")), "--json"]);
     assert_eq!(m["vertices"], info["vertices"]);
     assert_eq!(m["triangles"], info["triangles"]);
+    // Another tile's part in a tile's place: refused by its digest, naming the file.
+    std::fs::copy(
+        dir.path().join("mesh.tiles/part-00004.bin"),
+        dir.path().join("mesh.tiles/part-00003.bin"),
+    )
+    .expect("copy");
+    fails_with(
+        &["tiles", "build", s(&plan), "--tile", "3"],
+        "part-00003.bin: not tile 3's file as the plan wrote it",
+    );
     std::fs::remove_file(dir.path().join("mesh.tiles/part-00003.bin")).expect("remove");
     fails_with(&["tiles", "build", s(&plan), "--tile", "3"], "part-00003.bin");
     // Unset sizes are a DEM's in mean vertex spacings (about 690 m here): 512 of them hold this 30 km mesh in one
@@ -477,8 +487,35 @@ fn a_malformed_plan_is_refused_naming_the_tile() {
         "as an earlier tile is",
     );
     fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "edited.json");
-    // A tile's output that names what the job reads (the DEM, a far-field file): refused, the file untouched (the
-    // DEM was replaced by the tile's hierarchy).
+    // Any other edit of a sealed plan (its options, a tile's output) no longer matches its tiles' names: refused,
+    // so that tiles built under two sets of options are never merged (they were merged with cracks between them).
+    for change in [
+        &(|v: &mut serde_json::Value| v["options"]["max_error"] = serde_json::json!(5.0))
+            as &dyn Fn(&mut serde_json::Value),
+        &|v: &mut serde_json::Value| v["tiles"][0]["output"] = serde_json::json!("t.npy"),
+    ] {
+        edit(change);
+        for args in [
+            vec!["tiles", "build", s(&edited), "--tile", "0"],
+            vec!["tiles", "merge", s(&edited), "-o", s(&merged)],
+        ] {
+            fails_with(
+                &args,
+                "edited.json: the plan's content does not match the names `tincull tiles plan` gave its tiles",
+            );
+        }
+    }
+    // A plan without its tiles' file digests (made before they were kept) is not checked for its seal: what a job
+    // writes is still checked on its own. A tile's output that names what the job reads (the DEM, a far-field
+    // file): refused, the file untouched (the DEM was replaced by the tile's hierarchy).
+    let edit = |change: &dyn Fn(&mut serde_json::Value)| {
+        edit(&|v| {
+            for t in v["tiles"].as_array_mut().expect("tiles") {
+                t.as_object_mut().expect("tile").remove("file_digest");
+            }
+            change(v);
+        })
+    };
     let dem = dir.path().join("t.npy");
     let dem_bytes = std::fs::read(&dem).expect("DEM");
     edit(&|v| v["tiles"][0]["output"] = serde_json::json!("t.npy"));
@@ -505,6 +542,14 @@ fn a_malformed_plan_is_refused_naming_the_tile() {
         "edited.json: not a tincull tile plan",
     );
     assert!(!merged.exists(), "no merge of a malformed plan");
+    // Another tile's far-field file in a tile's place: refused by its digest, naming the file (it was read, and
+    // failed later as "not a height field").
+    let far = |i: usize| dir.path().join(original["tiles"][i]["far"].as_str().expect("far"));
+    std::fs::copy(far(1), far(0)).expect("copy");
+    fails_with(
+        &["tiles", "build", s(&plan), "--tile", "0"],
+        "far-00000.bin: not tile 0's file as the plan wrote it",
+    );
     // A hierarchy given for the plan: said to be binary, not "stream did not contain valid UTF-8".
     let tch = tile_outputs(&plan)[0].clone();
     fails_with(

@@ -216,10 +216,12 @@ fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput
 }
 
 /// A mesh tile: its part, as the plan cut it.
-fn mesh_input(plan_path: &Path, part: &Path) -> Result<TileInput, TilesError> {
+fn mesh_input(plan: &Plan, plan_path: &Path, spec: &TileSpec, part: &Path) -> Result<TileInput, TilesError> {
     let start = Instant::now();
     let path = Plan::resolve(plan_path, part);
-    let part = MeshPart::from_bytes(&crate::framed::read(&path)?, &path)?;
+    let bytes = crate::framed::read(&path)?;
+    let part = MeshPart::from_bytes(&bytes, &path)?;
+    plan.check_tile_file(spec, &path, &bytes)?;
     let tin = Tin::from_parts(
         part.positions.iter().map(|p| DVec3::from_array(*p)).collect(),
         part.triangles,
@@ -252,7 +254,7 @@ pub fn build_tile(
 ) -> Result<(cull::Hierarchy, TileReport), TilesError> {
     let spec = plan.tile(index)?;
     let input = match &spec.part {
-        Some(part) => mesh_input(plan_path, part)?,
+        Some(part) => mesh_input(plan, plan_path, spec, part)?,
         None => dem_input(plan, plan_path, spec)?,
     };
     let tin = &input.tin;

@@ -85,6 +85,11 @@ pub struct TileSpec {
     /// A mesh's tile: what its part holds, which the merge checks each built tile against.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extent: Option<MeshExtent>,
+    /// The [`file_digest`] of the tile's far-field or part file as the plan wrote it ([`Plan::seal`]); its job
+    /// refuses a file that differs (another plan's, another tile's). `None` in a plan made before it was kept (not
+    /// checked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file_digest: Option<u32>,
     /// The tile's partial hierarchy, relative to the plan's folder.
     pub output: PathBuf,
 }
@@ -263,6 +268,7 @@ pub fn make_plan(
                 part: None,
                 far: Some(tiles_dir.join(format!("far-{index:05}.bin"))),
                 window_digest: None,
+                file_digest: None,
                 extent: None,
                 output: tiles_dir.join(format!("tile-{index:05}.tch")),
             });
@@ -362,6 +368,7 @@ pub fn make_mesh_plan(
             part: Some(tiles_dir.join(format!("part-{index:05}.bin"))),
             far: None,
             window_digest: None,
+            file_digest: None,
             extent: Some(MeshExtent::of(&part)),
             output: tiles_dir.join(format!("tile-{index:05}.tch")),
         });
@@ -450,6 +457,13 @@ impl Plan {
                 });
             }
         }
+        if !plan.seal_holds()? {
+            return Err(TilesError::Parameter(format!(
+                "{}: the plan's content does not match the names `tincull tiles plan` gave its tiles (edited since?), \
+                 so tiles built under other options could be merged: plan again rather than editing a plan",
+                path.display()
+            )));
+        }
         Ok(plan)
     }
 
@@ -464,20 +478,63 @@ impl Plan {
     /// [`crate::merge()`] never takes it for a tile of this plan: it says the tile has not been built. Deterministic:
     /// the same plan and files give the same names. (A DEM changed in place under the same name, with the same grid
     /// and far field, is not seen.)
+    ///
+    /// Each tile keeps its file's digest ([`TileSpec::file_digest`], when `files` has one a tile), so that
+    /// [`Plan::parse`] can check the seal: a plan edited after it was made (its options, its tiles) no longer matches
+    /// its names and is refused, rather than merging tiles built under two sets of options.
     pub fn seal(&mut self, files: &[u32]) -> Result<(), TilesError> {
-        for t in &mut self.tiles {
-            t.output = self.tiles_dir.join(format!("tile-{:05}.tch", t.index));
+        if files.len() == self.tiles.len() {
+            for (t, &f) in self.tiles.iter_mut().zip(files) {
+                t.file_digest = Some(f);
+            }
         }
-        let mut hasher = crc32fast::Hasher::new();
-        hasher.update(self.to_json()?.as_bytes());
-        for f in files {
-            hasher.update(&f.to_le_bytes());
-        }
-        let digest = hasher.finalize();
+        let digest = self.seal_digest(files)?;
         for t in &mut self.tiles {
             t.output = self.tiles_dir.join(format!("tile-{:05}-{digest:08x}.tch", t.index));
         }
         Ok(())
+    }
+
+    /// The digest [`Plan::seal`] names the tiles after: of the plan with unsealed names, then of `files`.
+    fn seal_digest(&self, files: &[u32]) -> Result<u32, TilesError> {
+        let mut unsealed = self.clone();
+        for t in &mut unsealed.tiles {
+            t.output = unsealed.tiles_dir.join(format!("tile-{:05}.tch", t.index));
+        }
+        let mut hasher = crc32fast::Hasher::new();
+        hasher.update(unsealed.to_json()?.as_bytes());
+        for f in files {
+            hasher.update(&f.to_le_bytes());
+        }
+        Ok(hasher.finalize())
+    }
+
+    /// Whether the tiles' names are still those [`Plan::seal`] gave this plan (checked when every tile keeps its
+    /// file's digest; a plan made before they were kept passes).
+    fn seal_holds(&self) -> Result<bool, TilesError> {
+        let Some(files) = self.tiles.iter().map(|t| t.file_digest).collect::<Option<Vec<u32>>>() else {
+            return Ok(true);
+        };
+        let digest = self.seal_digest(&files)?;
+        Ok(self
+            .tiles
+            .iter()
+            .all(|t| t.output == self.tiles_dir.join(format!("tile-{:05}-{digest:08x}.tch", t.index))))
+    }
+
+    /// Refuses tile `spec`'s far-field or part file `path` (its whole `bytes`, already decoded: a file cut short or
+    /// damaged is named as such first) when its digest is not the plan's: another plan's or another tile's file in
+    /// its place.
+    pub(crate) fn check_tile_file(&self, spec: &TileSpec, path: &Path, bytes: &[u8]) -> Result<(), TilesError> {
+        match spec.file_digest {
+            Some(expected) if file_digest(bytes) != expected => Err(TilesError::Parameter(format!(
+                "{}: not tile {}'s file as the plan wrote it (its digest differs: another plan's or another tile's \
+                 file in its place?); plan again with `tincull tiles plan`",
+                path.display(),
+                spec.index
+            ))),
+            _ => Ok(()),
+        }
     }
 
     /// A path of the plan (the source, a tile's output) resolved against the plan file's folder.
@@ -520,7 +577,10 @@ impl Plan {
             )));
         };
         let path = Plan::resolve(plan_path, far);
-        far_from_bytes(&crate::framed::read(&path)?, [grid.rows, grid.cols], &path)
+        let bytes = crate::framed::read(&path)?;
+        let points = far_from_bytes(&bytes, [grid.rows, grid.cols], &path)?;
+        self.check_tile_file(spec, &path, &bytes)?;
+        Ok(points)
     }
 
     /// Checks that a built hierarchy can be tile `index` of this plan, so that a file of another tile copied over
