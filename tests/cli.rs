@@ -390,15 +390,24 @@ fn cull_above_ground() {
     ok(&["cull", s(&tch), "--eye", &format!("10000,12000,{ground}"), "-q"]);
     let below = format!("10000,12000,{}", ground - 0.01);
     fails_with(&["cull", s(&tch), "--eye", &below], "eye 1 (--eye) at x 10000, y 12000");
-    fails_with(&["cull", s(&tch), "--eye", &below], "0.010 m below the ground");
+    fails_with(
+        &["cull", s(&tch), "--eye", &below],
+        &format!(
+            "0.010 m below the ground (at z {ground:.3} there): an eye below the ground sees none of the terrain (for \
+             heights above the ground, give --above-ground)"
+        ),
+    );
     let eyes = dir.path().join("eyes.txt");
     std::fs::write(&eyes, format!("# a path\n-5000,0,2\n{below}\n")).expect("eyes");
     let line = format!("eye 2 ({}:3)", eyes.display());
     fails_with(&["cull", s(&tch), "--eyes", s(&eyes)], &line);
     fails_with(&["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"], &line);
-    fails_with(
-        &["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"],
-        "below the ground",
+    // `eval` takes no --above-ground, and does not suggest it.
+    let stderr =
+        String::from_utf8_lossy(&run(&["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"]).stderr).into_owned();
+    assert!(
+        stderr.contains("below the ground") && !stderr.contains("--above-ground"),
+        "{stderr}"
     );
 }
 
@@ -619,9 +628,20 @@ fn build_cull_export_eval_round_trip() {
     assert_eq!(drawn, c["triangles_drawn"].as_u64().expect("drawn"));
     assert!(drawn <= triangles);
     let eyes = dir.path().join("eyes.txt");
-    std::fs::write(&eyes, format!("{eye}\n# a comment\n{cx},{cy},5000\n")).expect("eyes");
+    // Comments (whole lines and after an eye) and a byte-order mark (as some editors write) are skipped.
+    std::fs::write(&eyes, format!("\u{feff}{eye}  # first\n# a comment\n{cx},{cy},5000\n")).expect("eyes");
     let lines = ok(&["cull", s(&tch), "--eyes", s(&eyes), "--json"]).stdout;
     assert_eq!(String::from_utf8_lossy(&lines).lines().count(), 2);
+    let v = json(&[
+        "eval",
+        s(&tch),
+        "--eyes",
+        s(&eyes),
+        "--no-safe-regions",
+        "--no-per-triangle",
+        "--json",
+    ]);
+    assert!(v["viewpoints_per_class"].is_null(), "--eyes has no classes: {v}");
 
     let (json_out, obj_out) = (dir.path().join("h.json"), dir.path().join("h.obj"));
     ok(&[

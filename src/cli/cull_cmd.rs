@@ -20,8 +20,8 @@ pub struct CullArgs {
     /// Eye position `x,y,z` in world coordinates (m).
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true, required_unless_present = "eyes")]
     pub eye: Option<[f64; 3]>,
-    /// A file of viewpoints, one `x,y,z` per line; prints one result per line (with `--json`, one JSON object per
-    /// line: JSON Lines).
+    /// A file of viewpoints, one `x,y,z` per line (`#` starts a comment); prints one result per line (with `--json`,
+    /// one JSON object per line: JSON Lines).
     #[arg(long, conflicts_with = "eye")]
     pub eyes: Option<PathBuf>,
     /// Read each eye's z as a height above the terrain under its x,y (m) instead of a world z: `--eye x,y,2
@@ -94,7 +94,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if args.above_ground {
         eyes.lift_above_ground(&h)?;
     } else {
-        eyes.check_not_below_ground(&h)?;
+        eyes.check_not_below_ground(&h, true)?;
     }
     let mut list = DrawList::default();
     for eye in eyes.points {

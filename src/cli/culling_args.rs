@@ -126,7 +126,8 @@ impl Eyes {
         }
     }
 
-    /// Reads a file of eye positions: one `x,y,z` a line; blank lines and lines starting with `#` are skipped.
+    /// Reads a file of eye positions: one `x,y,z` a line; `#` starts a comment (to the end of the line), blank lines
+    /// are skipped, and a leading byte-order mark is ignored.
     pub fn read(path: &Path) -> Result<Eyes> {
         let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
         let text = String::from_utf8(bytes).map_err(|_| {
@@ -139,8 +140,10 @@ impl Eyes {
             points: Vec::new(),
             sources: Vec::new(),
         };
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         for (i, line) in text.lines().enumerate() {
-            if line.trim().is_empty() || line.trim_start().starts_with('#') {
+            let line = line.split_once('#').map_or(line, |(before, _)| before);
+            if line.trim().is_empty() {
                 continue;
             }
             let source = format!("{}:{}", path.display(), i + 1);
@@ -164,24 +167,30 @@ impl Eyes {
     }
 
     /// Refuses an eye below the ground of `h`'s mesh (by more than the rounding of the ground's height): it sees none
-    /// of the terrain. Eyes outside the footprint, on the ground or above it are fine.
-    pub fn check_not_below_ground(&self, h: &cull::Hierarchy) -> Result<()> {
+    /// of the terrain. Eyes outside the footprint, on the ground or above it are fine. `above_ground_flag`: the
+    /// command takes `--above-ground` (heights above the ground), which the error then suggests.
+    pub fn check_not_below_ground(&self, h: &cull::Hierarchy, above_ground_flag: bool) -> Result<()> {
         for (i, ground) in self.grounds(h).into_iter().enumerate() {
             let z = self.points[i][2];
             if let Some(g) = ground
                 && z < g - ground_tolerance(g)
             {
+                // Millimetres, unless the eye is closer than that to the ground.
+                let (depth, ground) = if g - z >= 1e-3 {
+                    (format!("{:.3}", g - z), format!("{g:.3}"))
+                } else {
+                    (format!("{:.1e}", g - z), format!("{g}"))
+                };
                 anyhow::bail!(
-                    "{} at x {}, y {}, z {} is {} m below the ground (at z {g} there): an eye below the ground sees \
-                     none of the terrain (for heights above the ground, use --above-ground where offered)",
+                    "{} at x {}, y {}, z {z} is {depth} m below the ground (at z {ground} there): an eye below the \
+                     ground sees none of the terrain{}",
                     self.name(i),
                     self.points[i][0],
                     self.points[i][1],
-                    z,
-                    if g - z >= 1e-3 {
-                        format!("{:.3}", g - z)
+                    if above_ground_flag {
+                        " (for heights above the ground, give --above-ground)"
                     } else {
-                        format!("{:.1e}", g - z)
+                        ""
                     }
                 );
             }

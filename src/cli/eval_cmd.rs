@@ -35,8 +35,8 @@ pub struct EvalArgs {
     /// Skip the conservative precomputed regions (method `safe_regions`; computing them takes a few seconds).
     #[arg(long)]
     pub no_safe_regions: bool,
-    /// Score your own camera path: a file of eye positions, one `x,y,z` per line (class `path`, instead of the
-    /// seeded viewpoints: not with --classes or --viewpoints).
+    /// Score your own camera path: a file of eye positions, one `x,y,z` per line, `#` starting a comment (class
+    /// `path`, instead of the seeded viewpoints: not with --classes or --viewpoints).
     #[arg(long, value_name = "FILE", conflicts_with_all = ["classes", "viewpoints"])]
     pub eyes: Option<PathBuf>,
     /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
@@ -131,7 +131,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref(), &mut out)?;
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(eyes) = &eyes {
-        eyes.check_not_below_ground(&h)?;
+        eyes.check_not_below_ground(&h, false)?;
     }
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
@@ -161,7 +161,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     out.json(&serde_json::json!({
         "hierarchy": args.hierarchy,
         "triangles": e.triangles,
-        "viewpoints_per_class": opts.viewpoints,
+        "viewpoints_per_class": opts.eyes.is_none().then_some(opts.viewpoints),
         "view_seed": opts.view_seed,
         "fov_deg": opts.fov_deg,
         // The horizon cullers' parameters (`columns_per_face` is `lloyd-egbert`'s too), as in `--export-json`'s

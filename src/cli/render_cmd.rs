@@ -144,7 +144,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     }
     let terrain = load_terrain(&args.input, &args.import, out)?;
     if let (Some(eye), Some(h)) = (args.eye, &terrain.hierarchy) {
-        super::culling_args::Eyes::given(eye).check_not_below_ground(h)?;
+        super::culling_args::Eyes::given(eye).check_not_below_ground(h, false)?;
     }
     let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
         Some(rect) => {

@@ -65,7 +65,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         args.import.mesh(&args.input).refuse_for_hierarchy()?;
         let h = super::mesh_input::load_hierarchy(&args.input)?;
         if let Some(eye) = args.eye {
-            super::culling_args::Eyes::given(eye).check_not_below_ground(&h)?;
+            super::culling_args::Eyes::given(eye).check_not_below_ground(&h, false)?;
         }
         let b = &h.build;
         let p = &args.params;
