@@ -18,8 +18,8 @@ pub struct SynthArgs {
     /// and position beside it), e.g. the input of `tiles plan`.
     #[arg(short, long)]
     pub out: PathBuf,
-    /// Number of vertices (exact; for a `.npy` grid, the nearest square number of samples).
-    #[arg(long, default_value_t = 10_000)]
+    /// Number of vertices, 4 to 2^31 (exact; for a `.npy` grid, the nearest square number of samples).
+    #[arg(long, default_value_t = 10_000, value_parser = parse_vertices)]
     pub vertices: usize,
     /// Seed of the random generator: the same seed gives the same terrain.
     #[arg(long, default_value_t = 1)]
@@ -115,4 +115,12 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
         "rng_seed": args.rng_seed,
         "seconds": seconds,
     }))
+}
+
+/// `--vertices`: 4 to 2^31 (refused by clap, which names the flag).
+fn parse_vertices(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (4..=1 << 31).contains(&n) => Ok(n),
+        _ => Err(format!("{s:?}: a synthetic terrain has 4 to 2^31 vertices")),
+    }
 }

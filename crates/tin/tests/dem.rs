@@ -887,7 +887,10 @@ fn png_height_maps() {
     // Colour is rejected.
     write_png(&path, 2, 2, png::ColorType::Rgb, png::BitDepth::Eight, &[0; 12]);
     let m = format_message(read_dem(&path, &with_spacing(1.0, 1.0)));
-    assert!(m.contains("Rgb") && m.contains("grayscale"), "{m}");
+    assert!(
+        m.contains("an RGB image with 8 bits per sample") && m.contains("greyscale"),
+        "{m}"
+    );
     // Truncated.
     write_png(
         &path,

@@ -71,8 +71,15 @@ fn check_info(info: &png::Info, path: &Path) -> Result<()> {
         )));
     }
     if color != png::ColorType::Grayscale || !matches!(depth, png::BitDepth::Eight | png::BitDepth::Sixteen) {
+        let colour = match color {
+            png::ColorType::Grayscale => "a greyscale",
+            png::ColorType::Rgb => "an RGB",
+            png::ColorType::Indexed => "an indexed (palette)",
+            png::ColorType::GrayscaleAlpha => "a greyscale-with-alpha",
+            png::ColorType::Rgba => "an RGBA",
+        };
         return Err(err(format!(
-            "colour type {color:?} with {} bits per sample: only 8- or 16-bit grayscale height maps are supported",
+            "{colour} image with {} bits per sample: only 8- or 16-bit greyscale height maps are supported",
             depth as u8
         )));
     }
