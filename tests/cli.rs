@@ -558,6 +558,12 @@ fn bad_input_gives_clear_errors() {
         fails_with(&args, "bad.tch: truncated");
     }
     fails_with(&["cull", "x.tch", "--eye", "1,2"], "x,y,z");
+    // Without a viewpoint, both ways of giving one are named; with both, they clash.
+    fails_with(&["cull", "x.tch"], "<--eye <EYE>|--eyes <EYES>>");
+    fails_with(
+        &["cull", "x.tch", "--eye", "1,2,3", "--eyes", "e.txt"],
+        "cannot be used with",
+    );
 }
 
 #[test]

@@ -124,6 +124,15 @@ fn export_refuses_an_obj_named_like_its_materials() {
     let same = dir.path().join("same.mtl");
     fails_with(&["export", p(&tch), "--export-obj", p(&same)], &["same.mtl", ".mtl"]);
     assert_eq!(names(dir.path()), ["h.tch"]);
+    // A glTF named like the OBJ's materials is refused for its name, before any clash with the `.mtl`.
+    let beside = dir.path().join("x.obj");
+    let gltf = dir.path().join("x.mtl");
+    let e = fails_with(
+        &["export", p(&tch), "--export-obj", p(&beside), "--export-gltf", p(&gltf)],
+        &["x.mtl", "name it .glb or .gltf"],
+    );
+    assert!(!e.contains("the same file"), "{e}");
+    assert_eq!(names(dir.path()), ["h.tch"]);
     // A good pair is written together.
     let obj = dir.path().join("g.obj");
     ok(&["export", p(&tch), "--export-obj", p(&obj), "--quiet"]);
@@ -137,6 +146,10 @@ fn dash_writes_the_hierarchy_to_standard_output() {
     let h = cull::Hierarchy::from_bytes(&out.stdout).expect("stdout holds exactly the .tch file");
     assert!(!h.nodes.is_empty());
     fails_with(&["build", p(&m), "-o", "-", "--json"], &["standard output"]);
+    // A synthetic terrain's OBJ (text) too.
+    let out = ok(&["synth", "-o", "-", "--vertices", "50", "--quiet"]);
+    let text = String::from_utf8(out.stdout).expect("OBJ text");
+    assert_eq!(text.lines().filter(|l| l.starts_with("v ")).count(), 50, "{text}");
 }
 
 #[test]

@@ -487,6 +487,22 @@ fn a_malformed_plan_is_refused_naming_the_tile() {
         "as an earlier tile is",
     );
     fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "edited.json");
+    // A tile that does not fit its plan is refused with the reason.
+    edit(&|v| v["tiles"][1]["rows"] = serde_json::json!([5, 2]));
+    fails_with(
+        &["tiles", "build", s(&edited), "--tile", "0"],
+        "tile 1 is malformed: its rows [5, 2] and columns",
+    );
+    edit(&|v| v["tiles"][0]["index"] = serde_json::json!(3));
+    fails_with(
+        &["tiles", "merge", s(&edited), "-o", s(&merged)],
+        "tile 0 is malformed: its index is 3",
+    );
+    edit(&|v| v["version"] = serde_json::json!(99));
+    fails_with(
+        &["tiles", "build", s(&edited), "--tile", "0"],
+        "edited.json: a tile plan of version 99, made by another tincull; this one reads version 3: plan again",
+    );
     // Any other edit of a sealed plan (its options, a tile's output) no longer matches its tiles' names: refused,
     // so that tiles built under two sets of options are never merged (they were merged with cracks between them).
     for change in [

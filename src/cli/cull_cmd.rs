@@ -14,15 +14,16 @@ use eval::evaluate::timed_cull;
 
 /// Arguments of `tincull cull`.
 #[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("viewpoints").required(true).args(["eye", "eyes"])))]
 pub struct CullArgs {
     /// The hierarchy file written by `tincull build`.
     pub hierarchy: PathBuf,
     /// Eye position `x,y,z` in world coordinates (m).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, required_unless_present = "eyes")]
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
     /// A file of viewpoints, one `x,y,z` per line (`#` starts a comment); prints one result per line (with `--json`,
     /// one JSON object per line: JSON Lines).
-    #[arg(long, conflicts_with = "eye")]
+    #[arg(long)]
     pub eyes: Option<PathBuf>,
     /// Read each eye's z as a height above the terrain under its x,y (m) instead of a world z: `--eye x,y,2
     /// --above-ground` stands 2 m above the ground. An eye outside the terrain's footprint is an error.

@@ -45,6 +45,8 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         files.check_grouped_obj(path, "--export-obj")?;
     }
     if let Some(path) = &args.export_gltf {
+        // The name's format first: `--export-gltf x.mtl` beside `--export-obj x.obj` is a wrong name, not a clash.
+        refuse_other_formats(path, "glTF", &["glb", "gltf"])?;
         files.check_file(
             path,
             "--export-gltf",
@@ -53,7 +55,6 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         if !is_glb(path) {
             files.check(&bin_path(path)?.0)?;
         }
-        refuse_other_formats(path, "glTF", &["glb", "gltf"])?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(path) = &args.export_json {

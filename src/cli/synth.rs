@@ -14,8 +14,8 @@ use super::{Output, OutputArgs};
 /// Arguments of `tincull synth`.
 #[derive(Debug, Args)]
 pub struct SynthArgs {
-    /// Output file: an OBJ mesh, or with `.npy` the terrain's height grid (f64, a JSON sidecar with its spacing
-    /// and position beside it), e.g. the input of `tiles plan`.
+    /// Output file: an OBJ mesh (`-`: to standard output), or with `.npy` the terrain's height grid (f64, a JSON
+    /// sidecar with its spacing and position beside it), e.g. the input of `tiles plan`.
     #[arg(short, long)]
     pub out: PathBuf,
     /// Number of vertices, 4 to 2^31 (exact; for a `.npy` grid, the nearest square number of samples).
@@ -37,18 +37,20 @@ pub struct SynthArgs {
 
 /// Runs `tincull synth`.
 pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
+    let mut out = out;
+    let stdout = args.out == std::path::Path::new("-");
     let ext = args
         .out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     anyhow::ensure!(
-        matches!(ext.as_deref(), Some("obj" | "npy")),
-        "{}: synth writes an OBJ mesh (.obj) or a height grid (.npy); name the output so",
+        stdout || matches!(ext.as_deref(), Some("obj" | "npy")),
+        "{}: synth writes an OBJ mesh (.obj, or `-` for standard output) or a height grid (.npy); name the output so",
         args.out.display()
     );
     let mut files = Outputs::new();
-    files.check(&args.out)?;
+    files.check_or_stdout(&args.out, &mut out)?;
     let grid_out = args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
     let sidecar = tin::dem::npy::sidecar_path(&args.out);
     if grid_out {

@@ -473,18 +473,28 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
     };
     let seconds = start.elapsed().as_secs_f64();
     for r in &reports {
+        // A DEM's tile is simplified from its samples; a mesh's tile keeps its part's vertices as they are.
+        let (tin, simplify) = if plan.grid.is_some() {
+            (
+                format!(
+                    "{} samples -> {} vertices, {} triangles (max error {:.3} m)",
+                    r.samples, r.vertices, r.triangles, r.max_error
+                ),
+                format!(", simplify {:.2} s", r.simplify_seconds),
+            )
+        } else {
+            (
+                format!("{} vertices, {} triangles", r.vertices, r.triangles),
+                String::new(),
+            )
+        };
         out.say(format!(
-            "tile {}: {} samples -> {} vertices, {} triangles (max error {:.3} m); halo {} and far field {} points; \
-             read {:.2} s, simplify {:.2} s, triangulate {:.2} s, horizons {:.2} s, grouping {:.2} s",
+            "tile {}: {tin}; halo {} and far field {} points; read {:.2} s{simplify}, triangulate {:.2} s, horizons \
+             {:.2} s, grouping {:.2} s",
             r.index,
-            r.samples,
-            r.vertices,
-            r.triangles,
-            r.max_error,
             r.halo_points,
             r.far_points,
             r.read_seconds,
-            r.simplify_seconds,
             r.triangulate_seconds,
             r.build.horizon_seconds,
             r.build.grouping_seconds
@@ -559,7 +569,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
         "vertices": h.mesh.positions.len(),
         "triangles": h.num_triangles(),
         "nodes": h.nodes.len(),
-        "always_visible": h.always_visible[1] - h.always_visible[0],
+        "orphans": h.always_visible[1] - h.always_visible[0],
         "seconds": seconds,
         "peak_memory_bytes": peak,
     }))

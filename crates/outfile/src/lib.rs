@@ -178,8 +178,7 @@ impl fmt::Display for Error {
         match &self.kind {
             ErrorKind::NotRegular(what) => write!(
                 f,
-                "{p}: is {what}, not a regular file; tincull only replaces regular files (give `-` to write to \
-                 standard output where the command allows it)"
+                "{p}: is {what}, not a regular file; tincull only replaces regular files: give a file name"
             ),
             ErrorKind::NoDirectory(d) => write!(f, "{p}: the directory {} does not exist", d.display()),
             ErrorKind::NoFileName => write!(f, "{p}: not a file name"),

@@ -412,8 +412,11 @@ impl Plan {
         }
         let versioned: Versioned = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         if versioned.version != PLAN_VERSION {
-            return Err(bad(format!(
-                "plan version {} is not {PLAN_VERSION} (made by another tincull): plan again",
+            // A tile plan all the same, of another version: not "not a tile plan".
+            return Err(TilesError::Parameter(format!(
+                "{}: a tile plan of version {}, made by another tincull; this one reads version {PLAN_VERSION}: plan \
+                 again",
+                path.display(),
                 versioned.version
             )));
         }
@@ -438,23 +441,29 @@ impl Plan {
                     t.tile_row, t.tile_col
                 )));
             }
-            let ok = t.index == i
-                && match &plan.grid {
-                    Some(g) => {
-                        t.part.is_none()
-                            && t.far.is_some()
-                            && t.rows[0] < t.rows[1]
-                            && t.cols[0] < t.cols[1]
-                            && t.rows[1] < g.rows
-                            && t.cols[1] < g.cols
+            let problem = if t.index != i {
+                Some(format!("its index is {}", t.index))
+            } else {
+                match &plan.grid {
+                    Some(_) if t.part.is_some() || t.far.is_none() => {
+                        Some("a DEM's tile needs a far-field file and no part".to_string())
                     }
-                    None => t.part.is_some() && t.far.is_none(),
-                };
-            if !ok {
-                return Err(TilesError::Plan {
-                    path: path.to_path_buf(),
-                    reason: format!("tile {i} is malformed"),
-                });
+                    Some(_) if !(t.rows[0] < t.rows[1] && t.cols[0] < t.cols[1]) => Some(format!(
+                        "its rows {:?} and columns {:?} are not increasing ranges",
+                        t.rows, t.cols
+                    )),
+                    Some(g) if !(t.rows[1] < g.rows && t.cols[1] < g.cols) => Some(format!(
+                        "its rows {:?} and columns {:?} reach beyond the grid of {} x {} samples",
+                        t.rows, t.cols, g.rows, g.cols
+                    )),
+                    None if t.part.is_none() || t.far.is_some() => {
+                        Some("a mesh's tile needs a part file and no far field".to_string())
+                    }
+                    _ => None,
+                }
+            };
+            if let Some(problem) = problem {
+                return Err(bad(format!("tile {i} is malformed: {problem}")));
             }
         }
         if !plan.seal_holds()? {
@@ -667,7 +676,11 @@ mod tests {
         )
         .expect("write");
         let e = Plan::load(&path).expect_err("version 1").to_string();
-        assert!(e.contains("plan version 1 is not 3") && e.contains("plan again"), "{e}");
+        assert!(
+            e.contains("a tile plan of version 1") && e.contains("reads version 3") && e.contains("plan again"),
+            "{e}"
+        );
+        assert!(!e.contains("not a tincull tile plan"), "{e}");
         assert!(e.contains("plan.json"), "{e}");
         std::fs::write(&path, "[1, 2]").expect("write");
         assert!(Plan::load(&path).is_err());
