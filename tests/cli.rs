@@ -221,6 +221,29 @@ fn a_y_up_mesh_gets_a_hint() {
         &["info", s(&obj), "--dem-vertices", "500"],
         "--dem-vertices 500 applies to DEM grids",
     );
+    // A flag given is refused even at its default value: it was given for a reason that does not apply.
+    fails_with(&["info", s(&obj), "--z-scale", "1"], "--z-scale 1 applies to DEM grids");
+    fails_with(
+        &["info", s(&obj), "--dem-vertices", "10000"],
+        "--dem-vertices 10000 applies to DEM grids",
+    );
+    fails_with(
+        &["info", s(&grid), "--dedupe", "reject"],
+        "--dedupe reject applies to OBJ meshes",
+    );
+    fails_with(&["info", s(&grid), "--up", "z"], "--up z applies to OBJ meshes");
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&obj),
+            "--max-error",
+            "1",
+            "-o",
+            s(&dir.path().join("p.json")),
+        ],
+        "--max-error 1 applies to a DEM's tiles",
+    );
     assert!(!dir.path().join("g.tch").exists() && !dir.path().join("p.json").exists());
     // And both for a hierarchy, which holds its mesh.
     let tch = dir.path().join("j.tch");

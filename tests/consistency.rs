@@ -152,6 +152,18 @@ fn failmap_takes_out() {
         &["failmap", s(&tch), "--cell-size", "4000", "-q"],
         "nothing to write: -q hides the summary",
     );
+    // `--csv -`: the CSV alone on standard output, as `eval --csv -`.
+    let csv = String::from_utf8(ok(&["failmap", s(&tch), "--cell-size", "4000", "--csv", "-"]).stdout).expect("UTF-8");
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("x,y,eye_z,false_culls,false_cull_area,occlusion_captured,triangles_drawn,visible")
+    );
+    assert!(lines.all(|l| l.split(',').count() == 8), "{csv}");
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "4000", "--csv", "-", "--json"],
+        "standard output",
+    );
 }
 
 /// `--cell-size` is the side of square cells wherever cells have a size (`build --grouping quadtree`, `failmap`,
@@ -329,7 +341,7 @@ fn nonsense_values_are_refused() {
     let wrong = dir.path().join("s.tch");
     fails_with(
         &["synth", "-o", s(&wrong), "--vertices", "100"],
-        "(.obj) or a height grid (.npy)",
+        "or a height grid (.npy)",
     );
     assert!(!wrong.exists());
     if cfg!(feature = "viewer") {

@@ -280,6 +280,27 @@ fn sweep_rejects_bad_lists() {
         assert!(!err.contains("panicked"), "{err}");
         assert!(err.contains(opt), "{opt} {val}: {err}");
     }
+    // The crystal's swept parameters with a quadtree: refused by name, nothing written.
+    for (opt, val) in [("--seeds", "10"), ("--rng-seeds", "1,2"), ("--rng-seed", "3")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+            .args([
+                "sweep",
+                mesh("jacksboro-2k.obj").to_str().expect("path"),
+                "--grouping",
+                "quadtree",
+                opt,
+                val,
+                "-q",
+                "-o",
+            ])
+            .arg(dir.path().join("q.csv"))
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{opt} {val}");
+        assert!(err.contains("applies to the crystal grouping"), "{opt} {val}: {err}");
+        assert!(!dir.path().join("q.csv").exists());
+    }
 }
 
 #[test]

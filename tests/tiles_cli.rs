@@ -133,6 +133,12 @@ fn all_tiles_or_one_by_one_merge_to_the_same_file() {
         "--json",
     ]);
     assert_eq!(v["threads"].as_u64(), Some(2));
+    // One tile: its build uses the threads asked for, up to the cores.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+    let v = json(&["tiles", "build", s(&plan), "--tile", "2", "--jobs", "2", "--json"]);
+    assert_eq!(v["threads"].as_u64(), Some(2.min(cores)));
+    let v = json(&["tiles", "build", s(&plan), "--tile", "2", "--jobs", "100000", "--json"]);
+    assert_eq!(v["threads"].as_u64(), Some(cores));
     let b = dir.path().join("b.tch");
     ok(&["tiles", "merge", s(&plan), "-o", s(&b), "-q"]);
     assert_eq!(std::fs::read(&a).expect("a"), std::fs::read(&b).expect("b"));

@@ -30,7 +30,8 @@ pub struct FailmapArgs {
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// The CSV to write, one line per cell on the terrain: x, y, eye_z, false_culls, false_cull_area,
-    /// occlusion_captured, triangles_drawn, visible (triangles the exact checker sees).
+    /// occlusion_captured, triangles_drawn, visible (triangles the exact checker sees); `-` for standard output,
+    /// instead of the summary.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Output flags.
@@ -40,7 +41,7 @@ pub struct FailmapArgs {
 
 /// Runs `tincull failmap`.
 pub fn run(args: &FailmapArgs) -> Result<()> {
-    let out: Output = args.output.into();
+    let mut out: Output = args.output.into();
     ensure!(
         args.cell_size.is_finite() && args.cell_size > 0.0,
         "--cell-size must be a positive length, got {}",
@@ -64,11 +65,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         super::files::refuse_other_format(path, "a PNG image", "png")?;
     }
     if let Some(path) = &args.csv {
-        files.check_file(
-            path,
-            "--csv",
-            "standard output carries failmap's summary (or its --json)",
-        )?;
+        files.check_or_stdout(path, &mut out)?;
         super::files::refuse_other_format(path, "the map as CSV", "csv")?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;

@@ -42,40 +42,41 @@ impl UpArg {
     }
 }
 
-/// The first flag given of those that apply to OBJ meshes only (`--keep-faces`, `--dedupe keep-highest`, `--up y`),
-/// as written on the command line.
-fn mesh_flag(keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Option<String> {
+/// The first flag given of those that apply to OBJ meshes only (`--keep-faces`, `--dedupe`, `--up`), as written on
+/// the command line (a flag given is named even at its default value: it was given for a mesh).
+fn mesh_flag(keep_faces: bool, dedupe: Option<DedupeArg>, up: Option<UpArg>) -> Option<String> {
     let name = |v: Option<clap::builder::PossibleValue>| v.map_or_else(String::new, |v| v.get_name().to_string());
     if keep_faces {
         Some(String::from("--keep-faces"))
-    } else if dedupe != DedupeArg::Reject {
+    } else if let Some(dedupe) = dedupe {
         Some(format!("--dedupe {}", name(dedupe.to_possible_value())))
-    } else if up != UpArg::Z {
-        Some(format!("--up {}", name(up.to_possible_value())))
     } else {
-        None
+        up.map(|up| format!("--up {}", name(up.to_possible_value())))
     }
 }
 
-/// The first flag given of those that apply to DEM grids only (`--z-scale`, `--spacing`, `--band`, `--dem-vertices`
-/// other than its default), as written on the command line.
-fn dem_flag(dem: &DemArgs, dem_vertices: usize) -> Option<String> {
-    if dem.z_scale != 1.0 {
-        Some(format!("--z-scale {}", tin::compact_number(dem.z_scale)))
+/// The first flag given of those that apply to DEM grids only (`--z-scale`, `--spacing`, `--band`, `--dem-vertices`),
+/// as written on the command line (even at its default value).
+fn dem_flag(dem: &DemArgs, dem_vertices: Option<usize>) -> Option<String> {
+    if let Some(z_scale) = dem.z_scale {
+        Some(format!("--z-scale {}", tin::compact_number(z_scale)))
     } else if let Some((dx, dy)) = dem.spacing {
         Some(format!("--spacing {dx},{dy}"))
     } else if let Some(b) = dem.band {
         Some(format!("--band {b}"))
-    } else if dem_vertices != DEFAULT_DEM_VERTICES {
-        Some(format!("--dem-vertices {dem_vertices}"))
     } else {
-        None
+        dem_vertices.map(|n| format!("--dem-vertices {n}"))
     }
 }
 
 /// An error when a flag that applies to OBJ meshes only ([`mesh_flag`]) is given for the DEM grid `path`, rather
 /// than ignoring it: a DEM's samples are heights on a grid, triangulated by tincull.
-pub fn refuse_mesh_flags_for_dem(path: &std::path::Path, keep_faces: bool, dedupe: DedupeArg, up: UpArg) -> Result<()> {
+pub fn refuse_mesh_flags_for_dem(
+    path: &std::path::Path,
+    keep_faces: bool,
+    dedupe: Option<DedupeArg>,
+    up: Option<UpArg>,
+) -> Result<()> {
     if let Some(flag) = mesh_flag(keep_faces, dedupe, up) {
         bail!(
             "{}: {flag} applies to OBJ meshes; a DEM grid's samples are heights on a grid, triangulated by tincull",
@@ -87,7 +88,7 @@ pub fn refuse_mesh_flags_for_dem(path: &std::path::Path, keep_faces: bool, dedup
 
 /// An error when a flag that applies to DEM grids only ([`dem_flag`]) is given for the OBJ mesh `path`, rather than
 /// ignoring it: a mesh's vertices are used as they are.
-pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vertices: usize) -> Result<()> {
+pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vertices: Option<usize>) -> Result<()> {
     if let Some(flag) = dem_flag(dem, dem_vertices) {
         bail!(
             "{}: {flag} applies to DEM grids (.npy, .asc, .hgt, .png, .tif); a mesh's vertices are used as they are",
@@ -98,40 +99,33 @@ pub fn refuse_dem_flags_for_mesh(path: &std::path::Path, dem: &DemArgs, dem_vert
 }
 
 /// How to import a mesh or a DEM grid: part of [`MeshArgs`], and on its own for the commands whose input may also be
-/// a hierarchy (`render`, `view`).
-#[derive(Clone, Copy, Debug, Args)]
+/// a hierarchy (`render`, `view`). The default: no flag given.
+#[derive(Clone, Copy, Debug, Default, Args)]
 pub struct ImportArgs {
     /// For a mesh input: use the file's own triangles (checked to form a height field) instead of
     /// re-triangulating its vertices.
     #[arg(long)]
     pub keep_faces: bool,
-    /// For a mesh input: what to do with vertices that share x,y but differ in z.
-    #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
-    pub dedupe: DedupeArg,
-    /// For a mesh input: the file's up axis (y for a y-up OBJ, rotated to z up on import).
-    #[arg(long, value_enum, default_value_t = UpArg::Z)]
-    pub up: UpArg,
-    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first.
-    #[arg(long, default_value_t = DEFAULT_DEM_VERTICES)]
-    pub dem_vertices: usize,
+    /// For a mesh input: what to do with vertices that share x,y but differ in z [default: reject].
+    #[arg(long, value_enum)]
+    pub dedupe: Option<DedupeArg>,
+    /// For a mesh input: the file's up axis (y for a y-up OBJ, rotated to z up on import) [default: z].
+    #[arg(long, value_enum)]
+    pub up: Option<UpArg>,
+    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first [default: 10000].
+    #[arg(long, value_name = "N")]
+    pub dem_vertices: Option<usize>,
     /// For a DEM grid: how to read it.
     #[command(flatten)]
     pub dem: DemArgs,
 }
 
-impl Default for ImportArgs {
-    fn default() -> Self {
-        ImportArgs {
-            keep_faces: false,
-            dedupe: DedupeArg::Reject,
-            up: UpArg::Z,
-            dem_vertices: DEFAULT_DEM_VERTICES,
-            dem: DemArgs::default(),
-        }
-    }
-}
-
 impl ImportArgs {
+    /// The vertices a DEM grid is simplified to: `--dem-vertices`, or [`DEFAULT_DEM_VERTICES`].
+    pub fn dem_vertices(&self) -> usize {
+        self.dem_vertices.unwrap_or(DEFAULT_DEM_VERTICES)
+    }
+
     /// The mesh arguments for `path` with these import options.
     pub fn mesh(&self, path: &std::path::Path) -> MeshArgs {
         MeshArgs {
@@ -150,9 +144,9 @@ pub struct DemArgs {
     #[arg(long, value_parser = parse_spacing)]
     pub spacing: Option<(f64, f64)>,
     /// Multiply a DEM grid's heights by this (for .png: metres per grey level); finite and non-zero (negative
-    /// flips the terrain).
-    #[arg(long, default_value_t = 1.0, value_parser = parse_z_scale, allow_hyphen_values = true)]
-    pub z_scale: f64,
+    /// flips the terrain) [default: 1].
+    #[arg(long, value_name = "Z_SCALE", value_parser = parse_z_scale, allow_hyphen_values = true)]
+    pub z_scale: Option<f64>,
     /// The elevation band (1-based) of a multi-band GeoTIFF.
     #[arg(long)]
     pub band: Option<u16>,
@@ -163,7 +157,7 @@ impl Default for DemArgs {
     fn default() -> Self {
         DemArgs {
             spacing: None,
-            z_scale: 1.0,
+            z_scale: None,
             band: None,
         }
     }
@@ -174,7 +168,7 @@ impl DemArgs {
     pub fn options(&self) -> tin::DemOptions {
         tin::DemOptions {
             spacing: self.spacing,
-            z_scale: self.z_scale,
+            z_scale: self.z_scale.unwrap_or(1.0),
             band: self.band,
         }
     }
@@ -531,11 +525,11 @@ impl MeshArgs {
         refuse_dem_flags_for_mesh(&self.mesh, &self.import.dem, self.import.dem_vertices)?;
         let opts = ObjImportOptions {
             keep_faces: self.import.keep_faces,
-            dedupe: match self.import.dedupe {
+            dedupe: match self.import.dedupe.unwrap_or_default() {
                 DedupeArg::Reject => DedupePolicy::Reject,
                 DedupeArg::KeepHighest => DedupePolicy::KeepHighest,
             },
-            up: self.import.up.axis(),
+            up: self.import.up.unwrap_or_default().axis(),
         };
         let spinner = out.spinner("reading mesh");
         let (tin, report) = tin::read_obj(&self.mesh, &opts).map_err(|e| {
@@ -572,11 +566,11 @@ impl MeshArgs {
 
     /// Reads a DEM grid and simplifies it to `dem_vertices` vertices.
     fn load_dem(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
-        if self.import.dem_vertices < 3 {
+        if self.import.dem_vertices() < 3 {
             bail!(
                 "{}: --dem-vertices must be at least 3, got {}",
                 self.mesh.display(),
-                self.import.dem_vertices
+                self.import.dem_vertices()
             );
         }
         let opts = self.import.dem.options();
@@ -602,10 +596,10 @@ impl MeshArgs {
         spinner.finish_and_clear();
         warn_if_degrees(&grid, &self.mesh, out);
         warn_about_dem_file(&self.mesh, &opts, out);
-        let bar = out.progress(self.import.dem_vertices as u64, "simplifying DEM");
+        let bar = out.progress(self.import.dem_vertices() as u64, "simplifying DEM");
         let progress = |v: usize| bar.set_position(v as u64);
         let simplify = tin::SimplifyOptions {
-            max_vertices: Some(self.import.dem_vertices),
+            max_vertices: Some(self.import.dem_vertices()),
             max_error: None,
         };
         let (tin, simplified) =

@@ -35,9 +35,10 @@ pub struct SweepArgs {
     /// Crystal seeds of the first pass: numbers or ranges [default: one per 200 triangles].
     #[arg(long)]
     pub seeds: Option<String>,
-    /// Seeds of the crystal's random generator: numbers or ranges (`1..5`, `1,2,3`); `--rng-seed` is the same.
-    #[arg(long, visible_alias = "rng-seed", default_value = "1")]
-    pub rng_seeds: String,
+    /// Seeds of the crystal's random generator: numbers or ranges (`1..5`, `1,2,3`); `--rng-seed` is the same
+    /// [default: 1].
+    #[arg(long, visible_alias = "rng-seed")]
+    pub rng_seeds: Option<String>,
     /// Viewpoints per class, 1 to 1000000.
     #[arg(long, default_value_t = 10)]
     pub viewpoints: usize,
@@ -83,7 +84,8 @@ pub struct SweepArgs {
     #[arg(long)]
     pub no_per_triangle: bool,
     /// The CSV file of results; combinations already in it are skipped (it must have been written with the same mesh,
-    /// build options and evaluation options).
+    /// build options and evaluation options, else it is refused; `--viewpoints` is part of each line's key, as the
+    /// swept values are, so a run with another count adds its own lines beside the others).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Output flags.
@@ -128,6 +130,16 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         ..ParamArgs::default()
     }
     .resolve(args.config.as_deref())?;
+    // The crystal's swept parameters mean nothing to a quadtree: refused rather than swept over identical builds.
+    if matches!(base.grouping, pipeline::Grouping::Quadtree(_)) {
+        let given = [
+            ("--seeds", args.seeds.is_some()),
+            ("--rng-seeds", args.rng_seeds.is_some()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|(_, g)| *g) {
+            anyhow::bail!("{flag} applies to the crystal grouping; a quadtree has no seeds (--grouping quadtree)");
+        }
+    }
     super::eval_cmd::check_viewpoints(args.viewpoints)?;
     let spec = SweepSpec {
         sectors: u32_list(&args.sectors, "--sectors")?,
@@ -143,7 +155,10 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
                 .collect::<Result<_>>()?,
             None => vec![None],
         },
-        rng_seeds: parse_list(&args.rng_seeds, "--rng-seeds")?,
+        rng_seeds: match &args.rng_seeds {
+            Some(text) => parse_list(text, "--rng-seeds")?,
+            None => vec![1],
+        },
         base,
         viewpoints: args.viewpoints,
     };

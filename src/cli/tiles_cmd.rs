@@ -12,7 +12,7 @@ use tiles::{Plan, PlanOptions, TileReport, TilesError};
 
 use super::build_cmd::{ParamArgs, peak_memory_bytes, stage_progress};
 use super::files::Outputs;
-use super::mesh_input::{DEFAULT_DEM_VERTICES, DedupeArg, DemArgs, ImportArgs, MeshArgs, UpArg, is_dem};
+use super::mesh_input::{DedupeArg, DemArgs, ImportArgs, MeshArgs, UpArg, is_dem};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull tiles`.
@@ -41,6 +41,8 @@ const DEFAULT_TILE: usize = 512;
 const DEFAULT_HALO: usize = 16;
 /// Default far-field block of a DEM's plan, in samples (a mesh's: in mean vertex spacings).
 const DEFAULT_FAR_BLOCK: usize = 16;
+/// Default vertical error bound of a DEM's tiles (m); a mesh's plan records it too, unused.
+const DEFAULT_MAX_ERROR: f64 = 1.0;
 
 /// Arguments of `tincull tiles plan`.
 #[derive(Debug, Args)]
@@ -51,12 +53,13 @@ pub struct PlanArgs {
     /// For a mesh: use the file's own triangles (checked to form a height field) instead of re-triangulating.
     #[arg(long)]
     pub keep_faces: bool,
-    /// For a mesh: what to do with vertices that share x,y but differ in z (as every command that reads a mesh).
-    #[arg(long, value_enum, default_value_t = DedupeArg::Reject)]
-    pub dedupe: DedupeArg,
-    /// For a mesh: its up axis (y for a y-up OBJ, rotated to z up; as every command that reads a mesh).
-    #[arg(long, value_enum, default_value_t = UpArg::Z)]
-    pub up: UpArg,
+    /// For a mesh: what to do with vertices that share x,y but differ in z (as every command that reads a mesh)
+    /// [default: reject].
+    #[arg(long, value_enum)]
+    pub dedupe: Option<DedupeArg>,
+    /// For a mesh: its up axis (y for a y-up OBJ, rotated to z up; as every command that reads a mesh) [default: z].
+    #[arg(long, value_enum)]
+    pub up: Option<UpArg>,
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
     #[arg(short, long)]
     pub out: PathBuf,
@@ -78,9 +81,9 @@ pub struct PlanArgs {
     #[arg(long, value_name = "R", default_value_t = 16)]
     pub far_ratio: usize,
     /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated (a DEM
-    /// only: a mesh keeps its triangles).
-    #[arg(long, default_value_t = 1.0)]
-    pub max_error: f64,
+    /// only: a mesh keeps its triangles) [default: 1].
+    #[arg(long, value_name = "M")]
+    pub max_error: Option<f64>,
     /// How to read the DEM.
     #[command(flatten)]
     pub read: DemArgs,
@@ -108,8 +111,9 @@ pub struct TileBuildArgs {
     /// Build every tile of the plan.
     #[arg(long)]
     pub all: bool,
-    /// Threads, shared by the tiles built at once [default: all cores]; at most one per tile to build (more would
-    /// only wait), with a warning above the machine's cores (each running tile holds its own memory).
+    /// Threads [default: all cores]: a single tile's build uses them (up to the machine's cores); several tiles are
+    /// built at once on them, at most one thread per tile, with a warning above the machine's cores (each running
+    /// tile holds its own memory).
     #[arg(long)]
     pub jobs: Option<usize>,
     /// Output flags.
@@ -154,7 +158,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         halo: args.halo.unwrap_or(DEFAULT_HALO),
         far_block: args.far_block.unwrap_or(DEFAULT_FAR_BLOCK),
         far_ratio: args.far_ratio,
-        max_error: args.max_error,
+        max_error: args.max_error.unwrap_or(DEFAULT_MAX_ERROR),
         params,
     };
     let stem = args
@@ -174,12 +178,11 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }
     let source = std::path::absolute(&args.dem).with_context(|| format!("cannot resolve {}", args.dem.display()))?;
     if !is_dem(&args.dem) {
-        super::mesh_input::refuse_dem_flags_for_mesh(&args.dem, &args.read, DEFAULT_DEM_VERTICES)?;
-        if args.max_error != 1.0 {
+        super::mesh_input::refuse_dem_flags_for_mesh(&args.dem, &args.read, None)?;
+        if let Some(m) = args.max_error {
             bail!(
-                "{}: --max-error {} applies to a DEM's tiles (each simplified to it); a mesh's tiles keep its triangles",
+                "{}: --max-error {m} applies to a DEM's tiles (each simplified to it); a mesh's tiles keep its triangles",
                 args.dem.display(),
-                args.max_error
             );
         }
         return plan_mesh(args, out, files, options, &source, &tiles_dir);
@@ -444,13 +447,23 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
             bail!("--jobs must be at least 1");
         }
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if j > cores {
+        if j > cores && indices.len() == 1 {
+            out.warn(format!(
+                "--jobs {j} is more than the {cores} cores of this machine: the tile's build uses {cores}"
+            ));
+        } else if j > cores {
             out.warn(format!(
                 "--jobs {j} is more than the {cores} cores of this machine: the tiles built at once share them, and \
                  each holds its own memory"
             ));
         }
-        builder = builder.num_threads(j.min(indices.len()));
+        // One tile uses the threads in its own build, up to the cores (more would only wait); several take one
+        // thread each at most, so that no more tiles than threads are held in memory at once.
+        builder = builder.num_threads(if indices.len() == 1 {
+            j.min(cores)
+        } else {
+            j.min(indices.len())
+        });
     }
     let pool = builder.build()?;
     let reports: Vec<TileReport> = if indices.len() == 1 {

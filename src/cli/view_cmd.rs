@@ -52,7 +52,7 @@ pub struct ViewArgs {
     /// Window size `WIDTHxHEIGHT` in points.
     #[arg(long, default_value = "1280x800", value_parser = super::render_cmd::parse_size)]
     pub size: [u32; 2],
-    /// Print nothing but errors.
+    /// No progress bars or human-readable text (errors and warnings are still printed), as in every command.
     #[arg(long, short)]
     pub quiet: bool,
 }
