@@ -59,7 +59,7 @@ fn one_cell_a_grid_and_the_binary_file_agree() {
     );
     assert!(r.iter().all(|x| x[0] < x[1] && x[1] <= nt));
     let size: u64 = r.iter().map(|x| u64::from(x[1] - x[0])).sum();
-    assert_eq!(c["triangles"].as_u64(), Some(size));
+    assert_eq!(c["pvs_triangles"].as_u64(), Some(size));
     assert!(
         size < u64::from(nt),
         "a 300 m cell near the ground does not see the whole terrain"

@@ -310,7 +310,7 @@ fn render_paints_a_viewcell_pvs() {
     let culled = img.count(viewer::palette::to_rgba8(viewer::palette::CULLED_COLOUR));
     let j: serde_json::Value =
         serde_json::from_str(ok(&tincull(&["pvs", p(&tch), "--cell", &cell, "--json"])).trim()).unwrap();
-    let in_pvs = j["cells"][0]["triangles"].as_u64().unwrap();
+    let in_pvs = j["cells"][0]["pvs_triangles"].as_u64().unwrap();
     assert!(in_pvs > 0);
     assert!(drawn > 0, "the PVS is painted");
     assert_eq!(

@@ -228,7 +228,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
                     "ztop": r.ztop,
                     "nodes": r.nodes,
                     "ranges": r.ranges,
-                    "triangles": r.triangles(),
+                    "pvs_triangles": r.triangles(),
                     "boxes_tested": r.tests,
                     "seconds": r.seconds,
                     "bytes": rec.encoded_len(),

@@ -173,7 +173,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
                 result.seconds
             ));
             let centre = [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3]), result.ztop];
-            let summary = json!({ "cell": rect, "triangles": result.triangles(), "seconds": result.seconds });
+            let summary = json!({ "cell": rect, "pvs_triangles": result.triangles(), "seconds": result.seconds });
             (Some(result.mask(h.num_triangles())), Some(centre), Some(summary))
         }
         None => (None, None, None),

@@ -80,8 +80,10 @@ pub struct CaseResult {
     pub vertices: usize,
     /// Triangles of the terrain.
     pub triangles: usize,
-    /// Sectors × subsectors of the build.
-    pub sectors: String,
+    /// Sectors of the build.
+    pub sectors: u32,
+    /// Subsectors per sector of the build.
+    pub subsectors: u32,
     /// Undersampling-fix radius used (m).
     pub undersampling: Option<f64>,
     /// Wall time of the build (s).
@@ -276,7 +278,7 @@ fn score(tin: &Tin, truth: &GroundTruth, b: &Built, eyes: &[Eye]) -> Result<Scor
 fn fill(case: &mut CaseResult, tin: &Tin, params: &BuildParams, b: &Built, s: &Scores) {
     case.vertices = tin.num_vertices();
     case.triangles = tin.num_triangles();
-    case.sectors = format!("{}x{}", params.sectors, params.subsectors);
+    (case.sectors, case.subsectors) = (params.sectors, params.subsectors);
     case.undersampling = params.undersampling;
     case.build_seconds = b.seconds;
     case.groups = b.groups;
@@ -317,7 +319,8 @@ fn run_case(
         note: note.into(),
         vertices: tin.num_vertices(),
         triangles: tin.num_triangles(),
-        sectors: format!("{}x{}", params.sectors, params.subsectors),
+        sectors: params.sectors,
+        subsectors: params.subsectors,
         undersampling: params.undersampling,
         ..CaseResult::default()
     };
