@@ -382,8 +382,8 @@ fn a_geotiff_mask_is_applied() {
     assert_eq!(v["dem"]["voids"], 1, "{v}");
 }
 
-/// `cull --above-ground` reads z as a height above the terrain: the same cull as with the world z it reports, and
-/// an eye off the terrain is an error naming it.
+/// `cull --above-ground` (and `eval --eyes --above-ground`) reads z as a height above the terrain: the same cull as
+/// with the world z it reports, and an eye off the terrain is an error naming it.
 #[test]
 fn cull_above_ground() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -425,13 +425,48 @@ fn cull_above_ground() {
     let line = format!("eye 2 ({}:3)", eyes.display());
     fails_with(&["cull", s(&tch), "--eyes", s(&eyes)], &line);
     fails_with(&["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"], &line);
-    // `eval` takes no --above-ground, and does not suggest it.
+    // `eval --eyes` suggests --above-ground too, and takes it: the same scores as the world z it stands for.
     let stderr =
         String::from_utf8_lossy(&run(&["eval", s(&tch), "--eyes", s(&eyes), "--no-safe-regions"]).stderr).into_owned();
     assert!(
-        stderr.contains("below the ground") && !stderr.contains("--above-ground"),
+        stderr.contains("below the ground") && stderr.contains("give --above-ground"),
         "{stderr}"
     );
+    let (relative, absolute) = (dir.path().join("rel.txt"), dir.path().join("abs.txt"));
+    std::fs::write(&relative, "10000,12000,2\n").expect("eyes");
+    std::fs::write(&absolute, format!("{world}\n")).expect("eyes");
+    let score = |file: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            s(&tch),
+            "--eyes",
+            s(file),
+            "--no-safe-regions",
+            "--no-per-triangle",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let mut v = json(&args);
+        v["rows"]
+            .as_array_mut()
+            .expect("rows")
+            .iter_mut()
+            .for_each(|r| r["cull_ns"] = serde_json::Value::Null);
+        v["rows"].clone()
+    };
+    assert_eq!(score(&relative, &["--above-ground"]), score(&absolute, &[]));
+    fails_with(
+        &[
+            "eval",
+            s(&tch),
+            "--eyes",
+            s(&eyes),
+            "--above-ground",
+            "--no-safe-regions",
+        ],
+        "eye 1 (",
+    );
+    fails_with(&["eval", s(&tch), "--above-ground"], "--eyes");
 }
 
 /// The full-resolution path (issue #18): a regular grid kept whole (every cell's four corners are cocircular, so

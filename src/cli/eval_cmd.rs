@@ -39,6 +39,10 @@ pub struct EvalArgs {
     /// `path`, instead of the seeded viewpoints: not with --classes or --viewpoints).
     #[arg(long, value_name = "FILE", conflicts_with_all = ["classes", "viewpoints"])]
     pub eyes: Option<PathBuf>,
+    /// With --eyes: read each eye's z as a height above the terrain under its x,y (m) instead of a world z, as
+    /// `cull --above-ground` does. An eye outside the terrain's footprint is an error.
+    #[arg(long, requires = "eyes")]
+    pub above_ground: bool,
     /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
     #[command(flatten)]
     pub safe: SafeArgs,
@@ -122,7 +126,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         "--view-seed: with --eyes it seeds only the yaws of a view narrower than 360° (--fov); at 360° it has \
          nothing to seed"
     );
-    let eyes = args.eyes.as_deref().map(Eyes::read).transpose()?;
+    let mut eyes = args.eyes.as_deref().map(Eyes::read).transpose()?;
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
     if let Some(eyes) = &args.eyes {
@@ -130,8 +134,12 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     }
     check_outputs(&mut files, args.export_json.as_deref(), args.csv.as_deref(), &mut out)?;
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
-    if let Some(eyes) = &eyes {
-        eyes.check_not_below_ground(&h, false)?;
+    if let Some(eyes) = &mut eyes {
+        if args.above_ground {
+            eyes.lift_above_ground(&h)?;
+        } else {
+            eyes.check_not_below_ground(&h, true)?;
+        }
     }
     let tin = hierarchy_tin(&h)?;
     let opts = EvalOptions {
