@@ -276,6 +276,9 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     }
     let started = Instant::now();
     let (tin, _) = args.mesh.load(out)?;
+    if let Some(w) = tin::validate::small_terrain_warning(tin.positions()) {
+        out.warn(format!("{}: {w}", args.mesh.mesh.display()));
+    }
     let load_seconds = started.elapsed().as_secs_f64();
     let result = build(&tin, &params, Some(stage_progress(out)))?;
     let started = Instant::now();

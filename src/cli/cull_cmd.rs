@@ -117,7 +117,8 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
             }))?;
         } else {
             out.say(format!(
-                "eye {:?}: draw {} of {} in {}; {} tested, {} culled by occlusion, {} by frustum; {:.2} µs",
+                "eye {:?}: draw {} of {} in {}; {} tested, of which {} hidden and {} outside the view (culled \
+                 with their descendants); {:.2} µs",
                 eye,
                 s.triangles_drawn,
                 count((s.triangles_drawn + s.triangles_culled) as usize, "triangle"),

@@ -20,8 +20,10 @@ pub struct SafeArgs {
     /// Safe culler: largest patch (triangles) it tests and draws below the hierarchy's leaves, 1 to 64 [default: 16].
     #[arg(long, value_name = "N")]
     pub patch: Option<usize>,
-    /// Safe culler: most occluder edges written per cull, nearest first (bounds the cost of views that see
-    /// much terrain; fewer occluders cull less, never wrongly). Unlimited by default.
+    /// Safe culler: most occluder edges written per cull, nearest first (fewer occluders cull less, never
+    /// wrongly). It bounds the writing, not the cost of a cull: with few occluders little is hidden, and every
+    /// visible node is refined and tested, which can cost more than the default; --work-budget bounds the cost.
+    /// Unlimited by default.
     #[arg(long, value_name = "N")]
     pub occluder_budget: Option<usize>,
     /// Safe culler: most work units per cull (nodes tested while refining, occluder edges and chains written; a

@@ -142,6 +142,9 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         }
     }
     let tin = hierarchy_tin(&h)?;
+    if let Some(w) = tin::validate::small_terrain_warning(tin.positions()) {
+        out.warn(format!("{}: {w}", args.hierarchy.display()));
+    }
     let opts = EvalOptions {
         viewpoints: args.viewpoints,
         classes: args.classes.clone(),

@@ -72,6 +72,15 @@ pub enum Command {
     /// of 15 culls after a warm-up, each viewpoint).
     Cull(cull_cmd::CullArgs),
     /// Evaluate every culling method against ground truth from seeded viewpoints: false culls, occlusion captured.
+    ///
+    /// Methods: `safe` and `lloyd-egbert` (which never cull a visible triangle), the regions test of the hierarchy
+    /// (`thesis`, or `stewart` for a quadtree, and `per_triangle`, the same test triangle by triangle: neither is
+    /// conservative), the conservative regions (`safe_regions`), and `frustum_only` and `none` as references.
+    ///
+    /// Per method and viewpoint class: false culls (visible triangles culled: mean, max, viewpoints with any),
+    /// occlusion captured (hidden triangles culled / hidden triangles), leaf limit (what culling exactly the leaves
+    /// with no visible triangle would capture: the most a culler of whole leaves can), the visible and drawn
+    /// fractions of the mesh, overdraw and the median cull time.
     Eval(eval_cmd::EvalArgs),
     /// Export a hierarchy as JSON, as an OBJ with one group per leaf, or as glTF 2.0.
     Export(export_cmd::ExportArgs),

@@ -103,7 +103,9 @@ impl Camera {
         }
         Ok(Camera {
             position,
-            yaw: yaw_deg.to_radians(),
+            // Reduced in degrees first (`%` is exact in floating point), so that yaws a multiple of 360° apart give
+            // the same view however large they are.
+            yaw: (yaw_deg % 360.0).to_radians(),
             hfov: if hfov_deg >= 360.0 { TAU } else { hfov_deg.to_radians() },
         })
     }

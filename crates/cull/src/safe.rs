@@ -117,9 +117,10 @@ pub struct SafeParams {
     pub columns_per_face: usize,
     /// Largest patch (triangles) below the hierarchy's leaves: clamped to 1 ..= 64.
     pub patch: usize,
-    /// Most occluder edges written into the horizon per cull, nearest first: bounds the cost of views that
-    /// see much of the terrain (fewer occluders only cull less, never wrongly). `usize::MAX`: unlimited (`null`
-    /// when serialized, which JSON readers hold exactly).
+    /// Most occluder edges written into the horizon per cull, nearest first (fewer occluders only cull less, never
+    /// wrongly). It bounds the writing, not the cost: with few occluders every visible node is refined and tested
+    /// ([`SafeParams::work_budget`] bounds the cost). `usize::MAX`: unlimited (`null` when serialized, which JSON
+    /// readers hold exactly).
     #[serde(with = "unlimited")]
     pub occluder_budget: usize,
     /// Most work units per cull: nodes tested while refining, occluder edges and chains written. Once spent, the

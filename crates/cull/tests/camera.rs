@@ -101,3 +101,30 @@ fn a_mask_shorter_than_the_draw_list_keeps_what_fits() {
     assert_eq!(list.mask(3), [false, false, true]);
     assert!(list.mask(0).is_empty());
 }
+
+/// Yaws a multiple of 360° apart are the same view, however large: `1e17` and `3.6e17` are exactly 280° and 0° in f64
+/// (they once gave other frusta, reduced in radians).
+#[test]
+fn yaws_a_turn_apart_are_the_same_view() {
+    let tin = grid_tin(21, 200.0, DVec3::ZERO, notch);
+    let (h, _) = hierarchy_of(&tin, 16, 8);
+    let eye = [40.0, 100.0, 2.0];
+    for method in [CullMethod::Safe, CullMethod::Thesis, CullMethod::LloydEgbert] {
+        let culler = AnyCuller::new(&h, method);
+        for (yaw, same) in [
+            (1e17, 280.0),
+            (3.6e17, 0.0),
+            (-1e17, -280.0),
+            (720.0 + 45.0, 45.0),
+            (-315.0, 45.0),
+        ] {
+            let a = culler.cull(&Camera::from_degrees(eye, yaw, 30.0).expect("valid"));
+            let b = culler.cull(&Camera::from_degrees(eye, same, 30.0).expect("valid"));
+            assert!(
+                b.stats.culled_by_frustum > 0,
+                "{method:?}: the view must leave something out"
+            );
+            assert_eq!(a.ranges, b.ranges, "{method:?}: yaw {yaw} against {same}");
+        }
+    }
+}

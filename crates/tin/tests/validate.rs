@@ -218,3 +218,19 @@ fn from_parts_accepts_a_small_face_that_naive_orientation_calls_degenerate() {
     let tin = Tin::from_parts(vec![a, b, c], vec![[0, 1, 2]]).expect("a valid counter-clockwise face");
     assert_eq!(tin.triangle_area_xy(0), 0.5);
 }
+
+/// A terrain a few millimetres across is warned about (its tolerances are not small against it); one of a metre is not.
+#[test]
+fn a_terrain_under_a_metre_across_is_warned_about() {
+    let tiny = grid(20, 10, 1e-4, DVec3::ZERO).validate();
+    assert!(tiny.is_height_field());
+    assert!(
+        tiny.warnings
+            .iter()
+            .any(|w| w.contains("the terrain spans only 1.900e-3 m across")),
+        "{:?}",
+        tiny.warnings
+    );
+    let metre = grid(11, 11, 0.1, DVec3::ZERO).validate();
+    assert!(metre.warnings.is_empty(), "{:?}", metre.warnings);
+}
