@@ -262,44 +262,29 @@ fn sweep_resume_reruns_incomplete_combinations_and_refuses_damaged_lines() {
 #[test]
 fn sweep_rejects_bad_lists() {
     let dir = tempfile::tempdir().expect("temp dir");
-    for (opt, val) in [("--sectors", "4,x"), ("--rng-seeds", "5..1"), ("--subsectors", "")] {
+    let out = dir.path().join("x.csv");
+    // Runs a sweep that must fail without a panic and write nothing; returns its error.
+    let refused = |args: &[&str]| {
         let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
-            .args([
-                "sweep",
-                mesh("jacksboro-2k.obj").to_str().expect("path"),
-                opt,
-                val,
-                "-q",
-                "-o",
-            ])
-            .arg(dir.path().join("x.csv"))
+            .args(["sweep", mesh("jacksboro-2k.obj").to_str().expect("path"), "-q", "-o"])
+            .arg(&out)
+            .args(args)
             .output()
             .expect("runs");
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{opt} {val}");
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!o.status.success(), "{args:?}");
         assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists(), "{args:?}");
+        err
+    };
+    for (opt, val) in [("--sectors", "4,x"), ("--rng-seeds", "5..1"), ("--subsectors", "")] {
+        let err = refused(&[opt, val]);
         assert!(err.contains(opt), "{opt} {val}: {err}");
     }
-    // The crystal's swept parameters with a quadtree: refused by name, nothing written.
+    // The crystal's swept parameters with a quadtree: refused by name.
     for (opt, val) in [("--seeds", "10"), ("--rng-seeds", "1,2"), ("--rng-seed", "3")] {
-        let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
-            .args([
-                "sweep",
-                mesh("jacksboro-2k.obj").to_str().expect("path"),
-                "--grouping",
-                "quadtree",
-                opt,
-                val,
-                "-q",
-                "-o",
-            ])
-            .arg(dir.path().join("q.csv"))
-            .output()
-            .expect("runs");
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{opt} {val}");
+        let err = refused(&["--grouping", "quadtree", opt, val]);
         assert!(err.contains("applies to the crystal grouping"), "{opt} {val}: {err}");
-        assert!(!dir.path().join("q.csv").exists());
     }
 }
 

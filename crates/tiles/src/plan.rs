@@ -409,9 +409,18 @@ impl Plan {
         #[derive(Deserialize)]
         struct Versioned {
             version: u32,
+            /// A plan's own keys (every version has one of them): another JSON with a version is not a plan.
+            tiles: Option<serde::de::IgnoredAny>,
+            far_field: Option<serde::de::IgnoredAny>,
         }
         let versioned: Versioned = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         if versioned.version != PLAN_VERSION {
+            if versioned.tiles.is_none() && versioned.far_field.is_none() {
+                return Err(bad(format!(
+                    "version {}, and neither tiles nor a far field",
+                    versioned.version
+                )));
+            }
             // A tile plan all the same, of another version: not "not a tile plan".
             return Err(TilesError::Parameter(format!(
                 "{}: a tile plan of version {}, made by another tincull; this one reads version {PLAN_VERSION}: plan \

@@ -495,7 +495,7 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
 /// A terrain narrower than this (m) gets a warning: its tolerances are no longer small against it.
 const SMALL_TERRAIN: f64 = 1.0;
 
-/// A warning for a terrain under a metre across ([`SMALL_TERRAIN`], its wider side in x,y over the finite
+/// A warning for a terrain under a metre across (`SMALL_TERRAIN`, its wider side in x,y over the finite
 /// `positions`). Tolerances are absolute in part (the ground truth's 1e-9 m, the safe culler's 1e-7 m): on a terrain a
 /// few millimetres across they call sight lines clear that are not, which culls less but scores less exactly.
 pub fn small_terrain_warning(positions: &[DVec3]) -> Option<String> {
