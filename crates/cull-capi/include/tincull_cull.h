@@ -144,7 +144,9 @@ typedef struct TcInfo {
    */
   uint32_t sectors;
   /**
-   * First triangle of the always-visible range (it runs to `triangles`).
+   * First triangle of the always-visible range (it runs to `triangles`): the orphans, which no region of the
+   * hierarchy hides. The thesis', Stewart's and Lloyd & Egbert's cullers always draw it; the safe culler tests it
+   * like any other triangles and may cull part of it.
    */
   uint32_t always_visible_start;
   /**

@@ -97,7 +97,9 @@ pub struct TcInfo {
     pub nodes: u32,
     /// Sectors of the occlusion regions.
     pub sectors: u32,
-    /// First triangle of the always-visible range (it runs to `triangles`).
+    /// First triangle of the always-visible range (it runs to `triangles`): the orphans, which no region of the
+    /// hierarchy hides. The thesis', Stewart's and Lloyd & Egbert's cullers always draw it; the safe culler tests it
+    /// like any other triangles and may cull part of it.
     pub always_visible_start: u32,
     /// An upper bound on the ranges one cull can return: a buffer this long never gets `TC_ERR_BUFFER_TOO_SMALL`.
     pub max_ranges: u32,
@@ -145,7 +147,8 @@ fn guard(body: impl FnOnce() -> Result<(), Failure>) -> i32 {
     }
 }
 
-fn method(m: u32) -> Result<CullMethod, Failure> {
+/// The method of `m`; the error names `what` is being loaded (the function and file, or the memory buffer).
+fn method(m: u32, what: &str) -> Result<CullMethod, Failure> {
     match m {
         TC_METHOD_SAFE => Ok(CullMethod::Safe),
         TC_METHOD_THESIS => Ok(CullMethod::Thesis),
@@ -154,8 +157,8 @@ fn method(m: u32) -> Result<CullMethod, Failure> {
         _ => fail(
             TC_ERR_INVALID,
             format!(
-                "unknown method {m}: expected TC_METHOD_SAFE (0), TC_METHOD_THESIS (1), TC_METHOD_STEWART (2) or \
-                 TC_METHOD_LLOYD_EGBERT (3)"
+                "{what}: unknown method {m}: expected TC_METHOD_SAFE (0), TC_METHOD_THESIS (1), TC_METHOD_STEWART (2) \
+                 or TC_METHOD_LLOYD_EGBERT (3)"
             ),
         ),
     }
@@ -232,7 +235,7 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
         }
         // SAFETY: the caller passes a NUL-terminated string.
         let path = path_of(unsafe { CStr::from_ptr(path) })?;
-        let m = method(method_id)?;
+        let m = method(method_id, &format!("tc_load_path: {}", path.display()))?;
         let h = Hierarchy::load(path).map_err(|e| load_error("tc_load_path", e))?;
         m.check(&h)
             .map_err(|e| Failure(TC_ERR_INVALID, format!("tc_load_path: {}: {e}", path.display())))?;
@@ -268,7 +271,7 @@ pub unsafe extern "C" fn tc_load_buffer(data: *const u8, len: usize, method_id: 
         }
         // SAFETY: the caller passes `len` readable bytes at `data`, and `len` is at most `isize::MAX`.
         let bytes = unsafe { std::slice::from_raw_parts(data, len) };
-        let m = method(method_id)?;
+        let m = method(method_id, "tc_load_buffer: memory buffer")?;
         let h = Hierarchy::from_bytes(bytes).map_err(|e| load_error("memory buffer", e))?;
         m.check(&h)
             .map_err(|e| Failure(TC_ERR_INVALID, format!("memory buffer: {e}")))?;

@@ -257,7 +257,11 @@ fn errors_are_codes_with_messages() {
         assert!(c.is_null());
         let bytes = bundled_hierarchy().to_bytes().expect("to_bytes");
         assert_eq!(tc_load_buffer(bytes.as_ptr(), bytes.len(), 7, &mut c), TC_ERR_INVALID);
-        assert!(last_error().contains("unknown method 7"));
+        assert!(
+            last_error().contains("tc_load_buffer: memory buffer: unknown method 7"),
+            "{}",
+            last_error()
+        );
         assert_eq!(
             tc_load_buffer(bytes.as_ptr(), bytes.len(), TC_METHOD_THESIS, &mut c),
             TC_OK

@@ -106,7 +106,13 @@ impl Camera {
             // Reduced in degrees first (`%` is exact in floating point), so that yaws a multiple of 360° apart give
             // the same view however large they are.
             yaw: (yaw_deg % 360.0).to_radians(),
-            hfov: if hfov_deg >= 360.0 { TAU } else { hfov_deg.to_radians() },
+            // A field of view below about 3e-322° is 0 in radians, which would restrict nothing: at least the least
+            // normal angle.
+            hfov: if hfov_deg >= 360.0 {
+                TAU
+            } else {
+                hfov_deg.to_radians().max(f64::MIN_POSITIVE)
+            },
         })
     }
 

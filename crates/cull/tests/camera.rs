@@ -126,5 +126,16 @@ fn yaws_a_turn_apart_are_the_same_view() {
             );
             assert_eq!(a.ranges, b.ranges, "{method:?}: yaw {yaw} against {same}");
         }
+        // The narrowest field of view restricts the most, even below the smallest angle in radians (it once
+        // restricted nothing).
+        let narrow = culler.cull(&Camera::from_degrees(eye, 0.0, 1e-3).expect("valid"));
+        for fov in [1e-322, 5e-324] {
+            let tiny = culler.cull(&Camera::from_degrees(eye, 0.0, fov).expect("valid"));
+            assert!(tiny.stats.culled_by_frustum > 0, "{method:?}: fov {fov}");
+            assert!(
+                tiny.stats.triangles_drawn <= narrow.stats.triangles_drawn,
+                "{method:?}: fov {fov}"
+            );
+        }
     }
 }
