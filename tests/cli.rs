@@ -658,7 +658,7 @@ fn build_cull_export_eval_round_trip() {
     for key in [
         "horizon_seconds",
         "grouping_seconds",
-        "orphan_passes",
+        "orphan_passes_run",
         "orphans",
         "groups",
         "nodes",
@@ -705,7 +705,12 @@ fn build_cull_export_eval_round_trip() {
         "--no-per-triangle",
         "--json",
     ]);
-    assert!(v["viewpoints_per_class"].is_null(), "--eyes has no classes: {v}");
+    assert!(v["options"]["viewpoints"].is_null(), "--eyes has no classes: {v}");
+    assert!(v["options"]["classes"].is_null(), "--eyes has no classes: {v}");
+    assert!(
+        v["options"]["eyes"].as_u64().is_some_and(|n| n > 0),
+        "--eyes counted: {v}"
+    );
 
     let (json_out, obj_out) = (dir.path().join("h.json"), dir.path().join("h.obj"));
     ok(&[

@@ -32,15 +32,17 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
         s(&out),
         "--json",
     ]);
-    assert_eq!(v["viewpoints_per_class"], 1);
+    assert_eq!(v["options"]["viewpoints"], 1);
     // The culler's parameters are reported, the defaults included, with the unlimited occluder budget as null.
     let d = cull::SafeParams::default();
-    assert_eq!(v["culler_params"]["columns_per_face"], d.columns_per_face, "{v}");
-    assert_eq!(v["culler_params"]["work_budget"], d.work_budget, "{v}");
-    assert!(v["culler_params"]["occluder_budget"].is_null(), "{v}");
+    assert_eq!(v["options"]["safe"]["columns_per_face"], d.columns_per_face, "{v}");
+    assert_eq!(v["options"]["safe"]["work_budget"], d.work_budget, "{v}");
+    assert!(v["options"]["safe"]["occluder_budget"].is_null(), "{v}");
     assert!(v["rows"].as_array().is_some_and(|r| !r.is_empty()));
     let file: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).expect("file")).expect("JSON file");
     assert!(file["rows"].is_array());
+    // `--json` and `--export-json` name the options alike.
+    assert_eq!(file["options"], v["options"]);
 
     let hj = dir.path().join("h.json");
     let v = json(&["export", s(&tch), "--export-json", s(&hj), "--json"]);

@@ -247,8 +247,8 @@ pub fn print_report(r: &BuildReport, out: Output) {
         r.horizon_seconds, r.regions_seconds, r.grouping_seconds
     ));
     out.say(format!(
-        "  orphan passes {}, orphans {}, groups {}, nodes {}, levels {}, top-level {}",
-        r.orphan_passes, r.orphans, r.groups, r.nodes, r.levels, r.top_level
+        "  orphan passes run {}, orphans {}, groups {}, nodes {}, levels {}, top-level {}",
+        r.orphan_passes_run, r.orphans, r.groups, r.nodes, r.levels, r.top_level
     ));
     out.say(format!(
         "  visibility data {} bytes ({:.1} bytes per triangle)",

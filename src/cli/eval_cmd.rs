@@ -169,16 +169,14 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     ));
     add_outputs(&mut files, &e, args.export_json.as_deref(), args.csv.as_deref())?;
     files.commit()?;
+    // The evaluation as `--export-json` writes it, less its viewpoints.
     out.json(&serde_json::json!({
         "hierarchy": args.hierarchy,
+        "options": e.options,
         "triangles": e.triangles,
-        "viewpoints_per_class": opts.eyes.is_none().then_some(opts.viewpoints),
-        "view_seed": opts.view_seed,
-        "fov_deg": opts.fov_deg,
-        // The horizon cullers' parameters (`columns_per_face` is `lloyd-egbert`'s too), as in `--export-json`'s
-        // `options.safe`.
-        "culler_params": opts.safe,
         "ground_truth_seconds_per_viewpoint": e.ground_truth_seconds_per_viewpoint,
+        "per_triangle_setup_seconds": e.per_triangle_setup_seconds,
+        "safe_regions_setup_seconds": e.safe_regions_setup_seconds,
         "rows": e.rows,
     }))
 }

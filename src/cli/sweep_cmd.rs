@@ -296,7 +296,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
                     h.summary.occlusion_captured.map_or(0.0, |s| s.mean),
                     h.summary.false_culls.map_or(0.0, |s| s.mean),
                     h.summary.viewpoints_with_false_culls,
-                    h.cull_ns / 1000.0
+                    h.cull_ns as f64 / 1000.0
                 );
                 bar.suspend(|| out.say(line));
             }

@@ -53,8 +53,9 @@ pub const METHODS: [&str; 8] = [
 /// Most viewpoints per class: each one's ground truth takes milliseconds or more, and all are kept in memory.
 pub const MAX_VIEWPOINTS: usize = 1_000_000;
 
-/// What to evaluate.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// What to evaluate. Serialized as it applies: with `eyes`, `viewpoints` and `classes` are `null` (they are not used)
+/// and `eyes` is their count (the eyes themselves are the viewpoints' `eye`); without, `eyes` is `null`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct EvalOptions {
     /// Viewpoints per class.
     pub viewpoints: usize,
@@ -72,6 +73,35 @@ pub struct EvalOptions {
     pub safe_regions: bool,
     /// Score these eyes (class `path`, a user's camera path) instead of drawing viewpoints from `classes`.
     pub eyes: Option<Vec<[f64; 3]>>,
+}
+
+impl Serialize for EvalOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        /// The options as they apply (see [`EvalOptions`]).
+        #[derive(Serialize)]
+        struct Applied<'a> {
+            viewpoints: Option<usize>,
+            classes: Option<&'a [ViewpointClass]>,
+            view_seed: u64,
+            fov_deg: f64,
+            per_triangle: bool,
+            safe: SafeParams,
+            safe_regions: bool,
+            eyes: Option<usize>,
+        }
+        let classes = self.eyes.is_none();
+        Applied {
+            viewpoints: classes.then_some(self.viewpoints),
+            classes: classes.then_some(&self.classes[..]),
+            view_seed: self.view_seed,
+            fov_deg: self.fov_deg,
+            per_triangle: self.per_triangle,
+            safe: self.safe,
+            safe_regions: self.safe_regions,
+            eyes: self.eyes.as_ref().map(Vec::len),
+        }
+        .serialize(s)
+    }
 }
 
 impl Default for EvalOptions {
@@ -99,7 +129,7 @@ pub struct EvalRow {
     /// Aggregated metrics.
     pub summary: Summary,
     /// Median run-time test time over the viewpoints (ns).
-    pub cull_ns: f64,
+    pub cull_ns: u64,
     /// Mean `|V| / |A|` over the viewpoints.
     pub visible_fraction: f64,
     /// Mean `|D| / |A|` over the viewpoints.
@@ -511,7 +541,7 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
                 method: name.to_string(),
                 class: class.clone(),
                 summary: summarize(&metrics),
-                cull_ns: ns[ns.len() / 2] as f64,
+                cull_ns: ns[ns.len() / 2],
                 visible_fraction,
                 drawn_fraction,
                 leaf_limit: leaf_limit_mean,
@@ -640,7 +670,7 @@ impl Evaluation {
                 100.0 * r.visible_fraction,
                 100.0 * r.drawn_fraction,
                 mean(m.overdraw),
-                r.cull_ns / 1000.0
+                r.cull_ns as f64 / 1000.0
             );
         }
         s

@@ -34,7 +34,7 @@ use pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hier
 
 /// The header line of a sweep CSV (without the newline).
 pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
-regions_seconds,grouping_seconds,visibility_bytes,groups,orphans,orphan_passes,nodes,levels,top_level,method,class,\
+regions_seconds,grouping_seconds,visibility_bytes,groups,orphans,orphan_passes_run,nodes,levels,top_level,method,class,\
 views,false_culls_mean,false_culls_max,viewpoints_with_false_culls,false_cull_area_mean,occlusion_captured_mean,\
 occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns,visible_fraction,drawn_fraction,leaf_limit,setup";
 
@@ -203,7 +203,7 @@ pub fn csv_lines(key: &SweepKey, report: &BuildReport, e: &Evaluation) -> Vec<St
                 report.visibility_bytes,
                 report.groups,
                 report.orphans,
-                report.orphan_passes,
+                report.orphan_passes_run,
                 report.nodes,
                 report.levels,
                 report.top_level,

@@ -129,8 +129,8 @@ pub struct BuildReport {
     pub regions_seconds: f64,
     /// Wall time of crystal growth and the merge hierarchy (s).
     pub grouping_seconds: f64,
-    /// Orphan passes run after the first pass.
-    pub orphan_passes: u32,
+    /// Orphan passes run after the first pass (at most the limit `params.crystal.orphan_passes`).
+    pub orphan_passes_run: u32,
     /// Triangles in the always-visible set.
     pub orphans: usize,
     /// Leaf groups.
@@ -250,7 +250,7 @@ pub fn build_from_regions(
             horizon_seconds,
             regions_seconds,
             grouping_seconds,
-            orphan_passes: 0,
+            orphan_passes_run: 0,
             orphans: 0,
             groups: leaves,
             nodes: hierarchy.nodes.len(),
@@ -288,7 +288,7 @@ pub fn build_from_regions(
         horizon_seconds,
         regions_seconds,
         grouping_seconds,
-        orphan_passes: s.orphan_passes,
+        orphan_passes_run: s.orphan_passes,
         orphans: s.orphans,
         groups: s.groups,
         nodes: s.nodes,
