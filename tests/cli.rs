@@ -1385,3 +1385,34 @@ fn demo_refuses_dash_as_its_out_dir() {
         "nothing created"
     );
 }
+
+/// `view` checks what it would write and the method before a window opens: a screenshot over the input (which once
+/// replaced the hierarchy by a PNG), of another format or into a missing folder, `--screenshot-after` alone, and a
+/// method the hierarchy's grouping cannot take (as `render` refuses it) are errors, and nothing is written.
+#[test]
+fn view_checks_its_screenshot_and_method_before_opening_a_window() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "-q"]);
+    let before = std::fs::read(&tch).expect("hierarchy");
+    fails_with(&["view", s(&tch), "--screenshot", s(&tch)], "h.tch");
+    let typo = dir.path().join("shot.tch");
+    fails_with(&["view", s(&tch), "--screenshot", s(&typo)], "name it .png");
+    let missing = dir.path().join("no/shot.png");
+    fails_with(&["view", s(&tch), "--screenshot", s(&missing)], "does not exist");
+    fails_with(
+        &["view", s(&tch), "--screenshot-after", "3"],
+        "--screenshot-after 3 applies to --screenshot",
+    );
+    fails_with(&["view", s(&tch), "--method", "stewart"], "needs a quadtree hierarchy");
+    fails_with(
+        &["view", s(&mesh("jacksboro-2k.obj")), "--method", "stewart"],
+        "needs a quadtree hierarchy",
+    );
+    assert_eq!(
+        std::fs::read(&tch).expect("hierarchy"),
+        before,
+        "the input is untouched"
+    );
+    assert!(!typo.exists() && !missing.exists());
+}

@@ -398,3 +398,54 @@ fn stress_does_not_read_developer_data_by_default() {
         "crater_lake.npy",
     );
 }
+
+/// `--view-seed` seeds the viewpoints of the mesh, not of one build: two builds of one mesh (their triangles in other
+/// orders) are scored from the same eyes, and a class gets the same eyes whichever other classes are asked for.
+#[test]
+fn a_view_seed_gives_the_same_eyes_to_every_build_of_a_mesh() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let default = hierarchy(dir.path());
+    let other = dir.path().join("8x1.tch");
+    let obj = mesh("jacksboro-2k.obj");
+    ok(&[
+        "build",
+        s(&obj),
+        "-o",
+        s(&other),
+        "--sectors",
+        "8",
+        "--subsectors",
+        "1",
+        "--rng-seed",
+        "2",
+        "-q",
+    ]);
+    let eyes = |tch: &Path, classes: &str| -> Vec<(String, serde_json::Value)> {
+        let out = dir.path().join("e.json");
+        ok(&[
+            "eval",
+            s(tch),
+            "--viewpoints",
+            "3",
+            "--classes",
+            classes,
+            "--no-per-triangle",
+            "--no-safe-regions",
+            "--export-json",
+            s(&out),
+            "-q",
+        ]);
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).expect("file")).expect("JSON file");
+        v["viewpoints"]
+            .as_array()
+            .expect("viewpoints")
+            .iter()
+            .map(|p| (p["class"].as_str().unwrap_or("").to_string(), p["eye"].clone()))
+            .collect()
+    };
+    let a = eyes(&default, "ground,high,sky");
+    assert_eq!(a.len(), 9);
+    assert_eq!(a, eyes(&other, "ground,high,sky"), "two builds of one mesh");
+    let high: Vec<_> = a.iter().filter(|(c, _)| c == "high").cloned().collect();
+    assert_eq!(high, eyes(&default, "high"), "high alone");
+}

@@ -215,13 +215,16 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         Ok(far_points)
     })?;
     warn_of_earlier_files(&plan, &args.out, &dir, out);
-    let (rows, cols) = plan
-        .tiles
-        .iter()
-        .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
+    let [rows, cols] = tiles::plan::tile_grid([grid.rows, grid.cols], options.tile);
+    let void_tiles = rows * cols - plan.tiles.len();
+    let left_out = if void_tiles > 0 {
+        format!(", {} without terrain left out", count(void_tiles, "tile"))
+    } else {
+        String::new()
+    };
     out.say(format!(
-        "{} ({} x {} samples) -> {}: {} ({rows} x {cols}) of at most {} intervals, halo {} samples, far field \
-         {} blocks (at most {} points per tile); tiles write to {}",
+        "{} ({} x {} samples) -> {}: {} ({rows} x {cols}{left_out}) of at most {} intervals, halo {} samples, far \
+         field {} blocks (at most {} points per tile); tiles write to {}",
         args.dem.display(),
         grid.rows,
         grid.cols,
@@ -238,6 +241,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,
+        "void_tiles": void_tiles,
         "far_blocks": field.finest(),
         "far_points": far_points,
         "tiles_dir": dir,

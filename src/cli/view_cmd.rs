@@ -4,13 +4,16 @@
 use super::output::count;
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use viewer::app::{ScreenshotRequest, Source, Startup, ViewerOptions};
 
 use super::Output;
 use super::build_cmd::ParamArgs;
 use super::cull_cmd::parse_point;
+
+/// Frames drawn before a screenshot, by default.
+const DEFAULT_SCREENSHOT_AFTER: u32 = 10;
 
 /// Arguments of `tincull view`.
 #[derive(Debug, Args)]
@@ -47,7 +50,7 @@ pub struct ViewArgs {
     #[arg(long, value_name = "PNG")]
     pub screenshot: Option<PathBuf>,
     /// Frames drawn before the screenshot.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = DEFAULT_SCREENSHOT_AFTER)]
     pub screenshot_after: u32,
     /// Window size `WIDTHxHEIGHT` in points.
     #[arg(long, default_value = "1280x800", value_parser = super::render_cmd::parse_size)]
@@ -60,10 +63,26 @@ pub struct ViewArgs {
 /// Runs `tincull view`.
 pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     let is_tch = super::mesh_input::is_hierarchy(&args.input);
+    // The screenshot's path is checked before the window opens, as every output is.
+    if let Some(shot) = &args.screenshot {
+        let mut files = super::files::Outputs::new();
+        files.input(&args.input)?;
+        anyhow::ensure!(
+            shot.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
+            "{}: --screenshot writes a PNG image; name it .png",
+            shot.display()
+        );
+        files.check(shot)?;
+    } else if args.screenshot_after != DEFAULT_SCREENSHOT_AFTER {
+        anyhow::bail!("--screenshot-after {} applies to --screenshot", args.screenshot_after);
+    }
     let mut params = args.params.resolve(None)?;
     let source = if is_tch {
         args.import.mesh(&args.input).refuse_for_hierarchy()?;
         let h = super::mesh_input::load_hierarchy(&args.input)?;
+        args.method
+            .check(&h)
+            .with_context(|| format!("{}", args.input.display()))?;
         if let Some(eye) = args.eye {
             super::culling_args::Eyes::given(eye).check_not_below_ground(&h, false)?;
         }
@@ -82,6 +101,17 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         }
         Source::Hierarchy(h)
     } else {
+        // The hierarchy comes from the panel's parameters (Rebuild): the method must fit their grouping.
+        let grouping = match params.grouping {
+            pipeline::Grouping::Crystal => cull::Grouping::Crystal,
+            pipeline::Grouping::Quadtree(_) => cull::Grouping::Quadtree {
+                built_depth: 0,
+                stored_depth: 0,
+            },
+        };
+        args.method
+            .check_grouping(grouping)
+            .with_context(|| format!("{}", args.input.display()))?;
         let (tin, _) = args.import.mesh(&args.input).load(out)?;
         Source::Mesh(tin)
     };
@@ -97,7 +127,12 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         source,
         params,
         rebuild: None,
-        export_stem: args.input.with_extension(""),
+        // Exports go beside the input under another name (`NAME-view.tch`): never over the terrain shown.
+        export_stem: args.input.with_file_name(format!(
+            "{}-view",
+            args.input.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default()
+        )),
+        inputs: vec![args.input.clone()],
         eye: args.eye,
         screenshot: args.screenshot.as_ref().map(|path| ScreenshotRequest {
             path: path.clone(),
@@ -113,7 +148,11 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         },
     })?;
     if let Some(path) = &args.screenshot {
-        out.say(format!("wrote {}", path.display()));
+        match &summary.screenshot {
+            Some(Ok(_)) => out.say(format!("wrote {}", path.display())),
+            Some(Err(e)) => anyhow::bail!("cannot write the screenshot: {e}"),
+            None => anyhow::bail!("{}: no screenshot was taken (the window closed first)", path.display()),
+        }
     }
     if summary.rebuilds > 0 {
         out.say(format!(

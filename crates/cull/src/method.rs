@@ -60,7 +60,11 @@ impl CullMethod {
     /// Whether the method applies to `h`: `thesis` needs a crystal hierarchy and `stewart` a quadtree one (see the
     /// module documentation); `safe` and `lloyd-egbert` take both.
     pub fn check(self, h: &Hierarchy) -> Result<(), HierarchyError> {
-        let grouping = h.build.grouping;
+        self.check_grouping(h.build.grouping)
+    }
+
+    /// [`CullMethod::check`] for a hierarchy of `grouping`, before it is built.
+    pub fn check_grouping(self, grouping: Grouping) -> Result<(), HierarchyError> {
         let wrong = |needs: &str, build: &str| {
             Err(HierarchyError::MethodMismatch(format!(
                 "method `{}` needs a {needs} hierarchy, but this one is {}-grouped (build one with `tincull build \

@@ -208,24 +208,6 @@ pub fn per_triangle_of(h: &Hierarchy, tin: &Tin) -> Result<Hierarchy> {
     Ok(per_triangle_hierarchy(tin, &triangle_regions(tin, &vertices)))
 }
 
-/// Triangles with a vertex or the centroid inside the horizontal wedge `yaw ± half` seen from `eye`.
-fn in_view(tin: &Tin, eye: DVec3, yaw: f64, half: f64) -> Vec<bool> {
-    let inside = |p: DVec3| {
-        let d = p - eye;
-        if d.x == 0.0 && d.y == 0.0 {
-            return true;
-        }
-        let gap = (d.y.atan2(d.x) - yaw + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
-        gap.abs() <= half
-    };
-    (0..tin.num_triangles())
-        .map(|t| {
-            let c = tin.corners(t);
-            c.iter().any(|&p| inside(p)) || inside((c[0] + c[1] + c[2]) / 3.0)
-        })
-        .collect()
-}
-
 /// One viewpoint of a [`GroundTruthSet`].
 #[derive(Clone, Debug)]
 pub struct TruthView {
@@ -285,8 +267,13 @@ impl GroundTruthSet {
             None => opts
                 .classes
                 .iter()
-                .enumerate()
-                .map(|(ci, &class)| {
+                .map(|&class| {
+                    // Seeded by the class itself, not its place in `classes`: a class gets the same eyes whichever
+                    // other classes are asked for.
+                    let ci = ViewpointClass::ALL
+                        .iter()
+                        .position(|&c| c == class)
+                        .unwrap_or(ViewpointClass::ALL.len());
                     let seed = opts
                         .view_seed
                         .wrapping_mul(0x9e37_79b9_7f4a_7c15)
@@ -310,7 +297,7 @@ impl GroundTruthSet {
                 let mut visible = truth.visible_triangles(eye);
                 truth_seconds += t0.elapsed().as_secs_f64();
                 if !all_around {
-                    let view = in_view(tin, eye, yaw, opts.fov_deg.to_radians() * 0.5);
+                    let view = truth::in_view(tin, eye, yaw, opts.fov_deg.to_radians() * 0.5);
                     visible.iter_mut().zip(view).for_each(|(v, inside)| *v &= inside);
                 }
                 views.push(TruthView {

@@ -110,6 +110,19 @@ impl Default for BuildParams {
     }
 }
 
+impl BuildParams {
+    /// Checks the values (the sectors and subsectors, the grouping's parameters), as [`build`] does before any work:
+    /// a tile plan checks them before its jobs run.
+    pub fn validate(&self) -> Result<()> {
+        SectorConfig::new(self.sectors, self.subsectors)?;
+        match &self.grouping {
+            Grouping::Crystal => self.crystal.validate()?,
+            Grouping::Quadtree(q) => q.validate()?,
+        }
+        Ok(())
+    }
+}
+
 /// The figures of a build (the thesis' Tables 2 and 3, plus storage).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct BuildReport {
@@ -174,11 +187,8 @@ pub type BuildProgress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
 
 /// Runs the whole pipeline on `tin`.
 pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -> Result<Build> {
+    params.validate()?;
     let config = SectorConfig::new(params.sectors, params.subsectors)?;
-    match &params.grouping {
-        Grouping::Crystal => params.crystal.validate()?,
-        Grouping::Quadtree(q) => q.validate()?,
-    }
     let report_progress = progress.clone();
     let opts = HorizonOptions {
         undersampling_radius: params.undersampling,
@@ -218,10 +228,7 @@ pub fn build_from_regions(
     progress: Option<BuildProgress>,
 ) -> Result<Build> {
     let [horizon_seconds, regions_seconds] = seconds;
-    match &params.grouping {
-        Grouping::Crystal => params.crystal.validate()?,
-        Grouping::Quadtree(q) => q.validate()?,
-    }
+    params.validate()?;
     if vertex_regions.len() != tin.num_vertices() || vertex_regions.sectors() != params.sectors {
         anyhow::bail!(
             "{} vertex region rows of {} sectors do not match a terrain of {} vertices built with {} sectors",

@@ -267,7 +267,7 @@ pub fn build_tile(
     let (ext, _) = tin::triangulate(&points, DedupePolicy::Reject)?;
     if ext.num_vertices() != points.len() {
         return Err(TilesError::Parameter(format!(
-            "tile {index}: {} of the sweep's points coincide",
+            "{} of the sweep's points coincide",
             points.len() - ext.num_vertices()
         )));
     }
@@ -294,7 +294,7 @@ pub fn build_tile(
     drop(ext);
     let regions_seconds = start.elapsed().as_secs_f64();
     let build = pipeline::build_from_regions(tin, regions, params, [horizon_seconds, regions_seconds], progress)
-        .map_err(|e| TilesError::Parameter(format!("tile {index}: {e:#}")))?;
+        .map_err(|e| TilesError::Parameter(format!("{e:#}")))?;
     let report = TileReport {
         index,
         samples: input.samples,

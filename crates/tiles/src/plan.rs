@@ -2,7 +2,9 @@
 //!
 //! Tiles cut the grid's sample intervals evenly: with `k` tiles across `n` samples, tile `i` spans samples
 //! `round(i·(n−1)/k) ..= round((i+1)·(n−1)/k)`, so neighbouring tiles share one row or column of samples, which both
-//! simplify identically ([`crate::boundary`]). The far field's pyramid is computed here, once, and each tile's cut
+//! simplify identically ([`crate::boundary`]). A tile whose own samples are voids (or too few to triangulate: under
+//! three, or all in one row or column) holds no terrain and is left out of the plan; the others are numbered in
+//! order. The far field's pyramid is computed here, once, and each tile's cut
 //! through it goes to the tile's own file ([`crate::far_field`]), so the plan file stays small (a few hundred bytes
 //! a tile) and a job reads only what it needs, however large the terrain.
 
@@ -167,7 +169,10 @@ impl PlanOptions {
                 tin::compact_number(self.max_error)
             ));
         }
-        Ok(())
+        // The build parameters every tile job would refuse, refused before any job runs.
+        self.params
+            .validate()
+            .map_err(|e| TilesError::Parameter(format!("{e:#}")))
     }
 }
 
@@ -232,6 +237,42 @@ pub(crate) fn window_digest(z: &[f64]) -> u32 {
     hasher.finalize()
 }
 
+/// The tile grid (tile rows, tile columns) that cuts a grid of `shape` samples (rows, columns) into tiles of at most
+/// `tile` sample intervals a side.
+pub fn tile_grid(shape: [usize; 2], tile: usize) -> [usize; 2] {
+    shape.map(|n| n.saturating_sub(1).div_ceil(tile).max(1))
+}
+
+/// What a tile's own samples hold: how many are not voids, and the rows and columns they span.
+#[derive(Clone, Copy, Debug, Default)]
+struct TileTerrain {
+    samples: usize,
+    rows: Option<[usize; 2]>,
+    cols: Option<[usize; 2]>,
+}
+
+impl TileTerrain {
+    /// Adds row `r`'s samples `z`, the first at column `c0`.
+    fn add(&mut self, r: usize, c0: usize, z: &[f64]) {
+        let widen = |span: &mut Option<[usize; 2]>, i: usize| {
+            *span = Some(span.map_or([i, i], |[a, b]| [a.min(i), b.max(i)]));
+        };
+        for (k, v) in z.iter().enumerate() {
+            if !v.is_nan() {
+                self.samples += 1;
+                widen(&mut self.rows, r);
+                widen(&mut self.cols, c0 + k);
+            }
+        }
+    }
+
+    /// Whether the samples can be triangulated: three or more, not all in one row or one column.
+    fn can_triangulate(&self) -> bool {
+        let spans = |s: Option<[usize; 2]>| s.is_some_and(|[a, b]| a < b);
+        self.samples >= 3 && spans(self.rows) && spans(self.cols)
+    }
+}
+
 /// The first sample of each of `k` even spans over `n` samples, and the last sample.
 fn cuts(n: usize, k: usize) -> Vec<usize> {
     (0..=k)
@@ -252,8 +293,7 @@ pub fn make_plan(
 ) -> Result<(Plan, FarField), TilesError> {
     options.validate()?;
     let header = tin::read_dem_header(source, &dem)?;
-    let kr = (header.rows - 1).div_ceil(options.tile).max(1);
-    let kc = (header.cols - 1).div_ceil(options.tile).max(1);
+    let [kr, kc] = tile_grid([header.rows, header.cols], options.tile);
     let (rc, cc) = (cuts(header.rows, kr), cuts(header.cols, kc));
     let mut tiles = Vec::with_capacity(kr * kc);
     for tr in 0..kr {
@@ -281,6 +321,7 @@ pub fn make_plan(
         .collect();
     let row_windows: Vec<[usize; 2]> = (0..kr).map(|tr| windows[tr * kc].0).collect();
     let mut digests = vec![crc32fast::Hasher::new(); tiles.len()];
+    let mut terrain = vec![TileTerrain::default(); tiles.len()];
     let mut progress = progress;
     let (field, grid) = FarField::read_each_strip(source, &dem, options.far_block, options.max_error, |first, z| {
         let cols = header.cols;
@@ -292,6 +333,10 @@ pub fn make_plan(
                 for i in tr * kc..(tr + 1) * kc {
                     let c = windows[i].1;
                     digest_samples(&mut digests[i], &row[c[0]..=c[1]]);
+                    if (tiles[i].rows[0]..=tiles[i].rows[1]).contains(&r) {
+                        let cols = tiles[i].cols;
+                        terrain[i].add(r, cols[0], &row[cols[0]..=cols[1]]);
+                    }
                 }
             }
         }
@@ -310,6 +355,26 @@ pub fn make_plan(
     for (t, d) in tiles.iter_mut().zip(digests) {
         t.window_digest = Some(d.finalize());
     }
+    // Tiles whose samples are voids, or too few to triangulate, hold no terrain: left out (their neighbours' halos
+    // and the far field still see what lies around them), the others numbered anew.
+    let mut kept: Vec<TileSpec> = tiles
+        .into_iter()
+        .zip(&terrain)
+        .filter(|(_, t)| t.can_triangulate())
+        .map(|(t, _)| t)
+        .collect();
+    if kept.is_empty() {
+        return Err(TilesError::Parameter(format!(
+            "{}: no tile has samples to triangulate (at least 3, not all in one row or column): the DEM is voids",
+            source.display()
+        )));
+    }
+    for (index, t) in kept.iter_mut().enumerate() {
+        t.index = index;
+        t.far = Some(tiles_dir.join(format!("far-{index:05}.bin")));
+        t.output = tiles_dir.join(format!("tile-{index:05}.tch"));
+    }
+    let tiles = kept;
     let plan = Plan {
         version: PLAN_VERSION,
         source: source.to_path_buf(),

@@ -13,7 +13,10 @@
 //!
 //! - "Uniform over the footprint": a triangle is drawn with probability proportional to its x,y area, then a
 //!   uniform point inside it; the terrain height there is the triangle's plane. This is exactly uniform over the
-//!   footprint, whatever its shape, without rejection.
+//!   footprint, whatever its shape, without rejection. The triangles are taken in a canonical order (by their
+//!   corners' positions, each triangle's corners rotated to start at its least one), not in the order the TIN
+//!   stores them: builds of one mesh store its triangles in different orders (the grouping decides it), and they
+//!   get the same eyes.
 //! - A local minimum (maximum) is a vertex strictly lower (higher) than every vertex it shares a triangle with.
 //!   Vertices that belong to no triangle are ignored everywhere. Vertices on the footprint boundary are left out: their neighbourhood is cut off by the edge of the data, so they are not
 //!   known to be extrema. When no interior vertex qualifies, the candidates are all vertices, lowest (highest) first.
@@ -122,27 +125,46 @@ pub fn viewpoints(tin: &Tin, class: ViewpointClass, n: usize, seed: u64) -> Vec<
     }
 }
 
-/// `n` points uniform over the footprint, with height `z(ground point)`.
+/// `n` points uniform over the footprint, with height `z(ground point)`; the same for any order of the TIN's
+/// triangles and of their corners (see the module documentation).
 fn uniform_points(tin: &Tin, n: usize, rng: &mut ChaCha8Rng, z: impl Fn(DVec3) -> f64) -> Vec<DVec3> {
-    let mut cumulative = Vec::with_capacity(tin.num_triangles());
+    let triangles = canonical_triangles(tin);
+    let mut cumulative = Vec::with_capacity(triangles.len());
     let mut total = 0.0;
-    for t in 0..tin.num_triangles() {
-        total += tin.triangle_area_xy(t).abs();
+    for [a, b, c] in &triangles {
+        total += 0.5 * tin::orient2d(a.truncate(), b.truncate(), c.truncate()).abs();
         cumulative.push(total);
     }
     (0..n)
         .map(|_| {
             let u = rng.random::<f64>() * total;
-            let t = cumulative.partition_point(|&c| c <= u).min(tin.num_triangles() - 1);
+            let t = cumulative.partition_point(|&c| c <= u).min(triangles.len() - 1);
             let (mut r1, mut r2) = (rng.random::<f64>(), rng.random::<f64>());
             if r1 + r2 > 1.0 {
                 (r1, r2) = (1.0 - r1, 1.0 - r2);
             }
-            let [a, b, c] = tin.corners(t);
+            let [a, b, c] = triangles[t];
             let ground = a + r1 * (b - a) + r2 * (c - a);
             DVec3::new(ground.x, ground.y, z(ground))
         })
         .collect()
+}
+
+/// The TIN's triangles as corner positions, each rotated (its winding kept) to start at its least corner, sorted:
+/// corners compared by x, then y, then z (`total_cmp`), triangles by their first corner, then second, then third.
+/// Two triangles of a valid TIN never compare equal, so the order depends on the triangles alone.
+fn canonical_triangles(tin: &Tin) -> Vec<[DVec3; 3]> {
+    let cmp = |p: &DVec3, q: &DVec3| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)).then(p.z.total_cmp(&q.z));
+    let mut triangles: Vec<[DVec3; 3]> = (0..tin.num_triangles())
+        .map(|t| {
+            let mut c = tin.corners(t);
+            let least = (0..3).min_by(|&i, &j| cmp(&c[i], &c[j])).unwrap_or(0);
+            c.rotate_left(least);
+            c
+        })
+        .collect();
+    triangles.sort_by(|s, t| cmp(&s[0], &t[0]).then(cmp(&s[1], &t[1])).then(cmp(&s[2], &t[2])));
+    triangles
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -241,6 +263,26 @@ mod tests {
             })
             .collect();
         triangulate(&pts, DedupePolicy::Reject).expect("grid").0
+    }
+
+    /// Builds of one mesh store its triangles in other orders (and may rotate their corners): the eyes of every
+    /// class stay the same.
+    #[test]
+    fn eyes_do_not_depend_on_the_triangle_order() {
+        let tin = bumpy(12);
+        let mut triangles = tin.triangles().to_vec();
+        triangles.reverse();
+        for (i, t) in triangles.iter_mut().enumerate() {
+            t.rotate_left(i % 3);
+        }
+        let shuffled = Tin::from_parts(tin.positions().to_vec(), triangles).expect("same triangles");
+        for class in ViewpointClass::ALL {
+            assert_eq!(
+                viewpoints(&tin, class, 30, 5),
+                viewpoints(&shuffled, class, 30, 5),
+                "{class}"
+            );
+        }
     }
 
     #[test]

@@ -242,6 +242,27 @@ impl<'a> GroundTruth<'a> {
     }
 }
 
+/// The triangles in a horizontal view wedge: those with a vertex or the centroid inside `yaw ± half` (radians,
+/// azimuth counter-clockwise from +x) seen from `eye`; a point straight above or below the eye is inside. The ground
+/// truth of a view narrower than 360° is [`visible_triangles`] restricted to them (`eval --fov`, the viewer).
+pub fn in_view(tin: &Tin, eye: DVec3, yaw: f64, half: f64) -> Vec<bool> {
+    use std::f64::consts::{PI, TAU};
+    let inside = |p: DVec3| {
+        let d = p - eye;
+        if d.x == 0.0 && d.y == 0.0 {
+            return true;
+        }
+        let gap = (d.y.atan2(d.x) - yaw + PI).rem_euclid(TAU) - PI;
+        gap.abs() <= half
+    };
+    (0..tin.num_triangles())
+        .map(|t| {
+            let c = tin.corners(t);
+            c.iter().any(|&p| inside(p)) || inside((c[0] + c[1] + c[2]) / 3.0)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

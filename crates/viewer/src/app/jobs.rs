@@ -6,6 +6,7 @@ use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use cull::Camera;
 use eframe::egui;
 use glam::DVec3;
 
@@ -19,16 +20,27 @@ pub(super) struct RebuildJob {
 }
 
 pub(super) struct TruthJob {
-    pub(super) eye: [f64; 3],
+    pub(super) camera: Camera,
+    pub(super) drawn_fingerprint: u64,
     pub(super) drawn: Vec<bool>,
     pub(super) result: Receiver<Vec<bool>>,
 }
 
+/// The ground truth of one view, compared with what the culler drew for it: shown while the camera and the drawn
+/// set stay as they were (another eye, yaw, field of view, method or culler parameter clears it).
 pub(super) struct Truth {
-    pub(super) eye: [f64; 3],
+    pub(super) camera: Camera,
+    pub(super) drawn_fingerprint: u64,
     pub(super) visible: usize,
     pub(super) false_culls: Vec<bool>,
     pub(super) count: usize,
+}
+
+impl Truth {
+    /// Whether the truth still describes the view: the same camera (eye, yaw, field of view) and the same drawn set.
+    pub(super) fn holds_for(&self, camera: &Camera, drawn_fingerprint: u64) -> bool {
+        self.camera == *camera && self.drawn_fingerprint == drawn_fingerprint
+    }
 }
 
 impl ViewerApp {
@@ -39,16 +51,24 @@ impl ViewerApp {
         }
         let (tx, rx) = channel();
         let tin = Arc::clone(&self.model.tin);
-        let eye = self.eye;
+        let camera = self.camera();
         let ctx = ctx.clone();
         std::thread::spawn(move || {
-            let visible = truth::visible_triangles(&tin, DVec3::from_array(eye));
+            let eye = DVec3::from_array(camera.position);
+            let mut visible = truth::visible_triangles(&tin, eye);
+            // A view narrower than 360° sees only its wedge: what lies outside it is culled by the view, not hidden
+            // wrongly (as `eval --fov` scores it).
+            if camera.hfov > 0.0 && camera.hfov < std::f64::consts::TAU {
+                let view = truth::in_view(&tin, eye, camera.yaw, 0.5 * camera.hfov);
+                visible.iter_mut().zip(view).for_each(|(v, inside)| *v &= inside);
+            }
             let _ = tx.send(visible);
             ctx.request_repaint();
         });
         let n = self.terrain().num_triangles();
         self.truth_job = Some(TruthJob {
-            eye,
+            camera,
+            drawn_fingerprint: self.drawn_fingerprint,
             drawn: self.list.mask(n),
             result: rx,
         });
@@ -116,7 +136,8 @@ impl ViewerApp {
                 Ok(visible) => {
                     let false_culls: Vec<bool> = visible.iter().zip(&job.drawn).map(|(&v, &d)| v && !d).collect();
                     let truth = Truth {
-                        eye: job.eye,
+                        camera: job.camera,
+                        drawn_fingerprint: job.drawn_fingerprint,
                         visible: visible.iter().filter(|&&v| v).count(),
                         count: false_culls.iter().filter(|&&f| f).count(),
                         false_culls,
@@ -175,5 +196,33 @@ impl ViewerApp {
             self.startup.ground_truth = false;
         }
         self.truth_job.is_none()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A truth taken at a 360° view once stayed on screen after the field of view was narrowed (and so for the yaw
+    /// and the method): it holds only for its own camera and drawn set.
+    #[test]
+    fn a_truth_holds_only_for_its_camera_and_drawn_set() {
+        let camera = Camera::from_degrees([1.0, 2.0, 3.0], 0.0, 360.0).expect("camera");
+        let truth = Truth {
+            camera,
+            drawn_fingerprint: 7,
+            visible: 0,
+            false_culls: Vec::new(),
+            count: 0,
+        };
+        assert!(truth.holds_for(&camera, 7));
+        assert!(!truth.holds_for(&camera, 8), "another method or culler parameter");
+        for other in [
+            Camera::from_degrees([1.0, 2.0, 3.0], 0.0, 90.0),
+            Camera::from_degrees([1.0, 2.0, 3.0], 10.0, 360.0),
+            Camera::from_degrees([1.0, 2.0, 4.0], 0.0, 360.0),
+        ] {
+            assert!(!truth.holds_for(&other.expect("camera"), 7));
+        }
     }
 }

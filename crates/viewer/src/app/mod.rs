@@ -82,7 +82,7 @@ pub struct Startup {
 }
 
 /// What happened during a [`run`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RunSummary {
     /// Frames drawn.
     pub frames: u64,
@@ -96,6 +96,9 @@ pub struct RunSummary {
     pub groups: usize,
     /// The last ground truth: `(visible triangles, false culls)`.
     pub truth: Option<(usize, usize)>,
+    /// The screenshot asked for: `None` when none was taken (the window closed first), else whether it was written
+    /// (or why not).
+    pub screenshot: Option<std::result::Result<PathBuf, String>>,
 }
 
 /// Everything [`run`] needs.
@@ -110,6 +113,8 @@ pub struct ViewerOptions {
     pub rebuild: Option<RebuildFn>,
     /// Path stem of exports (`STEM.tch`, `STEM.json`, `STEM.obj`).
     pub export_stem: PathBuf,
+    /// Files the exports never write over (the terrain shown): an export to one of them is refused.
+    pub inputs: Vec<PathBuf>,
     /// Initial viewpoint (world); default: the terrain's centre, 20 m above the ground.
     pub eye: Option<[f64; 3]>,
     /// Screenshot-and-exit, for tests and documentation.
@@ -165,6 +170,12 @@ impl Model {
     fn from_hierarchy(h: Hierarchy, method: CullMethod, safe: cull::SafeParams) -> Result<Model> {
         let positions = h.mesh.positions.iter().map(|p| DVec3::from_array(*p)).collect();
         let tin = Tin::from_parts(positions, h.mesh.triangles.clone())?;
+        // A rebuild may change the grouping: a region method becomes the one meant for the new one.
+        let method = if method.check(&h).is_ok() {
+            method
+        } else {
+            CullMethod::regions_for(&h)
+        };
         let culler = AnyCuller::with_params(&h, method, safe);
         Ok(Model {
             tin: Arc::new(tin),
@@ -184,6 +195,7 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         params,
         rebuild,
         export_stem,
+        inputs,
         eye,
         screenshot,
         window_size,
@@ -205,6 +217,7 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         params,
         rebuild,
         export_stem,
+        inputs,
         eye,
         screenshot,
         startup,
@@ -219,7 +232,7 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
         }),
     )
     .map_err(|e| ViewerError::Window(e.to_string()))?;
-    let result = summary.lock().map(|s| *s).unwrap_or_default();
+    let result = summary.lock().map(|s| s.clone()).unwrap_or_default();
     Ok(result)
 }
 
@@ -228,6 +241,7 @@ struct Setup {
     params: BuildParams,
     rebuild: RebuildFn,
     export_stem: PathBuf,
+    inputs: Vec<PathBuf>,
     eye: Option<[f64; 3]>,
     screenshot: Option<ScreenshotRequest>,
     startup: Startup,
@@ -297,6 +311,8 @@ struct ViewerApp {
     params: BuildParams,
     rebuild: RebuildFn,
     export_stem: String,
+    /// Files the exports never write over.
+    inputs: Vec<PathBuf>,
     // Camera.
     mode: ViewMode,
     eye: [f64; 3],
@@ -320,6 +336,8 @@ struct ViewerApp {
     // State.
     pvs: Option<PvsView>,
     list: DrawList,
+    /// The fingerprint of `list`'s ranges after the last cull (0 with no culler).
+    drawn_fingerprint: u64,
     colours_key: Option<(ColourMode, u32, u64)>,
     map_dirty: bool,
     cull_us: Smoothed,
@@ -361,6 +379,7 @@ impl ViewerApp {
             params,
             rebuild,
             export_stem,
+            inputs,
             eye,
             screenshot,
             startup,
@@ -396,6 +415,7 @@ impl ViewerApp {
             params,
             rebuild,
             export_stem: export_stem.display().to_string(),
+            inputs,
             mode: ViewMode::Eye,
             eye,
             eye_height,
@@ -411,6 +431,7 @@ impl ViewerApp {
             pvs_size: f64::from(startup.pvs_cell_size.unwrap_or(100).max(1)),
             pvs: None,
             list: DrawList::default(),
+            drawn_fingerprint: 0,
             colours_key: Some((colour, 0, 0)),
             map_dirty: true,
             cull_us: Smoothed::default(),
@@ -453,15 +474,17 @@ impl ViewerApp {
             self.list.ranges.clear();
             self.list.ranges.push([0, self.terrain().num_triangles() as u32]);
             self.list.stats = CullStats::default();
+            self.drawn_fingerprint = 0;
             return 0;
         };
         let start = Instant::now();
         culler.cull_into(&camera, &mut self.list);
         self.cull_us.add(start.elapsed().as_secs_f64() * 1e6);
         // A cheap fingerprint of the ranges, to know when visibility colours must change.
-        self.list.ranges.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, r| {
+        self.drawn_fingerprint = self.list.ranges.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, r| {
             (h ^ (u64::from(r[0]) << 32 | u64::from(r[1]))).wrapping_mul(0x0100_0000_01b3)
-        })
+        });
+        self.drawn_fingerprint
     }
 
     /// Recomputes the viewcell PVS when the eye has left its cell or the band changed (when the PVS is on).
@@ -753,8 +776,11 @@ impl ViewerApp {
                     height: h as u32,
                     pixels,
                 };
-                if let Err(e) = crate::png_out::write_png(&req.path, &img) {
-                    eprintln!("error: cannot write the screenshot: {e}");
+                let written = crate::png_out::write_png(&req.path, &img)
+                    .map(|()| req.path.clone())
+                    .map_err(|e| e.to_string());
+                if let Ok(mut s) = self.summary.lock() {
+                    s.screenshot = Some(written);
                 }
                 self.screenshot = None;
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);
@@ -773,10 +799,11 @@ impl eframe::App for ViewerApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.poll_jobs();
-        if self.truth.as_ref().is_some_and(|t| t.eye != self.eye) {
+        let fingerprint = self.cull();
+        let camera = self.camera();
+        if self.truth.as_ref().is_some_and(|t| !t.holds_for(&camera, fingerprint)) {
             self.truth = None;
         }
-        let fingerprint = self.cull();
         self.update_pvs();
         self.update_colours(fingerprint);
         egui::Panel::left("controls").default_size(330.0).show(ui, |ui| {

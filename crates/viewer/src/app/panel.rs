@@ -178,8 +178,12 @@ impl ViewerApp {
             egui::ComboBox::from_label("culling method")
                 .selected_text(current.name())
                 .show_ui(ui, |ui| {
+                    // Only the methods that apply to the hierarchy (`thesis` needs crystals, `stewart` a quadtree).
+                    let hierarchy = self.model.terrain.hierarchy.as_ref();
                     for m in cull::CullMethod::ALL {
-                        ui.selectable_value(&mut chosen, m, m.name());
+                        if hierarchy.is_none_or(|h| m.check(h).is_ok()) {
+                            ui.selectable_value(&mut chosen, m, m.name());
+                        }
                     }
                 });
             if chosen != current {
@@ -235,9 +239,10 @@ impl ViewerApp {
             });
         }
         if let Some(t) = &self.truth {
+            let e = t.camera.position;
             ui.label(format!(
                 "{} visible triangles, {} false culls at {:.0}, {:.0}, {:.0}",
-                t.visible, t.count, t.eye[0], t.eye[1], t.eye[2]
+                t.visible, t.count, e[0], e[1], e[2]
             ));
         }
     }
@@ -302,23 +307,32 @@ impl ViewerApp {
         };
         let stem = PathBuf::from(&self.export_stem);
         let mut result: Option<std::result::Result<PathBuf, String>> = None;
+        // The terrain shown is never written over.
+        let free = |path: &std::path::Path| match self.inputs.iter().find(|i| same_file(i, path)) {
+            Some(_) => Err(format!(
+                "{} is the terrain this viewer shows; give the export another path",
+                path.display()
+            )),
+            None => Ok(()),
+        };
         ui.horizontal(|ui| {
             if ui.button(".tch").clicked() {
                 let path = stem.with_extension("tch");
-                let written = h.to_bytes().map_err(|e| e.to_string());
+                let written = free(&path).and_then(|()| h.to_bytes().map_err(|e| e.to_string()));
                 let written = written.and_then(|b| outfile::write_bytes(&path, &b).map_err(|e| e.to_string()));
                 result = Some(written.map(|_| path));
             }
             if ui.button("JSON").clicked() {
                 let path = stem.with_extension("json");
-                let written = to_json(h).map_err(|e| format!("{e:#}"));
+                let written = free(&path).and_then(|()| to_json(h).map_err(|e| format!("{e:#}")));
                 let written =
                     written.and_then(|t| outfile::write_bytes(&path, t.as_bytes()).map_err(|e| e.to_string()));
                 result = Some(written.map(|_| path));
             }
             if ui.button("grouped OBJ").clicked() {
                 let path = stem.with_extension("obj");
-                result = Some(write_grouped_obj(h, &path).map(|_| path));
+                let written = free(&path).and_then(|()| write_grouped_obj(h, &path));
+                result = Some(written.map(|_| path));
             }
         });
         match result {
@@ -327,6 +341,11 @@ impl ViewerApp {
             None => {}
         }
     }
+}
+
+/// Whether `a` and `b` name the same existing file (after following links and `..`).
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
 }
 
 /// Writes the grouped OBJ of `h` and its `.mtl` beside it, both or neither.
