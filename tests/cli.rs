@@ -1056,6 +1056,10 @@ fn contradictory_or_empty_options_are_errors() {
         &["eval", s(&tch), "--eyes", s(&eyes), "--view-seed", "5"],
         "at 360° it has nothing to seed",
     );
+    fails_with(
+        &["eval", s(&tch), "--above-ground", "--viewpoints", "1"],
+        "without --eyes the viewpoint classes set their own heights",
+    );
     let help = String::from_utf8_lossy(&ok(&["eval", "--help"]).stdout).into_owned();
     assert!(help.contains("not with --classes or --viewpoints"), "{help}");
     // More viewpoints than a run could score: refused, not a capacity overflow (a panic) or an aborted allocation.
@@ -1337,6 +1341,24 @@ fn messages_and_help_read_well() {
     build_with(
         "grouping = \"Crystal\"\n",
         &format!("`grouping` (in {}): unknown grouping \"Crystal\"", config.display()),
+    );
+    // The command line wins over the file: `--depth` replaces the file's `cell_size` (both set the finest level), and
+    // the report names the grouping and only its own parameters, as the options name them.
+    std::fs::write(&config, "grouping = \"quadtree\"\ncell_size = 500\n").expect("config");
+    let mesh2k = mesh("jacksboro-2k.obj");
+    let args = ["build", s(&mesh2k), "-o", s(&tch), "--config", s(&config), "--json"];
+    let v = json(&[&args[..], &["--depth", "2"]].concat());
+    assert_eq!(v["params"]["grouping"], "quadtree", "{v}");
+    assert_eq!(v["params"]["quadtree"]["depth"], 2, "{v}");
+    assert!(
+        v["params"]["quadtree"]["cell_size"].is_null() && v["params"]["crystal"].is_null(),
+        "{v}"
+    );
+    let v = json(&args);
+    assert_eq!(v["params"]["quadtree"]["cell_size"], 500.0, "{v}");
+    build_with(
+        "grouping = \"quadtree\"\ndepth = 2\ncell_size = 300\n",
+        "(`depth` and `cell_size` in --config) both set the finest level",
     );
 }
 

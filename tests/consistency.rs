@@ -293,7 +293,7 @@ fn nonsense_values_are_refused() {
         );
         fails_with(
             &["render", s(&tch), "-o", s(&png), "--view", "orbit", "--pitch", "95"],
-            "--pitch must be within ±89°, got 95",
+            "--pitch must be between -89° and 89° (exclusive: the camera never looks straight up or down), got 95",
         );
         assert!(!png.exists());
     }

@@ -120,3 +120,25 @@ fn an_interrupted_plan_leaves_no_folder() {
         assert_eq!(names(dir.path()), before, "after {ms} ms");
     }
 }
+
+/// `demo` creates its output folder: interrupted while it builds and evaluates, it removes the folder again (it once
+/// left it behind, empty).
+#[test]
+fn an_interrupted_demo_leaves_no_folder() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let code = interrupted(
+        &[
+            "demo",
+            s(&mesh("jacksboro-10k.obj")),
+            "--out-dir",
+            s(&out),
+            "--viewpoints",
+            "20",
+        ],
+        Duration::from_millis(1500),
+        false,
+    );
+    assert_eq!(code, Some(130));
+    assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
+}

@@ -276,6 +276,25 @@ fn text_to_a_reader_that_goes_away_ends_quietly_too() {
     assert_eq!(String::from_utf8_lossy(&out.stderr), "", "nothing to say");
 }
 
+/// `--json` to a reader that is gone (`tincull pvs h.tch --grid 300 --json | head -c 200`): quiet, status 141, as the
+/// text (the JSON once reported "error: Broken pipe").
+#[test]
+fn json_to_a_reader_that_is_gone_ends_quietly() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("h.tch");
+    ok(&["build", "-q", p(&mesh(SMALL)), "-o", p(&tch)]);
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["info", p(&tch), "--json"])
+        .stdout(writer)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(141), "{stderr}");
+    assert!(!stderr.contains("error"), "nothing to say: {stderr}");
+}
+
 #[test]
 fn a_closed_stderr_is_not_a_failure() {
     use std::process::Stdio;

@@ -147,6 +147,10 @@ fn bad_arguments_give_clear_errors() {
     fails_with(&["pvs", s(&tch), "--grid", "0"], "grid");
     fails_with(&["pvs", s(&tch), "--cell", &cell, "--patch", "0"], "--patch");
     fails_with(&["pvs", s(&tch), "--check", "1", "--cell-size", "1e6"], "cell-size");
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "--method", "koltun"],
+        "--check reports every method",
+    );
     fails_with(&["pvs", "/no/such.tch", "--cell", &cell], "such.tch");
     // Cells whose heights make no sense where they lie: off the terrain with heights above the ground, below the
     // ground (the bundled terrain lies above 200 m), and a grid of more cells than a run could compute.

@@ -318,6 +318,45 @@ fn render_paints_a_viewcell_pvs() {
         in_pvs < h.num_triangles() as u64,
         "what the PVS excludes is painted as culled"
     );
+    // The eye view of a cell's PVS draws its triangles and no other; nothing is culled from a point (it once drew
+    // the point culler's set under the PVS's name).
+    let eye_png = dir.path().join("eye.png");
+    let v: serde_json::Value = serde_json::from_str(
+        ok(&tincull(&[
+            "render",
+            p(&tch),
+            "--out",
+            p(&eye_png),
+            "--size",
+            "100x100",
+            "--pvs-cell",
+            &cell,
+            "--view",
+            "eye",
+            "--json",
+        ]))
+        .trim(),
+    )
+    .unwrap();
+    assert_eq!(v["triangles_submitted"].as_u64(), Some(in_pvs), "{v}");
+    assert!(v["cull"].is_null(), "{v}");
+    // Flags that would change nothing in a PVS's image are refused.
+    for (extra, needle) in [
+        (
+            ["--colour", "groups"],
+            "--pvs-cell paints what the cell's PVS excludes with --colour visibility",
+        ),
+        (
+            ["--method", "thesis"],
+            "with --pvs-cell the render shows the cell's PVS",
+        ),
+    ] {
+        let mut args = vec!["render", p(&tch), "--out", p(&map), "--pvs-cell", &cell];
+        args.extend_from_slice(&extra);
+        let out = tincull(&args);
+        assert!(!out.status.success(), "{extra:?} should fail");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(needle), "{extra:?}");
+    }
 }
 
 #[test]

@@ -286,6 +286,17 @@ fn sweep_rejects_bad_lists() {
         let err = refused(&["--grouping", "quadtree", opt, val]);
         assert!(err.contains("applies to the crystal grouping"), "{opt} {val}: {err}");
     }
+    // A table named as another format (it once wrote a CSV named .tch, or read a hierarchy as one to resume).
+    let tch = dir.path().join("x.tch");
+    let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args(["sweep", mesh("jacksboro-2k.obj").to_str().expect("path"), "-q", "-o"])
+        .arg(&tch)
+        .args(["--sectors", "4", "--subsectors", "1"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("name it .csv"), "{err}");
+    assert!(!tch.exists());
 }
 
 #[test]
@@ -415,4 +426,36 @@ fn a_sweep_of_nothing_valid_is_an_error() {
         assert!(!stderr.contains("no-such-mesh"), "{extra:?}: {stderr}");
         assert!(!csv.exists());
     }
+}
+
+/// Invalid combinations of the lists are skipped with a warning each, the first few by name and the rest counted (a
+/// range such as `--sectors 4..100000` once printed thousands of lines); `--json` lists every one.
+#[test]
+fn many_skipped_combinations_are_counted() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("s.csv");
+    let mesh = mesh("jacksboro-2k.obj");
+    let o = Command::new(env!("CARGO_BIN_EXE_tincull"))
+        .args([
+            "sweep",
+            mesh.to_str().expect("path"),
+            "--viewpoints",
+            "1",
+            "--classes",
+            "low",
+            "--json",
+        ])
+        .args(["--no-per-triangle", "-o", csv.to_str().expect("path")])
+        .args(["--sectors", "1,2,3,4", "--subsectors", "1,5000,6000"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("warning: skipped").count(), 8, "{err}");
+    assert!(
+        err.contains("and 3 more skipped combinations (--json lists them all)"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["notes"].as_array().map(Vec::len), Some(11), "{v}");
 }

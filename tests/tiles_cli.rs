@@ -601,3 +601,96 @@ fn a_mesh_cut_into_too_many_squares_is_refused() {
         "nothing written"
     );
 }
+
+/// A tile whose samples are all voids holds no terrain: the plan leaves it out (its job could never build), and the
+/// other tiles build and merge into the terrain that `build` makes of the whole grid (the same triangles count).
+#[test]
+fn a_tile_of_voids_is_left_out_of_the_plan() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asc = dir.path().join("v.asc");
+    let n = 60;
+    let mut text = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n");
+    for r in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|c| {
+                if r < 30 && c < 30 {
+                    "-9999".to_string()
+                } else {
+                    format!(
+                        "{:.2}",
+                        100.0 + 20.0 * ((r as f64) / 7.0).sin() * ((c as f64) / 5.0).cos()
+                    )
+                }
+            })
+            .collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&asc, text).expect("grid");
+    let plan = dir.path().join("p.json");
+    let args = [
+        "tiles",
+        "plan",
+        s(&asc),
+        "-o",
+        s(&plan),
+        "--tile",
+        "28",
+        "--max-error",
+        "0.5",
+    ];
+    let v = json(&[&args[..], &["--json"]].concat());
+    assert_eq!(
+        (v["tiles"].as_u64(), v["void_tiles"].as_u64()),
+        (Some(8), Some(1)),
+        "{v}"
+    );
+    let text = String::from_utf8(ok(&args).stdout).expect("text");
+    assert!(
+        text.contains("8 tiles (3 x 3, 1 tile without terrain left out)"),
+        "{text}"
+    );
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let merged = dir.path().join("m.tch");
+    ok(&["tiles", "merge", s(&plan), "-o", s(&merged), "-q"]);
+    let info = json(&["info", s(&merged), "--json"]);
+    assert!(info["triangles"].as_u64().is_some_and(|t| t > 1000), "{info}");
+
+    // Build parameters that every tile job would refuse are refused by the plan, once.
+    let bad = dir.path().join("bad.json");
+    fails_with(
+        &[
+            "tiles",
+            "plan",
+            s(&asc),
+            "-o",
+            s(&bad),
+            "--tile",
+            "28",
+            "--sectors",
+            "2",
+        ],
+        "at least 4 sectors",
+    );
+    assert!(!bad.exists());
+}
+
+/// `synth -o NAME.npy` writes the sidecar `NAME.json` beside the grid: it replaces an earlier sidecar, but not another
+/// JSON file there (a tile plan once was), which it refuses before writing anything.
+#[test]
+fn synth_never_replaces_a_json_that_is_not_a_sidecar() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("plan.npy");
+    let plan = dir.path().join("plan.json");
+    std::fs::write(&plan, "{\"version\": 3, \"tiles\": []}").expect("a plan");
+    fails_with(&["synth", "--vertices", "400", "-o", s(&npy)], "is not one");
+    assert!(!npy.exists());
+    assert_eq!(
+        std::fs::read_to_string(&plan).expect("plan"),
+        "{\"version\": 3, \"tiles\": []}"
+    );
+    std::fs::remove_file(&plan).expect("removed");
+    ok(&["synth", "--vertices", "400", "-o", s(&npy), "-q"]);
+    ok(&["synth", "--vertices", "900", "-o", s(&npy), "-q"]);
+    assert!(std::fs::read_to_string(&plan).expect("sidecar").contains("\"rows\":30"));
+}

@@ -101,9 +101,21 @@ impl ParamArgs {
                 tin::compact_number(r)
             );
         }
+        // The depth and the cell size are one choice (the finest level): either on the command line replaces both of
+        // the file's.
+        let (depth, cell) = if self.depth.is_some() || self.cell_size.is_some() {
+            (self.depth, self.cell_size)
+        } else {
+            (from_file.depth, from_file.cell_size)
+        };
+        anyhow::ensure!(
+            depth.is_none() || cell.is_none(),
+            "--depth and --cell-size (`depth` and `cell_size` in --config) both set the finest level of the quadtree: \
+             give one"
+        );
         let quadtree = QuadtreeParams {
-            depth: self.depth.or(from_file.depth),
-            cell: self.cell_size.or(from_file.cell_size),
+            depth,
+            cell,
             max_bytes: self.max_bytes.or(from_file.max_bytes),
         };
         match self.grouping.as_deref().or(from_file.grouping.as_deref()) {
@@ -293,8 +305,8 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     let write_seconds = started.elapsed().as_secs_f64();
     print_report(&result.report, out);
     out.say(format!(
-        "  mesh read and triangulated in {load_seconds:.3} s, output written in {write_seconds:.3} s; {} threads",
-        rayon::current_num_threads()
+        "  mesh read and triangulated in {load_seconds:.3} s, output written in {write_seconds:.3} s; {}",
+        super::output::count(rayon::current_num_threads(), "thread")
     ));
     let peak = peak_memory_bytes();
     if let Some(bytes) = peak {
@@ -312,12 +324,30 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     }
     let mut j = serde_json::to_value(&result.report)?;
     j["output"] = json!(args.out);
-    j["params"] = serde_json::to_value(&params)?;
+    j["params"] = params_json(&params)?;
     j["peak_memory_bytes"] = json!(peak);
     j["load_seconds"] = json!(load_seconds);
     j["write_seconds"] = json!(write_seconds);
     j["threads"] = json!(rayon::current_num_threads());
     out.json(&j)
+}
+
+/// The build parameters as `build --json` reports them: `grouping` is always its name, and only that grouping's
+/// parameters follow (`crystal`, or `quadtree` with its options' names: `depth`, `cell_size`, `max_bytes`).
+fn params_json(params: &BuildParams) -> Result<serde_json::Value> {
+    let mut j = json!({
+        "sectors": params.sectors,
+        "subsectors": params.subsectors,
+        "undersampling": params.undersampling,
+        "grouping": params.grouping.name(),
+    });
+    match &params.grouping {
+        Grouping::Crystal => j["crystal"] = serde_json::to_value(&params.crystal)?,
+        Grouping::Quadtree(q) => {
+            j["quadtree"] = json!({ "depth": q.depth, "cell_size": q.cell, "max_bytes": q.max_bytes });
+        }
+    }
+    Ok(j)
 }
 
 /// The process's peak resident memory (`VmHWM` of `/proc/self/status`), where the system reports it (Linux).

@@ -62,7 +62,13 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
         "build with defaults: {} sectors x {} subsectors, seeds one per 200 triangles, min group {}, {} orphan passes",
         params.sectors, params.subsectors, params.crystal.min_group, params.crystal.orphan_passes
     ));
-    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
+    // A folder made here is removed again if the demo fails or is interrupted (it is then empty: the outputs are all
+    // or nothing); the folders above it are made as needed.
+    if let Some(parent) = args.out_dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
+    }
+    let new_dir =
+        outfile::NewDir::create(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
     let stem = mesh
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -107,6 +113,9 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     out.say(e.table());
     add_outputs(&mut files, &e, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
     files.commit()?;
+    if let Some(new_dir) = new_dir {
+        new_dir.keep();
+    }
     let renders = match write_renders(h, &htin, &path("-map.png"), &path("-culling.png")) {
         Ok(eye) => format!(
             ", {stem}-map.png (groups, orphans grey) and {stem}-culling.png (valley eye at {:.0}, {:.0}, {:.0}: \

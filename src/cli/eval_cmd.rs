@@ -126,6 +126,11 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         "--view-seed: with --eyes it seeds only the yaws of a view narrower than 360° (--fov); at 360° it has \
          nothing to seed"
     );
+    anyhow::ensure!(
+        !args.above_ground || args.eyes.is_some(),
+        "--above-ground reads the z of --eyes FILE as heights above the terrain; without --eyes the viewpoint classes \
+         set their own heights"
+    );
     let mut eyes = args.eyes.as_deref().map(Eyes::read).transpose()?;
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
@@ -159,8 +164,23 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         .eyes
         .as_ref()
         .map_or(opts.viewpoints * opts.classes.len(), Vec::len);
+    // The bar names the stage: the per-triangle regions (their horizons) before the ground truth, the culls and the
+    // conservative regions of `safe_regions` after it; it ticks by itself through them.
     let bar = out.progress(total as u64, "viewpoints");
-    let e = evaluate(&h, &tin, &opts, &|done, _| bar.set_position(done as u64))?;
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    if opts.per_triangle {
+        bar.set_message("per-triangle regions");
+    }
+    let e = evaluate(&h, &tin, &opts, &|done, total| {
+        bar.set_message(if done < total {
+            "viewpoints"
+        } else if opts.safe_regions {
+            "scoring (and safe_regions' conservative regions)"
+        } else {
+            "scoring"
+        });
+        bar.set_position(done as u64);
+    })?;
     bar.finish_and_clear();
     out.say(e.table());
     out.say(format!(

@@ -66,9 +66,12 @@ impl Output {
     /// Prints `value` as one JSON object on stdout when `--json` is set.
     pub fn json(&self, value: &serde_json::Value) -> Result<()> {
         if self.json {
+            // Serialized first, so that a reader that went away is an I/O error (status 141 in `main`), not a
+            // serialization one.
+            let text = serde_json::to_string(value)?;
             let mut out = std::io::stdout().lock();
-            serde_json::to_writer(&mut out, value)?;
-            writeln!(out)?;
+            writeln!(out, "{text}")?;
+            out.flush()?;
         }
         Ok(())
     }

@@ -49,9 +49,9 @@ pub struct PvsArgs {
     #[arg(long, value_name = "H0,H1", value_parser = parse_pair, allow_hyphen_values = true)]
     pub above_ground: Option<[f64; 2]>,
     /// Test that culls: `koltun` (Koltun et al. 2001 in the dual ray space), `regions` (the conservative precomputed
-    /// regions) or `both`. With `--check` every method is reported.
-    #[arg(long, default_value = "both", value_parser = parse_method)]
-    pub method: Method,
+    /// regions) or `both` [default: both]. `--check` reports every method (and refuses this option).
+    #[arg(long, value_parser = parse_method)]
+    pub method: Option<Method>,
     /// Resolution R of the R × R ray-space bitmap, 1 to 256; with `--check` a comma-separated list.
     #[arg(long, value_delimiter = ',', default_value = "64", value_name = "R")]
     pub resolution: Vec<u32>,
@@ -129,6 +129,10 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     };
     let mut files = Outputs::new();
     if let Some(n) = args.check {
+        ensure!(
+            args.method.is_none(),
+            "--method: --check reports every method (koltun, regions and both), each at every --resolution"
+        );
         ensure!(n >= 1, "--check must be at least 1 cell");
         ensure!(
             n <= pvs::MAX_GRID_CELLS,
@@ -161,25 +165,31 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         return check(args, &h, height, n, safe_params, out);
     }
     let params = PvsParams {
-        method: args.method,
+        method: args.method.unwrap_or(Method::Both),
         resolution: args.resolution[0],
         patch: safe_params.patch as u32,
     };
-    let prep = Instant::now();
-    let pvs = Pvs::new(&h, params)?;
-    let prep_s = prep.elapsed().as_secs_f64();
-    let cells = match (args.cell, args.grid) {
-        (Some(rect), _) => {
-            let cell = ViewCell { rect, height };
-            pvs.check_over_terrain(&cell).context("--cell")?;
-            vec![cell]
+    // The cells are checked first, by a computer without the conservative regions (which take seconds to minutes).
+    let cells = {
+        let probe = Pvs::with_regions(&h, params, None)?;
+        match (args.cell, args.grid) {
+            (Some(rect), _) => {
+                let cell = ViewCell { rect, height };
+                probe.check_over_terrain(&cell).context("--cell")?;
+                vec![cell]
+            }
+            (None, Some(size)) => probe.grid(size, height)?,
+            (None, None) => bail!("give --cell, --grid or --check"),
         }
-        (None, Some(size)) => pvs.grid(size, height)?,
-        (None, None) => bail!("give --cell, --grid or --check"),
     };
     for c in &cells {
         c.validate().with_context(|| format!("--cell {:?}", c.rect))?;
     }
+    let spinner = out.spinner("preparing (walls, boxes and, for regions, the conservative regions)");
+    let prep = Instant::now();
+    let pvs = Pvs::new(&h, params)?;
+    let prep_s = prep.elapsed().as_secs_f64();
+    spinner.finish_and_clear();
     let bar = if args.grid.is_some() {
         out.progress(cells.len() as u64, "cells")
     } else {
@@ -336,6 +346,7 @@ fn check(
         resolution,
         patch,
     }));
+    let spinner = out.spinner("preparing (the conservative regions, walls and boxes)");
     let prep = Instant::now();
     let regions = std::sync::Arc::new(pvs::conservative_regions(h));
     let computers: Vec<Pvs> = configs
@@ -343,6 +354,7 @@ fn check(
         .map(|&p| Pvs::with_regions(h, p, (p.method != Method::Koltun).then(|| regions.clone())))
         .collect::<Result<_, _>>()?;
     let prep_s = prep.elapsed().as_secs_f64();
+    spinner.finish_and_clear();
     // Random cells whose centre lies on the terrain.
     let b = tin.bbox();
     let s = cell_size;

@@ -179,11 +179,19 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         None => (None, None, None),
     };
     let colour = if pvs_mask.is_some() {
-        colour.or(Some(ColourMode::Visibility))
+        // The PVS is painted with the visibility colours (the eye view also draws only its triangles).
+        if colour.is_some_and(|c| c != ColourMode::Visibility) {
+            bail!(
+                "--colour {}: --pvs-cell paints what the cell's PVS excludes with --colour visibility",
+                args.colour.as_deref().unwrap_or_default()
+            );
+        }
+        Some(ColourMode::Visibility)
     } else {
         colour
     };
     let eye = args.eye.or(pvs_eye);
+    let with_pvs = pvs_mask.is_some();
     let options = RenderOptions {
         view,
         eye,
@@ -202,7 +210,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     };
     viewer::validate(&terrain, &options)?;
     // A culling parameter that this render does not use is an error, as for `cull`, rather than ignored.
-    let culls = terrain.hierarchy.is_some()
+    // A PVS replaces the culling of a viewpoint.
+    let culls = !with_pvs
+        && terrain.hierarchy.is_some()
         && (eye.is_some() && view != ViewKind::Map || colour == Some(ColourMode::Visibility));
     // So is a view flag that changes nothing in this image.
     let view_name = &args.view;
@@ -239,6 +249,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     } else {
         let method = (args.method != cull::CullMethod::Safe).then(|| format!("--method {}", args.method.name()));
         if let Some(flag) = method.or_else(|| args.safe.first_given()) {
+            if with_pvs {
+                bail!("{flag}: with --pvs-cell the render shows the cell's PVS, and culls nothing from a point");
+            }
             bail!(
                 "{flag}: this render culls nothing (culling needs a hierarchy, and --eye with --view eye or orbit, or \
                  --colour visibility)"

@@ -183,8 +183,14 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     // none before any work.
     let (valid, notes) = spec.combos(0);
     if valid.is_empty() {
-        let reasons: Vec<&str> = notes.iter().map(|n| n.strip_prefix("skipped ").unwrap_or(n)).collect();
-        anyhow::bail!("no combination to sweep is valid: {}", reasons.join("; "));
+        let reasons: Vec<String> = notes
+            .iter()
+            .map(|n| n.strip_prefix("skipped ").unwrap_or(n).to_string())
+            .collect();
+        anyhow::bail!(
+            "no combination to sweep is valid: {}",
+            first_of(&reasons, "combination", "").join("; ")
+        );
     }
 
     // Refuse an output that cannot be written, or that is the mesh or the config, before any work (it is rewritten
@@ -201,6 +207,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         );
     }
     check.check(&args.out)?;
+    super::files::refuse_other_format(&args.out, "a CSV table (and resumes one)", "csv")?;
     let mut table = match std::fs::read_to_string(&args.out) {
         Ok(text) => SweepTable::parse(&text).with_context(|| format!("{}", args.out.display()))?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => SweepTable::default(),
@@ -212,7 +219,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         .adopt(&setup_digest(&tin, &spec.base, &eval))
         .with_context(|| args.out.display().to_string())?;
     let (combos, notes) = spec.combos(tin.num_triangles());
-    for n in &notes {
+    for n in first_of(&notes, "skipped combination", " (--json lists them all)") {
         out.warn(n);
     }
     if let Some(line) = table.truncated_line() {
@@ -319,4 +326,20 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         "ground_truth_seconds": truth_seconds,
         "seconds": start.elapsed().as_secs_f64(),
     }))
+}
+
+/// Most notes said one by one; the rest are counted.
+const NOTES_SHOWN: usize = 8;
+
+/// The first [`NOTES_SHOWN`] of `notes`, and a line counting the others (`what`, in the singular, names one;
+/// `where_all` says where they all are, if anywhere).
+fn first_of(notes: &[String], what: &str, where_all: &str) -> Vec<String> {
+    let mut shown: Vec<String> = notes.iter().take(NOTES_SHOWN).cloned().collect();
+    if notes.len() > NOTES_SHOWN {
+        shown.push(format!(
+            "and {}{where_all}",
+            count(notes.len() - NOTES_SHOWN, &format!("more {what}"))
+        ));
+    }
+    shown
 }

@@ -55,6 +55,17 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
     let sidecar = tin::dem::npy::sidecar_path(&args.out);
     if grid_out {
         files.check(&sidecar)?;
+        // The sidecar is named after the grid, not by the user: an existing file there is replaced only when it is
+        // a grid's sidecar (it says a spacing), never another JSON (a tile plan, a report) that happens to share it.
+        if sidecar.exists() {
+            let is_sidecar = tin::dem::npy::read_sidecar(&sidecar).is_ok_and(|c| c.spacing.is_some());
+            anyhow::ensure!(
+                is_sidecar,
+                "{}: a grid's sidecar goes here, and this file is not one (no spacing_x_m/spacing_y_m); move it, or \
+                 name the grid otherwise",
+                sidecar.display()
+            );
+        }
     }
     let start = Instant::now();
     let mut opts = SynthOptions::new(args.vertices, args.rng_seed);

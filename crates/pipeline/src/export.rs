@@ -41,7 +41,8 @@ pub fn write_mtl_to(h: &Hierarchy, w: &mut dyn Write) -> io::Result<()> {
     writeln!(w, "newmtl orphans\nKd {r:.4} {g:.4} {b:.4}")
 }
 
-/// Writes the hierarchy's mesh as OBJ with one group per leaf (in triangle order) and the orphans last, using the
+/// Writes the hierarchy's mesh as OBJ with one group per leaf (in triangle order) and the orphans last (when there
+/// are any), using the
 /// materials of `mtl_name` (see [`write_mtl_to`]). Positions are written exactly (shortest round-trip f64 text).
 pub fn write_grouped_obj_to(h: &Hierarchy, mtl_name: &str, w: &mut dyn Write) -> io::Result<()> {
     let leaves = h.leaf_ranges();
@@ -67,7 +68,10 @@ pub fn write_grouped_obj_to(h: &Hierarchy, mtl_name: &str, w: &mut dyn Write) ->
         writeln!(w, "g group_{i}\nusemtl group_{i}")?;
         faces(w, range)?;
     }
-    writeln!(w, "g orphans\nusemtl orphans")?;
+    // A quadtree has no orphans: no empty group.
+    if h.always_visible[0] < h.always_visible[1] {
+        writeln!(w, "g orphans\nusemtl orphans")?;
+    }
     faces(w, h.always_visible)
 }
 

@@ -15,7 +15,8 @@
 //!   `(x, y, z) → (x, z, −y)`, so north is −z) and moves it to its local origin (`translation`: the origin, rounded to
 //!   f32, turned the same way); the buffer and `extras` keep the terrain's own axes. Hierarchy node
 //!   `i` is glTF node `i + 1`, with the children of the hierarchy as its children and, for a leaf, its group's mesh;
-//!   the hierarchy's top-level nodes and a last node `always_visible` (with its mesh) are the children of node 0.
+//!   the hierarchy's top-level nodes and, when there are always-visible triangles, a last node `always_visible` (with
+//!   their mesh) are the children of node 0.
 //! - **Culling data** in `extras.tincull` (documented here; no extension is required to load the file):
 //!   - on the scene: `{"version": 1, "sectors", "origin": [x, y, z] (exact f64), "roots": [hierarchy node indices],
 //!     "always_visible": [s, e], "triangles", "vertices", "node_offset": 1, "index_buffer_view": 2, "build": {...}}`;
@@ -129,7 +130,9 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
 
     let mut nodes = Vec::with_capacity(h.nodes.len() + 2);
     let mut root_children: Vec<usize> = h.roots.iter().map(|&r| r as usize + 1).collect();
-    root_children.push(h.nodes.len() + 1);
+    if av_mesh.is_some() {
+        root_children.push(h.nodes.len() + 1);
+    }
     // glTF is +Y up, the terrain +Z up: node 0 turns it by −90° about +x, `(x, y, z) → (x, z, −y)`, after moving it
     // to its origin (glTF applies the rotation first, so the translation is the origin turned the same way).
     let half = std::f32::consts::FRAC_1_SQRT_2;
@@ -157,11 +160,9 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
         }
         nodes.push(node);
     }
-    let mut av_node = json!({"name": "always_visible"});
     if let Some(m) = av_mesh {
-        av_node["mesh"] = json!(m);
+        nodes.push(json!({"name": "always_visible", "mesh": m}));
     }
-    nodes.push(av_node);
 
     let mut buffer = json!({"byteLength": bin.len()});
     if let Some(uri) = buffer_uri {

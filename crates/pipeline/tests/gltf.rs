@@ -78,7 +78,12 @@ fn check_reimport(h: &Hierarchy, document: &gltf::Document, bin: &[u8]) {
         }
     }
     assert!(covered.iter().all(|&c| c), "every triangle is in a primitive");
-    assert_eq!(primitives, leaves.len() + 1);
+    let orphans = h.always_visible[0] < h.always_visible[1];
+    assert_eq!(primitives, leaves.len() + usize::from(orphans));
+    // The always-visible node exists when there are orphans, and holds them (a quadtree has none: no empty node).
+    let av = document.nodes().filter(|n| n.name() == Some("always_visible")).count();
+    assert_eq!(av, usize::from(orphans));
+    assert_eq!(document.nodes().count(), h.nodes.len() + 1 + usize::from(orphans));
     // The node tree mirrors the hierarchy: node 0 carries the origin, hierarchy node i is node i + 1.
     let nodes: Vec<gltf::Node> = document.nodes().collect();
     let (t, r, s) = nodes[0].transform().decomposed();
@@ -203,4 +208,24 @@ fn khronos_validator_reports_no_errors() {
     for r in &reports {
         assert_eq!(r["errors"], 0, "{r}");
     }
+}
+
+/// A quadtree hierarchy has no always-visible triangles: its glTF has no empty `always_visible` node (which the
+/// Khronos validator reports as `NODE_EMPTY`) and its grouped OBJ no empty `g orphans` group.
+#[test]
+fn a_quadtree_export_has_no_empty_orphans() {
+    let (t, _) = tin::read_obj(workspace().join("meshes/jacksboro-2k.obj"), &Default::default()).expect("mesh");
+    let params = pipeline::BuildParams {
+        grouping: pipeline::Grouping::Quadtree(Default::default()),
+        ..Default::default()
+    };
+    let h = pipeline::build(&t, &params, None).expect("build").hierarchy;
+    assert_eq!(h.always_visible[0], h.always_visible[1], "a quadtree has no orphans");
+    let glb = to_glb(&h).expect("glb");
+    let g = gltf::Gltf::from_slice(&glb).expect("the gltf crate reads the .glb");
+    check_reimport(&h, &g.document, &g.blob.clone().expect("a BIN chunk"));
+    let mut obj = Vec::new();
+    pipeline::export::write_grouped_obj_to(&h, "x.mtl", &mut obj).expect("obj");
+    let obj = String::from_utf8(obj).expect("utf-8");
+    assert!(!obj.contains("g orphans"), "no empty orphans group");
 }

@@ -72,8 +72,9 @@ pub struct RenderOptions {
     pub method: CullMethod,
     /// The safe culler's run-time parameters (also `--columns` of `lloyd-egbert`).
     pub safe: cull::SafeParams,
-    /// A viewcell's PVS as a per-triangle mask (hierarchy order; crate `pvs`): with `ColourMode::Visibility` it
-    /// replaces the viewpoint's culling, painting what the PVS excludes as culled.
+    /// A viewcell's PVS as a per-triangle mask (hierarchy order; crate `pvs`): it replaces the viewpoint's culling
+    /// (nothing is culled for `eye`): `ColourMode::Visibility` paints what it excludes as culled, and the eye view
+    /// draws only its triangles.
     pub pvs: Option<Vec<bool>>,
 }
 
@@ -158,7 +159,9 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
     if let Some(p) = o.pitch_deg
         && p.abs() >= 89.0
     {
-        return bad(format!("--pitch must be within ±89°, got {p}"));
+        return bad(format!(
+            "--pitch must be between -89° and 89° (exclusive: the camera never looks straight up or down), got {p}"
+        ));
     }
     if let (Some(level), Some(h)) = (o.level, &terrain.hierarchy) {
         let top = h.nodes.iter().map(|n| n.level).max().unwrap_or(0);
@@ -205,9 +208,12 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
     let aspect = width as f32 / height.max(1) as f32;
     let n = terrain.num_triangles() as u32;
 
-    // Cull for the viewpoint when there is one and a hierarchy to cull with.
+    // Cull for the viewpoint when there is one and a hierarchy to cull with (a PVS replaces it: see `pvs`).
     let culled = match (&terrain.hierarchy, options.eye) {
-        (Some(h), Some(eye)) if options.view != ViewKind::Map || options.colour == Some(ColourMode::Visibility) => {
+        (Some(h), Some(eye))
+            if options.pvs.is_none()
+                && (options.view != ViewKind::Map || options.colour == Some(ColourMode::Visibility)) =>
+        {
             let culler = AnyCuller::with_params(h, options.method, options.safe);
             let camera = culling_camera(eye, options)?;
             Some((culler.cull(&camera), culler, camera))
@@ -267,9 +273,11 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
         }
         ViewKind::Eye => {
             let eye = eye_camera(terrain, options);
-            let items = match &culled {
-                Some((list, _, _)) => solid(&list.ranges),
-                None => all.to_vec(),
+            let items = match (&culled, &options.pvs) {
+                (Some((list, _, _)), _) => solid(&list.ranges),
+                // The eye view of a PVS draws its triangles only.
+                (None, Some(pvs)) => solid(&mask_ranges(pvs)),
+                (None, None) => all.to_vec(),
             };
             (eye.view_proj(aspect), items, None)
         }
@@ -394,4 +402,17 @@ fn median(v: &mut [f64]) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// The runs of `true` in `mask` as triangle ranges.
+fn mask_ranges(mask: &[bool]) -> Vec<[u32; 2]> {
+    let mut ranges: Vec<[u32; 2]> = Vec::new();
+    for (t, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
+        let t = t as u32;
+        match ranges.last_mut() {
+            Some(r) if r[1] == t => r[1] = t + 1,
+            _ => ranges.push([t, t + 1]),
+        }
+    }
+    ranges
 }
