@@ -1431,6 +1431,11 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         &["view", s(&mesh("jacksboro-2k.obj")), "--method", "stewart"],
         "needs a quadtree hierarchy",
     );
+    fails_with(&["view", s(&tch), "--pvs-cell-size", "0"], "at least 1 m");
+    fails_with(
+        &["view", s(&mesh("jacksboro-2k.obj")), "--truth"],
+        "a mesh has no culler until it is built: add --rebuild",
+    );
     assert_eq!(
         std::fs::read(&tch).expect("hierarchy"),
         before,

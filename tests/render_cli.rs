@@ -69,6 +69,29 @@ fn render_map_orbit_and_eye_compare() {
     assert_eq!((img.width, img.height), (200, 150));
     let grey = img.count(viewer::palette::to_rgba8([0.0; 3]));
     assert!(grey < 200 * 150, "not black");
+    // With --eye the map shows the viewpoint's pin (its head was once clipped by the map camera, above the terrain).
+    let pinned = dir.path().join("pinned.png");
+    let h = cull::Hierarchy::load(&tch).unwrap();
+    let c = h.mesh.positions[h.mesh.positions.len() / 2];
+    let eye = format!("{},{},{}", c[0], c[1], c[2] + 20.0);
+    ok(&tincull(&[
+        "render",
+        p(&tch),
+        "--out",
+        p(&pinned),
+        "--size",
+        "200x150",
+        "--eye",
+        &eye,
+    ]));
+    let with_pin = viewer::read_png(&pinned).unwrap();
+    let differing = with_pin
+        .pixels
+        .chunks_exact(4)
+        .zip(img.pixels.chunks_exact(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(differing > 4, "the pin shows on the map ({differing} pixels differ)");
 
     // A plain mesh renders by height.
     let height = dir.path().join("height.png");

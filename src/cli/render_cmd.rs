@@ -133,12 +133,12 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     // The outputs are checked before the terrain is read and its PVS computed.
     let mut files = Outputs::new();
     files.input(&args.input)?;
+    files.check(&args.out)?;
     anyhow::ensure!(
         args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
         "{}: render writes a PNG image; name it .png",
         args.out.display()
     );
-    files.check(&args.out)?;
     if args.compare {
         files.check(&diff_path(&args.out))?;
     }

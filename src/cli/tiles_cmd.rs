@@ -237,7 +237,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         dir.display()
     ));
     out.json(&json!({
-        "plan": args.out,
+        "output": args.out,
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,
@@ -387,7 +387,7 @@ fn plan_mesh(
         dir.display()
     ));
     out.json(&json!({
-        "plan": args.out,
+        "output": args.out,
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,

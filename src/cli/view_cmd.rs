@@ -44,7 +44,7 @@ pub struct ViewArgs {
     /// Turn the viewcell PVS on at start, with cells of this side (m): the cell around the eye is outlined on the map
     /// and what its PVS excludes is painted as culled (also a toggle in the side panel).
     #[arg(long, value_name = "M")]
-    pub pvs_cell_size: Option<u32>,
+    pub pvs_cell_size: Option<f64>,
     /// Write a screenshot of the window to this PNG after a few frames (and after --rebuild and --truth), then
     /// close.
     #[arg(long, value_name = "PNG")]
@@ -67,14 +67,24 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     if let Some(shot) = &args.screenshot {
         let mut files = super::files::Outputs::new();
         files.input(&args.input)?;
+        files.check(shot)?;
         anyhow::ensure!(
             shot.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
             "{}: --screenshot writes a PNG image; name it .png",
             shot.display()
         );
-        files.check(shot)?;
     } else if args.screenshot_after != DEFAULT_SCREENSHOT_AFTER {
         anyhow::bail!("--screenshot-after {} applies to --screenshot", args.screenshot_after);
+    }
+    anyhow::ensure!(
+        !args.truth || is_tch || args.rebuild,
+        "--truth compares the culler with the ground truth, and a mesh has no culler until it is built: add --rebuild"
+    );
+    if let Some(m) = args.pvs_cell_size {
+        anyhow::ensure!(
+            m.is_finite() && m >= 1.0,
+            "--pvs-cell-size {m}: the cells' side must be at least 1 m"
+        );
     }
     let mut params = args.params.resolve(None)?;
     let source = if is_tch {

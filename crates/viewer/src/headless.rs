@@ -252,11 +252,14 @@ pub fn render(gpu: &Gpu, terrain: &Terrain, options: &RenderOptions) -> Result<R
         }
     });
     let (view_proj, items, marker) = match options.view {
-        ViewKind::Map => (
-            MapView::fit(terrain.min, terrain.max, aspect).view_proj(),
-            all.to_vec(),
-            marker,
-        ),
+        ViewKind::Map => {
+            let mut map = MapView::fit(terrain.min, terrain.max, aspect);
+            // The camera above the pin's head, which stands high over the terrain (it was clipped away).
+            if let Some(m) = &marker {
+                map.z_range[1] = map.z_range[1].max(m.position.z + m.height + m.size);
+            }
+            (map.view_proj(), all.to_vec(), marker)
+        }
         ViewKind::Orbit => {
             let orbit = Orbit::overview(
                 terrain.min,

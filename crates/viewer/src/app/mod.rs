@@ -71,14 +71,14 @@ pub struct ScreenshotRequest {
 
 /// Actions the viewer takes by itself once the window is up, for tests and demonstrations: first the rebuild
 /// (with the panel's parameters), then the ground truth for the viewpoint. A screenshot waits for both.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Startup {
     /// Press Rebuild at the first frame (with the pipeline, or the stand-in of [`ViewerOptions::rebuild`]).
     pub rebuild: bool,
     /// Press "Ground truth here" once the hierarchy is ready.
     pub ground_truth: bool,
     /// Turn the viewcell PVS on, with cells of this side (m).
-    pub pvs_cell_size: Option<u32>,
+    pub pvs_cell_size: Option<f64>,
 }
 
 /// What happened during a [`run`].
@@ -428,7 +428,7 @@ impl ViewerApp {
             culled_wire: true,
             show_horizon: false,
             pvs_on: startup.pvs_cell_size.is_some(),
-            pvs_size: f64::from(startup.pvs_cell_size.unwrap_or(100).max(1)),
+            pvs_size: startup.pvs_cell_size.unwrap_or(100.0).max(1.0),
             pvs: None,
             list: DrawList::default(),
             drawn_fingerprint: 0,
