@@ -39,9 +39,11 @@ impl ViewerApp {
             .add(egui::Slider::new(&mut self.yaw_deg, -180.0..=180.0).text("yaw °"))
             .changed();
         ui.add(egui::Slider::new(&mut self.pitch_deg, -89.0..=89.0).text("pitch °"));
+        // Up to 500 m, or as high as R has raised the eye (the slider shows the true height).
+        let top = self.eye_height.max(500.0);
         if ui
             .add(
-                egui::Slider::new(&mut self.eye_height, 0.5..=500.0)
+                egui::Slider::new(&mut self.eye_height, 0.5..=top)
                     .logarithmic(true)
                     .text("height above ground m"),
             )
