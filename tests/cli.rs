@@ -205,6 +205,11 @@ fn a_y_up_mesh_gets_a_hint() {
         &["build", s(&obj), "--spacing", "1,1", "-o", s(&dir.path().join("g.tch"))],
         "--spacing 1,1 applies to DEM grids",
     );
+    // A negative spacing is read as the value it is (not as another flag) and refused for what it is.
+    fails_with(
+        &["info", s(&obj), "--spacing", "-1,1"],
+        "spacing must be positive and finite, got \"-1,1\"",
+    );
     fails_with(
         &[
             "tiles",
@@ -491,6 +496,8 @@ fn a_whole_regular_grid_builds_and_culls() {
     let whole = dir.path().join("whole.obj");
     let v = json(&["tin", s(&asc), "-o", s(&whole), "--keep-grid", "--json", "-q"]);
     assert_eq!(v["vertices"], rows * cols);
+    // The same keys as a simplified TIN's report, null where nothing was simplified.
+    assert!(v.get("simplify_seconds").is_some_and(|t| t.is_null()), "{v}");
     assert_eq!(v["triangles"], 2 * (rows - 1) * (cols - 1));
     let exact = dir.path().join("exact.obj");
     let e = json(&["tin", s(&asc), "-o", s(&exact), "--max-error", "0", "--json", "-q"]);
@@ -1108,6 +1115,24 @@ fn contradictory_or_empty_options_are_errors() {
         text.contains("occlusion captured none (no cell hides any triangle)"),
         "{text}"
     );
+    // Its JSON names its input and outputs, as every command's does.
+    let v = json(&[
+        "failmap",
+        s(&tch),
+        "--cell-size",
+        "10000",
+        "--eye-height",
+        "1e300",
+        "-o",
+        s(&png),
+        "--json",
+    ]);
+    assert_eq!(
+        (v["hierarchy"].as_str(), v["output"].as_str()),
+        (Some(s(&tch)), Some(s(&png))),
+        "{v}"
+    );
+    assert!(v["csv"].is_null(), "{v}");
 
     let v = String::from_utf8_lossy(&run(&["failmap", s(&tch), "--cell-size", "1e9", "--json"]).stdout).into_owned();
     assert!(v.is_empty(), "{v}");

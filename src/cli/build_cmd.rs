@@ -153,7 +153,10 @@ impl ParamArgs {
                         }
                         _ => flag.to_string(),
                     };
-                    anyhow::bail!("{given} applies to the crystal grouping; a quadtree grouping has no seeds to grow");
+                    anyhow::bail!(
+                        "{given} applies to the crystal grouping (its seeds, passes, groups and random generator); a \
+                         quadtree's cells are fixed by its depth"
+                    );
                 }
                 quadtree.validate()?;
                 p.grouping = Grouping::Quadtree(quadtree);

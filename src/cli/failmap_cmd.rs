@@ -124,6 +124,9 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         )),
     ));
     out.json(&serde_json::json!({
+        "hierarchy": args.hierarchy,
+        "output": args.out,
+        "csv": args.csv,
         "method": args.method.name(),
         "cols": map.cols,
         "rows": map.rows,

@@ -141,7 +141,7 @@ impl ImportArgs {
 pub struct DemArgs {
     /// A DEM grid's sample spacing `dx,dy` in metres (overrides a .npy sidecar or a GeoTIFF's georeference; required
     /// for .png and a plain TIFF).
-    #[arg(long, value_parser = parse_spacing)]
+    #[arg(long, value_parser = parse_spacing, allow_hyphen_values = true)]
     pub spacing: Option<(f64, f64)>,
     /// Multiply a DEM grid's heights by this (for .png: metres per grey level); finite and non-zero (negative
     /// flips the terrain) [default: 1].

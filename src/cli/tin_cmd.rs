@@ -128,6 +128,7 @@ fn keep_grid(args: &TinArgs, grid: &tin::Grid, mut files: Outputs, start: Instan
         "max_error": 0.0,
         "rms_error": 0.0,
         "stopped_by": "keep_grid",
+        "simplify_seconds": null,
         "seconds": seconds,
     }))
 }
