@@ -677,6 +677,26 @@ fn build_cull_export_eval_round_trip() {
     }
     let groups = report["groups"].as_u64().expect("groups");
     assert!(groups >= 1);
+    assert_eq!(
+        (report["seeds"].as_u64(), report["first_pass_crystals"].as_u64()),
+        (Some(20), Some(20)),
+        "20 seeds on 3,908 free triangles start 20 crystals"
+    );
+    // More seeds than triangles: the report says how many crystals could start.
+    let many = dir.path().join("many.tch");
+    let j2k = mesh("jacksboro-2k.obj");
+    let args = ["build", s(&j2k), "-o", s(&many), "--seeds", "100000"];
+    let r = json(&[&args[..], &["--json"]].concat());
+    let started = r["first_pass_crystals"].as_u64().expect("first_pass_crystals");
+    assert!(
+        started <= r["triangles"].as_u64().expect("triangles") && started > 20,
+        "{r}"
+    );
+    let text = String::from_utf8_lossy(&ok(&args).stdout).into_owned();
+    assert!(
+        text.contains(&format!("100000 seeds ({started} crystals started)")),
+        "{text}"
+    );
     if cfg!(target_os = "linux") {
         let peak = report["peak_memory_bytes"].as_u64().expect("peak memory on Linux");
         assert!((1 << 20..1 << 34).contains(&peak), "peak memory {peak} bytes");
@@ -1203,9 +1223,10 @@ fn files_of_the_wrong_kind_say_what_they_are() {
     let mut bytes = b"TINCPVS\x1a".to_vec();
     bytes.extend_from_slice(&[0; 40]);
     std::fs::write(&pvs, &bytes).expect("pvs");
+    fails_with(&["info", s(&pvs)], "g.pvs: not a readable PVS file:");
     fails_with(
-        &["info", s(&pvs)],
-        "g.pvs is a tincull PVS file (written by `tincull pvs -o`), which `info` does not",
+        &["info", s(&pvs), "--dem-vertices", "100"],
+        "g.pvs: --dem-vertices 100 applies to a DEM grid input; a PVS file (.pvs) holds no mesh",
     );
     fails_with(
         &["cull", s(&pvs), "--eye", "1,1,1"],

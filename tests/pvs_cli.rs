@@ -74,6 +74,20 @@ fn one_cell_a_grid_and_the_binary_file_agree() {
     assert_eq!(decoded.cells.len(), 1);
     assert_eq!(decoded.cells[0].ranges(), r);
     assert_eq!(decoded.triangles, nt);
+    // `info` describes the file as `pvs` computed it.
+    let info = json(&["info", s(&file), "--json"]);
+    assert_eq!(info["triangles"].as_u64(), Some(u64::from(nt)));
+    assert_eq!(info["file_bytes"], v["file_bytes"]);
+    assert_eq!((&info["method"], info["resolution"].as_u64()), (&v["method"], Some(32)));
+    assert_eq!(ranges(&info["cells"][0]["ranges"]), r);
+    assert_eq!(info["cells"][0]["pvs_triangles"].as_u64(), Some(size));
+    assert_eq!(info["cells"][0]["nodes"], c["nodes"]);
+    assert_eq!(info["cells"][0]["height"], v["height"]);
+    let text = String::from_utf8_lossy(&ok(&["info", s(&file)]).stdout).into_owned();
+    assert!(
+        text.contains("(a tincull PVS file,") && text.contains(&format!("cells         1, mean PVS {size} triangles")),
+        "{text}"
+    );
 
     // The grid: deterministic, and its cell containing the one above has ranges of the same kind.
     let (g1, g2) = (dir.path().join("g1.pvs"), dir.path().join("g2.pvs"));

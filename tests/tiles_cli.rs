@@ -650,7 +650,13 @@ fn a_tile_of_voids_is_left_out_of_the_plan() {
         text.contains("8 tiles (3 x 3, 1 tile without terrain left out)"),
         "{text}"
     );
-    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let built = json(&["tiles", "build", s(&plan), "--all", "--json", "-q"]);
+    let far = built["tiles"].as_array().expect("tiles").iter();
+    assert_eq!(
+        far.map(|t| t["far_points"].as_u64().expect("far_points")).max(),
+        v["far_points_max"].as_u64(),
+        "the plan's far_points_max is the most far points of a tile: {built}"
+    );
     let merged = dir.path().join("m.tch");
     ok(&["tiles", "merge", s(&plan), "-o", s(&merged), "-q"]);
     let info = json(&["info", s(&merged), "--json"]);

@@ -254,8 +254,17 @@ pub fn print_report(r: &BuildReport, out: Output) {
         return;
     }
     out.say(format!(
-        "{} vertices, {} triangles; {} sectors x {} subsectors, {} seeds",
-        r.vertices, r.triangles, r.sectors, r.subsectors, r.seeds
+        "{} vertices, {} triangles; {} sectors x {} subsectors, {} seeds{}",
+        r.vertices,
+        r.triangles,
+        r.sectors,
+        r.subsectors,
+        r.seeds,
+        if r.first_pass_crystals < r.seeds {
+            format!(" ({} crystals started)", r.first_pass_crystals)
+        } else {
+            String::new()
+        }
     ));
     out.say(format!(
         "  horizons {:.3} s, regions {:.3} s, grouping {:.3} s",

@@ -117,9 +117,9 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
             }))?;
         } else {
             out.say(format!(
-                "eye {:?}: draw {} of {} in {}; {} tested, of which {} hidden and {} outside the view (culled \
+                "eye {}: draw {} of {} in {}; {} tested, of which {} hidden and {} outside the view (culled \
                  with their descendants); {:.2} µs",
-                eye,
+                super::output::point(eye),
                 s.triangles_drawn,
                 count((s.triangles_drawn + s.triangles_culled) as usize, "triangle"),
                 count(list.ranges.len(), "range"),

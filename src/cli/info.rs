@@ -1,4 +1,5 @@
-//! `tincull info`: what a terrain mesh holds and whether it is a sound height field.
+//! `tincull info`: what a terrain mesh holds and whether it is a sound height field; what a hierarchy or a PVS file
+//! holds.
 
 use super::output::count;
 use anyhow::{Context, Result};
@@ -11,8 +12,8 @@ use super::{Output, OutputArgs};
 /// Arguments of `tincull info`.
 #[derive(Debug, Args)]
 #[command(mut_arg("mesh", |a| a.help(
-    "The terrain mesh (OBJ), a DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to --dem-vertices, or a \
-     hierarchy (.tch)"
+    "The terrain mesh (OBJ), a DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to --dem-vertices, a \
+     hierarchy (.tch) or a PVS file (.pvs, written by `tincull pvs -o`)"
 )))]
 pub struct InfoArgs {
     /// The mesh and how to import it.
@@ -30,11 +31,8 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
         return hierarchy(&args.mesh.mesh, out);
     }
     if super::mesh_input::file_kind(&args.mesh.mesh) == super::mesh_input::FileKind::Pvs {
-        anyhow::bail!(
-            "{} is a tincull PVS file (written by `tincull pvs -o`), which `info` does not describe: it describes OBJ \
-             meshes, DEM grids and hierarchies (.tch)",
-            args.mesh.mesh.display()
-        );
+        args.mesh.refuse_import_flags("a PVS file (.pvs) holds no mesh")?;
+        return pvs_file(&args.mesh.mesh, out);
     }
     let (tin, import, dem) = args.mesh.load_with_source(out)?;
     let stats = tin::mesh_stats(&tin);
@@ -229,5 +227,90 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         "height_field": check.as_ref().is_ok_and(|c| c.is_height_field()),
         "validation": check.as_ref().ok(),
         "build": b_info,
+    }))
+}
+
+/// Cells listed one by one by `info FILE.pvs` (all of them with `--json`).
+const PVS_CELLS_LISTED: usize = 20;
+
+/// Describes a `.pvs` file: the hierarchy it refers to, its parameters and every viewcell's PVS.
+fn pvs_file(path: &std::path::Path, out: Output) -> Result<()> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let file = pvs::PvsFile::from_bytes(&bytes).with_context(|| format!("{}", path.display()))?;
+    let nt = u64::from(file.triangles);
+    let sizes: Vec<u64> = file
+        .cells
+        .iter()
+        .map(|c| c.ranges().iter().map(|r| u64::from(r[1] - r[0])).sum())
+        .collect();
+    let percent = |s: u64| 100.0 * s as f64 / nt.max(1) as f64;
+    let mean = sizes.iter().sum::<u64>() as f64 / sizes.len().max(1) as f64;
+    let p = file.params;
+    out.say(format!(
+        "{} (a tincull PVS file, {} bytes)",
+        path.display(),
+        bytes.len()
+    ));
+    out.say(format!(
+        "  hierarchy     {} and {} (of the .tch it was computed for)",
+        count(nt as usize, "triangle"),
+        count(file.nodes as usize, "node")
+    ));
+    out.say(format!(
+        "  computed with method {}, resolution {}, patch {}",
+        p.method.name(),
+        p.resolution,
+        p.patch
+    ));
+    out.say(format!(
+        "  cells         {}, mean PVS {mean:.0} triangles ({:.1}%)",
+        file.cells.len(),
+        percent(mean.round() as u64)
+    ));
+    for (i, (c, &s)) in file.cells.iter().zip(&sizes).enumerate().take(PVS_CELLS_LISTED) {
+        let [x0, y0, x1, y1] = c.cell.rect;
+        out.say(format!(
+            "  cell {i:<8} x {x0} .. {x1}, y {y0} .. {y1}, {} (top {:.3} m): PVS {s} triangles ({:.1}%) in {}, {}; {} \
+             bytes",
+            c.cell.height,
+            c.ztop,
+            percent(s),
+            count(c.ranges().len(), "range"),
+            count(c.nodes().len(), "node"),
+            c.encoded_len()
+        ));
+    }
+    if file.cells.len() > PVS_CELLS_LISTED {
+        out.say(format!(
+            "  … and {} more cells (--json lists them all)",
+            file.cells.len() - PVS_CELLS_LISTED
+        ));
+    }
+    let cells: Vec<serde_json::Value> = file
+        .cells
+        .iter()
+        .zip(&sizes)
+        .map(|(c, &s)| {
+            json!({
+                "cell": c.cell.rect,
+                "height": c.cell.height,
+                "ztop": c.ztop,
+                "nodes": c.nodes(),
+                "ranges": c.ranges(),
+                "pvs_triangles": s,
+                "bytes": c.encoded_len(),
+            })
+        })
+        .collect();
+    out.json(&json!({
+        "pvs": path,
+        "file_bytes": bytes.len(),
+        "triangles": nt,
+        "nodes": file.nodes,
+        "method": p.method.name(),
+        "resolution": p.resolution,
+        "patch": p.patch,
+        "mean_pvs_triangles": mean,
+        "cells": cells,
     }))
 }

@@ -477,14 +477,17 @@ impl MeshArgs {
     /// An error when a flag of how to import a mesh or a DEM grid is given while the input is a hierarchy, rather
     /// than ignoring it: a `.tch` holds its mesh as it was built.
     pub fn refuse_for_hierarchy(&self) -> Result<()> {
+        self.refuse_import_flags("a hierarchy (.tch) holds its mesh as it was built")
+    }
+
+    /// An error when a flag of how to import a mesh or a DEM grid is given while the input is neither (`why` says
+    /// what it is instead).
+    pub fn refuse_import_flags(&self, why: &str) -> Result<()> {
         let flag = mesh_flag(self.import.keep_faces, self.import.dedupe, self.import.up)
             .map(|f| (f, "an OBJ mesh input"))
             .or_else(|| dem_flag(&self.import.dem, self.import.dem_vertices).map(|f| (f, "a DEM grid input")));
         if let Some((flag, input)) = flag {
-            bail!(
-                "{}: {flag} applies to {input}; a hierarchy (.tch) holds its mesh as it was built",
-                self.mesh.display()
-            );
+            bail!("{}: {flag} applies to {input}; {why}", self.mesh.display());
         }
         Ok(())
     }

@@ -118,6 +118,11 @@ impl Output {
     }
 }
 
+/// A point for human text: `(x, y, z)` in metres to the millimetre (JSON output keeps every digit).
+pub fn point(p: [f64; 3]) -> String {
+    format!("({:.3}, {:.3}, {:.3})", p[0], p[1], p[2])
+}
+
 /// `n` and `noun` (given in the singular) for human text, the noun in the plural unless `n` is 1: `count(1,
 /// "range")` is "1 range", `count(3, "range")` "3 ranges", `count(2, "vertex")` "2 vertices". Not for JSON or CSV.
 pub fn count(n: usize, noun: &str) -> String {

@@ -279,8 +279,8 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     ));
     if let Some(s) = &result.cull {
         out.say(format!(
-            "culled for eye {:?}: draw {} of {}; {} tested, {} culled by occlusion, {} by frustum",
-            options.eye.unwrap_or_default(),
+            "culled for eye {}: draw {} of {}; {} tested, {} culled by occlusion, {} by frustum",
+            super::output::point(options.eye.unwrap_or_default()),
             s.triangles_drawn,
             count((s.triangles_drawn + s.triangles_culled) as usize, "triangle"),
             count(s.nodes_tested as usize, "node"),

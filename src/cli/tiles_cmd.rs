@@ -243,7 +243,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "tile_cols": cols,
         "void_tiles": void_tiles,
         "far_blocks": field.finest(),
-        "far_points": far_points,
+        "far_points_max": far_points,
         "tiles_dir": dir,
     }))
 }
@@ -391,7 +391,7 @@ fn plan_mesh(
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,
-        "far_points": parts.iter().map(|p| p.far.len()).max().unwrap_or(0),
+        "far_points_max": parts.iter().map(|p| p.far.len()).max().unwrap_or(0),
         "tiles_dir": dir,
     }))
 }

@@ -134,8 +134,11 @@ pub struct BuildReport {
     pub sectors: u32,
     /// Subsectors per sector.
     pub subsectors: u32,
-    /// Seeds of the first crystal pass.
+    /// Seeds asked for in the first crystal pass.
     pub seeds: usize,
+    /// Crystals started by the first pass: fewer than `seeds` when fewer triangles than that are free to seed or
+    /// pass the visibility rule.
+    pub first_pass_crystals: usize,
     /// Wall time of the horizon sweep (s).
     pub horizon_seconds: f64,
     /// Wall time of the vertex regions (s).
@@ -254,6 +257,7 @@ pub fn build_from_regions(
             sectors: params.sectors,
             subsectors: params.subsectors,
             seeds: 0,
+            first_pass_crystals: 0,
             horizon_seconds,
             regions_seconds,
             grouping_seconds,
@@ -292,6 +296,7 @@ pub fn build_from_regions(
         sectors: params.sectors,
         subsectors: params.subsectors,
         seeds: params.crystal.first_seeds(tin.num_triangles()),
+        first_pass_crystals: s.passes.first().map_or(0, |p| p.new_groups),
         horizon_seconds,
         regions_seconds,
         grouping_seconds,

@@ -693,15 +693,12 @@ impl ViewerApp {
     }
 
     fn move_eye(&mut self, forward: f64, right: f64, up: f64) {
-        let a = self.yaw_deg.to_radians();
-        let (f, r) = ([a.cos(), a.sin()], [a.sin(), -a.cos()]);
-        let x = self.eye[0] + f[0] * forward + r[0] * right;
-        let y = self.eye[1] + f[1] * forward + r[1] * right;
-        if let Some(ground) = self.terrain().height_at(x, y) {
-            self.eye_height = (self.eye[2] + up - ground).max(0.5);
-            self.eye = [x, y, ground + self.eye_height];
-            self.map_dirty = true;
-        }
+        let t = &self.model.terrain;
+        (self.eye, self.eye_height) =
+            moved_eye(self.eye, self.eye_height, self.yaw_deg, [forward, right, up], |x, y| {
+                t.height_at(x, y)
+            });
+        self.map_dirty = true;
     }
 
     fn render_views(&mut self, size: [u32; 2]) -> Result<()> {
@@ -853,4 +850,57 @@ fn map_size(aspect: f32) -> [u32; 2] {
 
 fn wrap_degrees(d: f64) -> f64 {
     (d + 180.0).rem_euclid(360.0) - 180.0
+}
+
+/// The eye moved by `[forward, right, up]` (m) at the view azimuth `yaw_deg`: over the terrain it keeps its height
+/// above the ground (changed by `up`, at least 0.5 m), returned with it; off the terrain (`ground` is `None` there)
+/// it moves at its own height and keeps `eye_height` for when it comes back.
+fn moved_eye(
+    eye: [f64; 3],
+    eye_height: f64,
+    yaw_deg: f64,
+    [forward, right, up]: [f64; 3],
+    ground: impl Fn(f64, f64) -> Option<f64>,
+) -> ([f64; 3], f64) {
+    let a = yaw_deg.to_radians();
+    let (f, r) = ([a.cos(), a.sin()], [a.sin(), -a.cos()]);
+    let x = eye[0] + f[0] * forward + r[0] * right;
+    let y = eye[1] + f[1] * forward + r[1] * right;
+    match ground(x, y) {
+        Some(g) => {
+            let h = (eye[2] + up - g).max(0.5);
+            ([x, y, g + h], h)
+        }
+        None => ([x, y, eye[2] + up], eye_height),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::moved_eye;
+
+    /// Ground at height 100 on x in [0, 10], none beyond.
+    fn ground(x: f64, _: f64) -> Option<f64> {
+        (0.0..=10.0).contains(&x).then_some(100.0)
+    }
+
+    #[test]
+    fn the_eye_follows_the_ground_and_moves_freely_off_it() {
+        // Over the terrain: the height above the ground changes by `up`, never below 0.5 m.
+        let (eye, h) = moved_eye([5.0, 0.0, 120.0], 20.0, 0.0, [1.0, 0.0, 5.0], ground);
+        assert_eq!((eye, h), ([6.0, 0.0, 125.0], 25.0));
+        let (eye, h) = moved_eye(eye, h, 0.0, [0.0, 0.0, -100.0], ground);
+        assert_eq!((eye, h), ([6.0, 0.0, 100.5], 0.5));
+        // Off the terrain (an eye given outside it, or walking off its edge): it moves, at its own height.
+        let (eye, h) = moved_eye([5.0, 0.0, 120.0], 20.0, 180.0, [10.0, 0.0, 3.0], ground);
+        assert!(
+            (eye[0] + 5.0).abs() < 1e-9 && eye[2] == 123.0 && h == 20.0,
+            "{eye:?} {h}"
+        );
+        let (eye, h) = moved_eye([-50.0, 0.0, 300.0], 20.0, 0.0, [-10.0, 0.0, 0.0], ground);
+        assert_eq!((eye, h), ([-60.0, 0.0, 300.0], 20.0));
+        // Back onto it: its height above the ground is what it is there.
+        let (eye, h) = moved_eye([-1.0, 0.0, 130.0], 20.0, 0.0, [2.0, 0.0, 0.0], ground);
+        assert_eq!((eye, h), ([1.0, 0.0, 130.0], 30.0));
+    }
 }
