@@ -152,7 +152,7 @@ fn failmap_takes_out() {
     assert!(text.contains("0 with false culls"), "{text}");
     fails_with(
         &["failmap", s(&tch), "--cell-size", "4000", "-q"],
-        "nothing to write: -q hides the summary",
+        "nothing to write: -q hides the report",
     );
     // `--csv -`: the CSV alone on standard output, as `eval --csv -`.
     let csv = String::from_utf8(ok(&["failmap", s(&tch), "--cell-size", "4000", "--csv", "-"]).stdout).expect("UTF-8");
@@ -277,7 +277,16 @@ fn nonsense_values_are_refused() {
     let dir = tempfile::tempdir().expect("tempdir");
     let tch = hierarchy(dir.path());
     fails_with(&["eval", s(&tch), "--viewpoints", "0"], "--viewpoints");
-    fails_with(&["cull", s(&tch), "--eye", "0,0,100", "--yaw", "nan"], "--yaw");
+    fails_with(
+        &["cull", s(&tch), "--eye", "0,0,100", "--yaw", "nan", "--fov", "90"],
+        "--yaw must be finite",
+    );
+    // A yaw at 360 degrees would change nothing.
+    fails_with(
+        &["cull", s(&tch), "--eye", "0,0,100", "--yaw", "30"],
+        "at --fov 360 (the default) there is none to turn",
+    );
+    ok(&["cull", s(&tch), "--eye", "0,0,3000", "--yaw", "30", "--fov", "90"]);
     fails_with(&["cull", s(&tch), "--eye", "0,0,100", "--fov", "nan"], "--fov");
     if cfg!(feature = "viewer") {
         // Refused before any GPU work, so this runs without an adapter.
@@ -448,4 +457,62 @@ fn a_view_seed_gives_the_same_eyes_to_every_build_of_a_mesh() {
     assert_eq!(a, eyes(&other, "ground,high,sky"), "two builds of one mesh");
     let high: Vec<_> = a.iter().filter(|(c, _)| c == "high").cloned().collect();
     assert_eq!(high, eyes(&default, "high"), "high alone");
+}
+
+/// `-q` without `--json` where the printed report is the only result (no file written, nothing in the exit status)
+/// is refused before any work, saying what keeps a result; where a file or the exit status is the result it runs.
+#[test]
+fn quiet_runs_with_no_result_are_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = hierarchy(dir.path());
+    let m = mesh("jacksboro-2k.obj");
+    for (args, hint) in [
+        (
+            vec!["eval", s(&tch), "-q"],
+            "give --csv FILE, --export-json FILE or --json",
+        ),
+        (
+            vec!["pvs", s(&tch), "--grid", "4000", "-q"],
+            "give -o FILE.pvs or --json",
+        ),
+        (
+            vec!["horizon", s(&m), "-q"],
+            "give --export-json FILE, --verify or --json",
+        ),
+        (vec!["stress", s(&m), "-q"], "give --json"),
+        (
+            vec!["failmap", s(&tch), "--cell-size", "8000", "-q"],
+            "give -o MAP.png, --csv MAP.csv or --json",
+        ),
+    ] {
+        fails_with(
+            &args,
+            &format!("nothing to write: -q hides the report, this run's only result; {hint}"),
+        );
+    }
+    let csv = dir.path().join("e.csv");
+    let csv_arg = s(&csv);
+    ok(&[
+        "eval",
+        s(&tch),
+        "--viewpoints",
+        "1",
+        "--no-safe-regions",
+        "--csv",
+        csv_arg,
+        "-q",
+    ]);
+    assert!(csv.is_file());
+    ok(&[
+        "horizon",
+        s(&m),
+        "--sectors",
+        "4",
+        "--subsectors",
+        "1",
+        "--verify",
+        "-q",
+    ]);
+    // A quiet cull or info checks its inputs: the exit status is the result.
+    ok(&["info", s(&tch), "-q"]);
 }

@@ -160,6 +160,13 @@ fn bad_arguments_give_clear_errors() {
     fails_with(&["pvs", s(&tch), "--cell", &cell, "--method", "exact"], "koltun");
     fails_with(&["pvs", s(&tch), "--grid", "0"], "grid");
     fails_with(&["pvs", s(&tch), "--cell", &cell, "--patch", "0"], "--patch");
+    // Koltun's parameters with the regions alone, which would ignore them.
+    for (flag, value) in [("--resolution", "16"), ("--patch", "4")] {
+        fails_with(
+            &["pvs", s(&tch), "--cell", &cell, "--method", "regions", flag, value],
+            &format!("{flag} does not apply to --method regions"),
+        );
+    }
     fails_with(&["pvs", s(&tch), "--check", "1", "--cell-size", "1e6"], "cell-size");
     fails_with(
         &["pvs", s(&tch), "--check", "1", "--method", "koltun"],

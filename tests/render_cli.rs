@@ -272,6 +272,13 @@ fn render_refuses_culling_flags_it_does_not_use() {
             "--cull-fov: this render culls nothing",
         ),
     ];
+    // An eye below the ground of a plain mesh, as of a hierarchy.
+    let j2k = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/meshes/jacksboro-2k.obj"));
+    let cases = cases.into_iter().chain([(
+        j2k,
+        vec!["--view", "eye", "--eye", "2458,17626,100"],
+        "is 317.963 m below the ground (at z 417.963 there)",
+    )]);
     for (input, extra, needle) in cases {
         let mut args = vec!["render", p(input), "--out", p(&png)];
         args.extend_from_slice(&extra);

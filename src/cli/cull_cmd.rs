@@ -29,9 +29,10 @@ pub struct CullArgs {
     /// --above-ground` stands 2 m above the ground. An eye outside the terrain's footprint is an error.
     #[arg(long)]
     pub above_ground: bool,
-    /// View direction in degrees, counter-clockwise from east (+x).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub yaw: f64,
+    /// View direction in degrees, counter-clockwise from east (+x) [default: 0]; turns a --fov below 360 (refused
+    /// at 360, where it changes nothing).
+    #[arg(long, allow_hyphen_values = true)]
+    pub yaw: Option<f64>,
     /// Horizontal field of view in degrees (360 = no frustum restriction).
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
@@ -78,8 +79,12 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     if !(args.fov > 0.0 && args.fov <= 360.0) {
         bail!("--fov must be in (0, 360], got {}", tin::compact_number(args.fov));
     }
-    if !args.yaw.is_finite() {
-        bail!("--yaw must be finite, got {}", tin::compact_number(args.yaw));
+    let yaw = args.yaw.unwrap_or(0.0);
+    if !yaw.is_finite() {
+        bail!("--yaw must be finite, got {}", tin::compact_number(yaw));
+    }
+    if args.yaw.is_some() && args.fov == 360.0 {
+        bail!("--yaw turns the field of view, and at --fov 360 (the default) there is none to turn: give --fov too");
     }
     args.safe.check_method(args.method)?;
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
@@ -99,7 +104,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     }
     let mut list = DrawList::default();
     for eye in eyes.points {
-        let camera = Camera::from_degrees(eye, args.yaw, args.fov)?;
+        let camera = Camera::from_degrees(eye, yaw, args.fov)?;
         let ns = timed_cull(&culler, &camera, &mut list);
         let s = list.stats;
         if out.json {

@@ -164,15 +164,31 @@ impl Eyes {
 
     /// The ground's height under each eye on `h`'s mesh, `None` outside its footprint ([`truth::ground_heights`]).
     fn grounds(&self, h: &cull::Hierarchy) -> Vec<Option<f64>> {
+        self.grounds_on(&h.mesh.positions, &h.mesh.triangles)
+    }
+
+    /// The ground's height under each eye on a mesh, `None` outside its footprint.
+    fn grounds_on(&self, positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<Option<f64>> {
         let xy: Vec<glam::DVec2> = self.points.iter().map(|e| glam::DVec2::new(e[0], e[1])).collect();
-        truth::ground_heights(&h.mesh.positions, &h.mesh.triangles, &xy)
+        truth::ground_heights(positions, triangles, &xy)
     }
 
     /// Refuses an eye below the ground of `h`'s mesh (by more than the rounding of the ground's height): it sees none
     /// of the terrain. Eyes outside the footprint, on the ground or above it are fine. `above_ground_flag`: the
     /// command takes `--above-ground` (heights above the ground), which the error then suggests.
     pub fn check_not_below_ground(&self, h: &cull::Hierarchy, above_ground_flag: bool) -> Result<()> {
-        for (i, ground) in self.grounds(h).into_iter().enumerate() {
+        self.check_not_below(self.grounds(h), above_ground_flag)
+    }
+
+    /// [`Eyes::check_not_below_ground`] on a plain mesh (a TIN read from a file, not a hierarchy).
+    pub fn check_not_below_mesh(&self, tin: &tin::Tin, above_ground_flag: bool) -> Result<()> {
+        let positions: Vec<[f64; 3]> = tin.positions().iter().map(|p| p.to_array()).collect();
+        self.check_not_below(self.grounds_on(&positions, tin.triangles()), above_ground_flag)
+    }
+
+    /// Refuses an eye below its ground (`grounds`, one per eye).
+    fn check_not_below(&self, grounds: Vec<Option<f64>>, above_ground_flag: bool) -> Result<()> {
+        for (i, ground) in grounds.into_iter().enumerate() {
             let z = self.points[i][2];
             if let Some(g) = ground
                 && z < g - ground_tolerance(g)

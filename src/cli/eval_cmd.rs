@@ -131,6 +131,10 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         "--above-ground reads the z of --eyes FILE as heights above the terrain; without --eyes the viewpoint classes \
          set their own heights"
     );
+    out.require_a_result(
+        args.csv.is_some() || args.export_json.is_some(),
+        "give --csv FILE, --export-json FILE or --json",
+    )?;
     let mut eyes = args.eyes.as_deref().map(Eyes::read).transpose()?;
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;

@@ -54,10 +54,10 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         tin::compact_number(args.eye_height)
     );
     // Without -o or --csv the summary alone is the result (as for `pvs`); quietened as well, nothing would be.
-    ensure!(
-        args.out.is_some() || args.csv.is_some() || args.output.json || !args.output.quiet,
-        "nothing to write: -q hides the summary; give -o MAP.png, --csv MAP.csv or --json"
-    );
+    out.require_a_result(
+        args.out.is_some() || args.csv.is_some(),
+        "give -o MAP.png, --csv MAP.csv or --json",
+    )?;
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.out {

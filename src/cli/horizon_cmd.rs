@@ -73,6 +73,11 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
             tin::compact_number(r)
         );
     }
+    // With --verify the exit status is a result (non-zero on a mismatch).
+    out.require_a_result(
+        args.export_json.is_some() || args.verify,
+        "give --export-json FILE, --verify or --json",
+    )?;
     let mut files = Outputs::new();
     let mut out = out;
     files.input(&args.mesh.mesh)?;

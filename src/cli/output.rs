@@ -39,6 +39,17 @@ pub struct Output {
 }
 
 impl Output {
+    /// Refuses `-q` without `--json` for a command whose printed report is its only result when it writes no file
+    /// (`files` false) and whose exit status tells nothing of that result: the work would be done for nothing.
+    /// `hint` names what keeps a result, e.g. "give --csv FILE or --json".
+    pub fn require_a_result(&self, files: bool, hint: &str) -> Result<()> {
+        anyhow::ensure!(
+            files || self.json || !self.quiet,
+            "nothing to write: -q hides the report, this run's only result; {hint}"
+        );
+        Ok(())
+    }
+
     /// Prints a line of human-readable text on stdout (not with `--json` or `--quiet`). When stdout cannot take it,
     /// the command ends there (its temporary files removed): quietly with status 141 when the reader went away
     /// (`tincull cull h.tch --eyes e.txt | head`), as a process ended by SIGPIPE, else with the error and status 1.

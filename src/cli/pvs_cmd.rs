@@ -52,14 +52,16 @@ pub struct PvsArgs {
     /// regions) or `both` [default: both]. `--check` reports every method (and refuses this option).
     #[arg(long, value_parser = parse_method)]
     pub method: Option<Method>,
-    /// Resolution R of the R × R ray-space bitmap, 1 to 256; with `--check` a comma-separated list.
-    #[arg(long, value_delimiter = ',', default_value = "64", value_name = "R")]
+    /// Resolution R of the R × R ray-space bitmap, 1 to 256 [default: 64]; with `--check` a comma-separated list.
+    /// Koltun's test only: refused with `--method regions`.
+    #[arg(long, value_delimiter = ',', value_name = "R")]
     pub resolution: Vec<u32>,
-    /// Largest patch (triangles) of the halving trees below the hierarchy's leaves, 1 to 64: the PVS's unit below
-    /// the leaves (smaller: a tighter PVS, more boxes to test), and the patch of the safe culler that `--check`
-    /// compares with (its other parameters are its defaults).
-    #[arg(long, default_value_t = 16, value_name = "N")]
-    pub patch: usize,
+    /// Largest patch (triangles) of the halving trees below the hierarchy's leaves, 1 to 64 [default: 16]: the PVS's
+    /// unit below the leaves (smaller: a tighter PVS, more boxes to test), and the patch of the safe culler that
+    /// `--check` compares with (its other parameters are its defaults). Refused with `--method regions`, whose
+    /// regions are the hierarchy nodes' only.
+    #[arg(long, value_name = "N")]
+    pub patch: Option<usize>,
     /// Write the PVS of every cell here, in the compact binary form (`.pvs`); not with `--check`, which writes no PVS.
     #[arg(long, short = 'o', value_name = "FILE", conflicts_with = "check")]
     pub out: Option<PathBuf>,
@@ -107,7 +109,26 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     };
     // Before the hierarchy is read and prepared (seconds on a large one).
     height.validate()?;
-    for &r in &args.resolution {
+    out.require_a_result(args.out.is_some(), "give -o FILE.pvs or --json")?;
+    if args.method == Some(Method::Regions) {
+        for (flag, given) in [
+            ("--resolution", !args.resolution.is_empty()),
+            ("--patch", args.patch.is_some()),
+        ] {
+            ensure!(
+                !given,
+                "{flag} does not apply to --method regions: the conservative regions are the hierarchy nodes' own, \
+                 with no ray-space bitmap and nothing below the leaves"
+            );
+        }
+    }
+    let resolutions = if args.resolution.is_empty() {
+        vec![64]
+    } else {
+        args.resolution.clone()
+    };
+    let patch = args.patch.unwrap_or(16);
+    for &r in &resolutions {
         ensure!(
             (1..=pvs::MAX_RESOLUTION).contains(&r),
             "--resolution must be from 1 to {}, got {r}",
@@ -115,16 +136,12 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         );
     }
     ensure!(
-        args.check.is_some() || args.resolution.len() == 1,
+        args.check.is_some() || resolutions.len() == 1,
         "--resolution takes a list only with --check"
     );
-    ensure!(
-        (1..=64).contains(&args.patch),
-        "--patch must be from 1 to 64, got {}",
-        args.patch
-    );
+    ensure!((1..=64).contains(&patch), "--patch must be from 1 to 64, got {patch}");
     let safe_params = cull::SafeParams {
-        patch: args.patch,
+        patch,
         ..cull::SafeParams::default()
     };
     let mut files = Outputs::new();
@@ -162,11 +179,11 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(n) = args.check {
-        return check(args, &h, height, n, safe_params, out);
+        return check(args, &h, height, n, &resolutions, safe_params, out);
     }
     let params = PvsParams {
         method: args.method.unwrap_or(Method::Both),
-        resolution: args.resolution[0],
+        resolution: resolutions[0],
         patch: safe_params.patch as u32,
     };
     // The cells are checked first, by a computer without the conservative regions (which take seconds to minutes).
@@ -313,6 +330,7 @@ fn check(
     h: &Hierarchy,
     height: Height,
     n: usize,
+    resolutions: &[u32],
     safe_params: cull::SafeParams,
     out: Output,
 ) -> Result<()> {
@@ -327,8 +345,7 @@ fn check(
     let safe = SafeCuller::new(h, safe_params);
     let patch = safe_params.patch as u32;
     // Configurations: koltun at every resolution, regions, both at the highest resolution.
-    let mut configs: Vec<PvsParams> = args
-        .resolution
+    let mut configs: Vec<PvsParams> = resolutions
         .iter()
         .map(|&resolution| PvsParams {
             method: Method::Koltun,
@@ -341,7 +358,7 @@ fn check(
         resolution: 1,
         patch,
     });
-    configs.extend(args.resolution.iter().max().map(|&resolution| PvsParams {
+    configs.extend(resolutions.iter().max().map(|&resolution| PvsParams {
         method: Method::Both,
         resolution,
         patch,

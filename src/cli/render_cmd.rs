@@ -102,14 +102,21 @@ pub fn parse_size(s: &str) -> Result<[u32; 2], String> {
     Ok([parse(w)?, parse(h)?])
 }
 
-/// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`].
-pub fn load_terrain(path: &Path, import: &ImportArgs, out: Output) -> Result<Terrain> {
+/// Loads a `.tch` hierarchy or an OBJ mesh as a [`Terrain`], refusing an `eye` below its ground.
+pub fn load_terrain(path: &Path, import: &ImportArgs, eye: Option<[f64; 3]>, out: Output) -> Result<Terrain> {
+    let eyes = eye.map(super::culling_args::Eyes::given);
     if super::mesh_input::is_hierarchy(path) {
         import.mesh(path).refuse_for_hierarchy()?;
         let h = super::mesh_input::load_hierarchy(path)?;
+        if let Some(e) = &eyes {
+            e.check_not_below_ground(&h, false)?;
+        }
         Ok(Terrain::from_hierarchy(h)?)
     } else {
         let (tin, _) = import.mesh(path).load(out)?;
+        if let Some(e) = &eyes {
+            e.check_not_below_mesh(&tin, false)?;
+        }
         Ok(Terrain::from_tin(&tin)?)
     }
 }
@@ -142,10 +149,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     if args.compare {
         files.check(&diff_path(&args.out))?;
     }
-    let terrain = load_terrain(&args.input, &args.import, out)?;
-    if let (Some(eye), Some(h)) = (args.eye, &terrain.hierarchy) {
-        super::culling_args::Eyes::given(eye).check_not_below_ground(h, false)?;
-    }
+    let terrain = load_terrain(&args.input, &args.import, args.eye, out)?;
     let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
         Some(rect) => {
             let h = terrain

@@ -34,6 +34,7 @@ pub struct StressArgs {
 /// Runs `tincull stress`.
 pub fn run(args: &StressArgs, out: Output) -> Result<()> {
     super::eval_cmd::check_viewpoints(args.viewpoints)?;
+    out.require_a_result(false, "give --json")?;
     let (tin, _) = args.mesh.load(out)?;
     if let Some(dir) = &args.dem_dir
         && !dir.join("crater_lake.npy").exists()

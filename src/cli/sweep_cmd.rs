@@ -45,7 +45,8 @@ pub struct SweepArgs {
     /// Viewpoint classes, comma-separated, each once: ground, low, high, valley, ridge, sky.
     #[arg(long, value_delimiter = ',', default_value = "ground,low,high,valley,ridge,sky")]
     pub classes: Vec<ViewpointClass>,
-    /// Seed of the viewpoint generator.
+    /// Seed of the viewpoint generator, and of each viewpoint's yaw below 360° (`--fov`), as for `eval`
+    /// (`--rng-seed` seeds the grouping).
     #[arg(long, default_value_t = 1)]
     pub view_seed: u64,
     /// Horizontal field of view in degrees (360 = all around).
@@ -64,7 +65,8 @@ pub struct SweepArgs {
     #[arg(long, value_name = "RADIUS")]
     pub undersampling: Option<f64>,
     /// Grouping of every build: `crystal` or `quadtree` (Stewart's baseline; its region test is reported as
-    /// `stewart`). The CSV's key does not hold the grouping: write each grouping to its own file [default: crystal].
+    /// `stewart`) [default: crystal]. The grouping is part of the CSV's `setup`: a file of one grouping is not resumed
+    /// with the other (write each to its own file).
     #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
     pub grouping: Option<String>,
     /// Quadtree: finest depth [default: cells of about 128 triangles].

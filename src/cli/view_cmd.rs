@@ -123,6 +123,9 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             .check_grouping(grouping)
             .with_context(|| format!("{}", args.input.display()))?;
         let (tin, _) = args.import.mesh(&args.input).load(out)?;
+        if let Some(eye) = args.eye {
+            super::culling_args::Eyes::given(eye).check_not_below_mesh(&tin, false)?;
+        }
         Source::Mesh(tin)
     };
     let title = format!(

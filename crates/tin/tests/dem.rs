@@ -799,6 +799,12 @@ fn hgt_tiles() {
     let nameless = dir.path().join("tile.hgt");
     std::fs::write(&nameless, &bytes).expect("write");
     assert!(format_message(read_dem(&nameless, &opts())).contains("cannot tell the tile's position"));
+    // A missing file is named as missing, whatever its name.
+    let missing = dir.path().join("nope.hgt");
+    match read_dem(&missing, &opts()) {
+        Err(e @ TinError::Io { .. }) => assert!(e.to_string().contains("nope.hgt"), "{e}"),
+        other => panic!("expected an I/O error naming the file, got {other:?}"),
+    }
     assert_eq!(parse_tile_name("n43w123.hgt"), Some(TileName { lat: 43, lon: -123 }));
     assert_eq!(
         parse_tile_name("N50E008.SRTMGL1.hgt"),

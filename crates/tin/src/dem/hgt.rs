@@ -68,16 +68,18 @@ pub fn parse_tile_name(file_name: &str) -> Option<TileName> {
 /// Reads an SRTM tile (see the module documentation).
 pub fn read_hgt(path: &Path, opts: &DemOptions) -> Result<Grid> {
     opts.check_one_band(path, ".hgt")?;
-    let tile = tile_of(path)?;
+    // A missing file is named as missing before its name is read for the tile.
     let bytes = read_bytes(path)?;
+    let tile = tile_of(path)?;
     parse_hgt(&bytes, tile, path, opts)
 }
 
 /// The grid of an SRTM tile from its name and size, without reading its samples.
 pub fn read_hgt_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
     opts.check_one_band(path, ".hgt")?;
+    let file = open(path)?;
     let tile = tile_of(path)?;
-    let len = file_len(&open(path)?, path)?;
+    let len = file_len(&file, path)?;
     Ok(shape(side(len, path)?, tile, opts))
 }
 
@@ -89,8 +91,8 @@ pub(super) fn read_hgt_window(
     rows: [usize; 2],
     cols: [usize; 2],
 ) -> Result<(GridShape, Vec<f64>)> {
-    let tile = tile_of(path)?;
     let mut file = open(path)?;
+    let tile = tile_of(path)?;
     let n = side(file_len(&file, path)?, path)?;
     let shape = shape(n, tile, opts);
     check_window(&shape, rows, cols, path)?;
