@@ -20,7 +20,7 @@ for ax, (title, name) in zip(axes, meshes):
     rows = [r for r in csv.DictReader(l for l in open(root / name) if not l.startswith("#")) if r["class"] == "all"]
     for sk, colour in [("16x4", "tab:blue"), ("64x4", "tab:orange")]:
         s, k = sk.split("x")
-        mine = [r for r in rows if r["sectors"] == s and r["subsectors"] == k and r["method"] != "safe"]
+        mine = [r for r in rows if r["sectors"] == s and r["subsectors"] == k and r["method"] in ("thesis", "stewart")]
         quad = sorted((r for r in mine if r["grouping"] == "quadtree"), key=lambda r: int(r["bytes"]))
         crys = [r for r in mine if r["grouping"] == "crystal"]
         ax.plot([int(r["bytes"]) for r in quad], [float(r["captured"]) for r in quad], "o-", color=colour,
