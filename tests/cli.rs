@@ -558,6 +558,13 @@ fn bad_input_gives_clear_errors() {
     fails_with(&["info", s(&write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1"))], "cut.obj:3");
     let nonmanifold = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3\nf 1 2 4\nf 1 2 5\n";
     fails_with(&["info", "--keep-faces", s(&write("nm.obj", nonmanifold))], "nm.obj");
+    // A crack: vertex 5 on the edge of the first face at 50 m where that edge is at 0 m (a T-junction the faces only
+    // touch at, so no overlap); named by the face's line and the vertex.
+    let cracked = "v 0 0 0\nv 10 0 0\nv 5 10 0\nv 5 -10 0\nv 5 0 50\nf 1 2 3\nf 1 4 5\nf 5 4 2\n";
+    fails_with(
+        &["info", "--keep-faces", s(&write("crack.obj", cracked))],
+        "crack.obj:6: vertex 5 lies on an edge of the face, not at one of its corners, at another height",
+    );
     // Faces cut short: the vertices no face uses are dropped, with a warning naming the file.
     let cut = write("short.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3\n");
     let warned = String::from_utf8_lossy(&ok(&["info", "--keep-faces", s(&cut)]).stderr).into_owned();

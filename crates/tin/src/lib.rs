@@ -33,7 +33,10 @@ pub use predicates::{COORDINATE_LIMIT, coordinate_in_range, orient2d, orientatio
 pub use prefetch::prefetch;
 pub use simplify::{SimplifyOptions, SimplifyReport, StopReason, simplify, simplify_constrained};
 pub use synth::{SynthOptions, synth_grid, synth_tin};
-pub use validate::{MeshStats, PrecisionReport, ValidationReport, find_overlaps, mesh_stats, validate, validate_parts};
+pub use validate::{
+    Cracks, MeshStats, PrecisionReport, ValidationReport, find_cracks, find_overlaps, mesh_stats, validate,
+    validate_parts,
+};
 
 /// A number as messages print it: as Rust writes it (`2.5`, `1000`, `inf`) from 10^-4 to 10^9 in magnitude, and in
 /// scientific notation outside (`1e308`, `1.5e-9`), so that a huge or tiny value given by a user takes a few

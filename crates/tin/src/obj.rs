@@ -21,7 +21,9 @@
 //!   clipping. **Vertices that no face uses are dropped** and counted in [`ObjImportReport::unreferenced_dropped`]
 //!   (exporters often leave stray vertices behind; they are not part of the surface). The result must be a height
 //!   field: non-degenerate, consistently oriented (all clockwise is flipped), manifold, and without two triangles
-//!   overlapping in x,y (checked exactly, see [`crate::validate::find_overlaps`]).
+//!   overlapping in x,y (checked exactly, see [`crate::validate::find_overlaps`]), and without a crack: a vertex on
+//!   another face's edge at another height than the edge's ([`crate::validate::find_cracks`]; a T-junction at the
+//!   edge's height is accepted).
 //!
 //! Every error names the file and the line (see [`ObjLineError`]); errors about two faces or vertices name both
 //! lines. Vertex numbers in messages are the file's own 1-based numbers.
@@ -40,7 +42,7 @@ use crate::delaunay::{DedupePolicy, triangulate};
 use crate::error::{Result, TinError};
 use crate::mesh::Tin;
 use crate::predicates::orient2d;
-use crate::validate::find_overlaps;
+use crate::validate::{find_cracks, find_overlaps};
 
 /// Largest polygon (number of vertices in one face) the importer triangulates.
 pub const MAX_POLYGON_VERTICES: usize = 1024;
@@ -234,6 +236,15 @@ pub enum ObjLineError {
     Overlap {
         /// Line of the other face.
         other_line: usize,
+    },
+    /// A vertex lies on an edge of the face, not at one of its corners, at another height than the edge there.
+    #[error(
+        "vertex {vertex} lies on an edge of the face, not at one of its corners, at another height than the edge there \
+         (a crack in the surface): not a height field"
+    )]
+    Crack {
+        /// 1-based number of the vertex.
+        vertex: usize,
     },
     /// The Delaunay triangulator refused the vertex.
     #[error("the triangulator rejected this vertex: {reason}")]
@@ -731,6 +742,13 @@ fn from_faces(p: &Parsed, path: &Path, dedupe: DedupePolicy, report: &mut ObjImp
             ObjLineError::Overlap {
                 other_line: tri_lines[first as usize],
             },
+        ));
+    }
+    if let Some(&[vertex, triangle]) = find_cracks(tin.positions(), tin.triangles(), 1).first.first() {
+        return Err(line_error(
+            path,
+            tri_lines[triangle as usize],
+            ObjLineError::Crack { vertex: number(vertex) },
         ));
     }
     Ok(tin)

@@ -20,6 +20,10 @@
 //!   uniform grid over the triangles' bounding boxes, with cells about the size of an average triangle, so a
 //!   well-shaped mesh of n triangles is checked in O(n) after bucketing; a few huge triangles (for example over a
 //!   flat lake) cost time proportional to the cells they cover.
+//! - A *crack* is a T-junction (a vertex on an edge of a triangle that does not use it, not at a corner) at another
+//!   height than the edge's there: the triangles only touch, so no overlap is found, but the surface has two heights
+//!   at the vertex's x,y. The same grid finds them: each used vertex is tested exactly (in x,y) against the triangles
+//!   whose boxes hold it, then its height against the edge's. A T-junction at the edge's height is a whole surface.
 //! - f32 precision: converting a coordinate of magnitude m to f32 rounds it to a multiple of the f32 spacing
 //!   2^(⌊log2 m⌋ − 23). Absolute coordinates of 1e5 m or more get a warning (f32 spacing ≥ 2^-7 m ≈ 8 mm there, and
 //!   0.5 m at UTM northings); coordinates relative to [`Tin::origin`] are flagged when their f32 spacing exceeds 1% of
@@ -75,6 +79,11 @@ pub struct ValidationReport {
     pub overlapping_pairs: usize,
     /// Some of them, as `[smaller, larger]` triangle indices.
     pub overlap_examples: Vec<[u32; 2]>,
+    /// Vertices on an edge of a triangle that does not use them at another height than that edge, as (vertex,
+    /// triangle) pairs: cracks in the surface ([`find_cracks`]).
+    pub cracks: usize,
+    /// Some of them, as `[vertex, triangle]`.
+    pub crack_examples: Vec<[u32; 2]>,
     /// Non-degenerate triangles with aspect ratio above [`NEAR_DEGENERATE_ASPECT`].
     pub near_degenerate_triangles: usize,
     /// Triangles with smallest angle below [`SLIVER_MIN_ANGLE_DEG`] or aspect ratio above [`SLIVER_MAX_ASPECT`]
@@ -90,7 +99,8 @@ pub struct ValidationReport {
 
 impl ValidationReport {
     /// True when the mesh is a valid height field: finite, unique x,y, valid indices, no degenerate, clockwise or
-    /// overlapping triangles, manifold edges. Slivers, unreferenced vertices and precision risks do not count.
+    /// overlapping triangles, manifold edges, no cracks. Slivers, unreferenced vertices and precision risks do
+    /// not count.
     pub fn is_height_field(&self) -> bool {
         self.non_finite_vertices == 0
             && self.bad_index_triangles == 0
@@ -99,6 +109,7 @@ impl ValidationReport {
             && self.clockwise_triangles == 0
             && self.non_manifold_edges == 0
             && self.overlapping_pairs == 0
+            && self.cracks == 0
     }
 }
 
@@ -233,76 +244,13 @@ pub struct Overlaps {
 /// non-finite corner or zero area are skipped (they are reported elsewhere). The result does not depend on the
 /// number of threads.
 pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) -> Overlaps {
-    // Counter-clockwise corners and x,y box of each usable triangle.
-    let mut tris: Vec<(u32, [DVec2; 3], DVec2, DVec2)> = Vec::with_capacity(triangles.len());
-    for (t, tri) in triangles.iter().enumerate() {
-        if tri.iter().any(|&v| v as usize >= positions.len()) {
-            continue;
-        }
-        let mut c = tri.map(|v| positions[v as usize].truncate());
-        if !c.iter().all(|p| p.is_finite()) {
-            continue;
-        }
-        let o = orient2d(c[0], c[1], c[2]);
-        if o == 0.0 {
-            continue;
-        }
-        if o < 0.0 {
-            c.swap(1, 2);
-        }
-        let lo = c[0].min(c[1]).min(c[2]);
-        let hi = c[0].max(c[1]).max(c[2]);
-        tris.push((t as u32, c, lo, hi));
-    }
-    if tris.len() < 2 {
+    let Some(grid) = TriangleGrid::new(positions, triangles) else {
+        return Overlaps::default();
+    };
+    if grid.tris.len() < 2 {
         return Overlaps::default();
     }
-    let (mut lo, mut hi) = (tris[0].2, tris[0].3);
-    let mut mean_extent = 0.0;
-    for (_, _, l, h) in &tris {
-        lo = lo.min(*l);
-        hi = hi.max(*h);
-        mean_extent += (*h - *l).max_element();
-    }
-    mean_extent /= tris.len() as f64;
-    let size = hi - lo;
-    // Cells about one average triangle across, but no more than ~4 per triangle.
-    let max_cells = 4.0 * tris.len() as f64 + 16.0;
-    let mut cell = mean_extent.max(f64::MIN_POSITIVE);
-    let cells_for = |cell: f64| ((size.x / cell).floor() + 1.0) * ((size.y / cell).floor() + 1.0);
-    while cells_for(cell) > max_cells {
-        cell *= 1.5;
-    }
-    let nx = (size.x / cell).floor() as usize + 1;
-    let ny = (size.y / cell).floor() as usize + 1;
-    let cell_of = |p: DVec2| -> (usize, usize) {
-        let cx = (((p.x - lo.x) / cell).floor().max(0.0) as usize).min(nx - 1);
-        let cy = (((p.y - lo.y) / cell).floor().max(0.0) as usize).min(ny - 1);
-        (cx, cy)
-    };
-    // Bucket triangles into every cell their box touches (compressed rows).
-    let mut offsets = vec![0usize; nx * ny + 1];
-    let ranges: Vec<((usize, usize), (usize, usize))> = tris.iter().map(|t| (cell_of(t.2), cell_of(t.3))).collect();
-    for &((x0, y0), (x1, y1)) in &ranges {
-        for cy in y0..=y1 {
-            for cx in x0..=x1 {
-                offsets[cy * nx + cx + 1] += 1;
-            }
-        }
-    }
-    for i in 0..nx * ny {
-        offsets[i + 1] += offsets[i];
-    }
-    let mut fill = offsets.clone();
-    let mut members = vec![0u32; offsets[nx * ny]];
-    for (k, &((x0, y0), (x1, y1))) in ranges.iter().enumerate() {
-        for cy in y0..=y1 {
-            for cx in x0..=x1 {
-                members[fill[cy * nx + cx]] = k as u32;
-                fill[cy * nx + cx] += 1;
-            }
-        }
-    }
+    let tris = &grid.tris;
     let keep_smallest = |mut v: Vec<[u32; 2]>| {
         if v.len() > limit {
             v.sort_unstable();
@@ -310,12 +258,12 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
         }
         v
     };
-    let (count, mut first) = (0..nx * ny)
+    let (count, mut first) = (0..grid.nx * grid.ny)
         .into_par_iter()
         .fold(
             || (0usize, Vec::new()),
             |(mut count, mut found), c| {
-                let here = &members[offsets[c]..offsets[c + 1]];
+                let here = grid.members(c);
                 for (i, &ka) in here.iter().enumerate() {
                     let a = &tris[ka as usize];
                     for &kb in &here[i + 1..] {
@@ -325,8 +273,7 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
                         if a.2.x >= b.3.x || b.2.x >= a.3.x || a.2.y >= b.3.y || b.2.y >= a.3.y {
                             continue;
                         }
-                        let (cx, cy) = cell_of(a.2.max(b.2));
-                        if cy * nx + cx != c || !interiors_overlap(&a.1, &b.1) {
+                        if grid.cell_of(a.2.max(b.2)) != c || !interiors_overlap(&a.1, &b.1) {
                             continue;
                         }
                         count += 1;
@@ -351,6 +298,202 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
     first.sort_unstable();
     first.truncate(limit);
     Overlaps { count, first }
+}
+
+/// Vertices lying on an edge of a triangle that does not use them at another height than that edge (cracks).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Cracks {
+    /// How many (vertex, triangle) pairs there are.
+    pub count: usize,
+    /// The smallest pairs (by vertex, then triangle), `[vertex, triangle]`, at most the requested limit.
+    pub first: Vec<[u32; 2]>,
+}
+
+/// Two heights closer than this, relative to `1 + |z|` of the three vertices, are one (the rounding of an exporter
+/// that split an edge at a vertex it computed).
+const CRACK_TOLERANCE: f64 = 1e-9;
+
+/// Finds every vertex used by some triangle that lies, exactly in x,y, on an edge of a triangle that does not use it
+/// (a T-junction: not at one of its corners) at a height other than the edge's there (by more than
+/// [`CRACK_TOLERANCE`] relative): the surface has a *crack* along that edge, two heights at the vertex's x,y. Such a
+/// mesh passes the overlap test (the triangles only touch) but is not a height field. A T-junction at the edge's own
+/// height leaves the surface whole and is not reported. A vertex at a corner's x,y is a duplicate x,y, reported as
+/// such; a vertex inside a triangle makes its own triangles overlap it. Triangles with an invalid index, a non-finite
+/// corner or zero area are skipped, as by [`find_overlaps`]. The result does not depend on the number of threads.
+pub fn find_cracks(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) -> Cracks {
+    let Some(grid) = TriangleGrid::new(positions, triangles) else {
+        return Cracks::default();
+    };
+    let mut used = vec![false; positions.len()];
+    for tri in triangles {
+        if tri.iter().all(|&v| (v as usize) < positions.len()) {
+            tri.iter().for_each(|&v| used[v as usize] = true);
+        }
+    }
+    let grid = &grid;
+    let found: Vec<[u32; 2]> = (0..positions.len() as u32)
+        .into_par_iter()
+        .filter(|&v| used[v as usize] && positions[v as usize].is_finite())
+        .flat_map_iter(|v| {
+            let q = positions[v as usize];
+            let p = q.truncate();
+            let inside = p.x >= grid.lo.x && p.y >= grid.lo.y && p.x <= grid.hi.x && p.y <= grid.hi.y;
+            let here: &[u32] = if inside { grid.members(grid.cell_of(p)) } else { &[] };
+            here.iter().filter_map(move |&k| {
+                let (t, c, lo, hi) = &grid.tris[k as usize];
+                let tri = triangles[*t as usize];
+                if tri.contains(&v) || c.contains(&p) || p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
+                    return None;
+                }
+                // Counter-clockwise corners: in the closed triangle when no edge has it strictly to its right, and on
+                // the edge whose line holds it (at most one: it is no corner).
+                let sides = [0, 1, 2].map(|i| orient2d(c[i], c[(i + 1) % 3], p));
+                let edge = sides.iter().position(|&o| o == 0.0)?;
+                if sides.iter().any(|&o| o < 0.0) {
+                    return None;
+                }
+                // The edge's end vertices in 3-D (the corners `c` may have been swapped to counter-clockwise).
+                let [a, b] = [c[edge], c[(edge + 1) % 3]].map(|e| {
+                    let i = tri
+                        .iter()
+                        .position(|&w| positions[w as usize].truncate() == e)
+                        .unwrap_or(0);
+                    positions[tri[i] as usize]
+                });
+                let d = b - a;
+                let s = if d.x.abs() >= d.y.abs() {
+                    (q.x - a.x) / d.x
+                } else {
+                    (q.y - a.y) / d.y
+                };
+                let z = a.z + s * d.z;
+                let tolerance = CRACK_TOLERANCE * (1.0 + a.z.abs() + b.z.abs() + q.z.abs());
+                ((q.z - z).abs() > tolerance).then_some([v, *t])
+            })
+        })
+        .collect();
+    let mut first = found;
+    let count = first.len();
+    first.sort_unstable();
+    first.truncate(limit);
+    Cracks { count, first }
+}
+
+/// The usable triangles of a mesh (counter-clockwise corners and x,y box; invalid indices, non-finite corners and zero
+/// area left out) bucketed into a uniform grid over their boxes, with cells about one average triangle across.
+struct TriangleGrid {
+    /// `(triangle, counter-clockwise corners, box min, box max)`.
+    tris: Vec<(u32, [DVec2; 3], DVec2, DVec2)>,
+    lo: DVec2,
+    hi: DVec2,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    /// The entries of `tris` whose box touches cell `c` are `members[offsets[c]..offsets[c + 1]]`.
+    offsets: Vec<usize>,
+    members: Vec<u32>,
+}
+
+impl TriangleGrid {
+    /// The grid of the usable triangles; `None` when there is none.
+    fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> Option<TriangleGrid> {
+        let mut tris: Vec<(u32, [DVec2; 3], DVec2, DVec2)> = Vec::with_capacity(triangles.len());
+        for (t, tri) in triangles.iter().enumerate() {
+            if tri.iter().any(|&v| v as usize >= positions.len()) {
+                continue;
+            }
+            let mut c = tri.map(|v| positions[v as usize].truncate());
+            if !c.iter().all(|p| p.is_finite()) {
+                continue;
+            }
+            let o = orient2d(c[0], c[1], c[2]);
+            if o == 0.0 {
+                continue;
+            }
+            if o < 0.0 {
+                c.swap(1, 2);
+            }
+            let lo = c[0].min(c[1]).min(c[2]);
+            let hi = c[0].max(c[1]).max(c[2]);
+            tris.push((t as u32, c, lo, hi));
+        }
+        let (mut lo, mut hi) = (tris.first()?.2, tris.first()?.3);
+        let mut mean_extent = 0.0;
+        for (_, _, l, h) in &tris {
+            lo = lo.min(*l);
+            hi = hi.max(*h);
+            mean_extent += (*h - *l).max_element();
+        }
+        mean_extent /= tris.len() as f64;
+        let size = hi - lo;
+        // Cells about one average triangle across, but no more than ~4 per triangle.
+        let max_cells = 4.0 * tris.len() as f64 + 16.0;
+        let mut cell = mean_extent.max(f64::MIN_POSITIVE);
+        let cells_for = |cell: f64| ((size.x / cell).floor() + 1.0) * ((size.y / cell).floor() + 1.0);
+        while cells_for(cell) > max_cells {
+            cell *= 1.5;
+        }
+        let nx = (size.x / cell).floor() as usize + 1;
+        let ny = (size.y / cell).floor() as usize + 1;
+        let mut grid = TriangleGrid {
+            tris,
+            lo,
+            hi,
+            cell,
+            nx,
+            ny,
+            offsets: vec![0usize; nx * ny + 1],
+            members: Vec::new(),
+        };
+        // Bucket triangles into every cell their box touches (compressed rows).
+        let ranges: Vec<(usize, usize, usize, usize)> = grid
+            .tris
+            .iter()
+            .map(|t| {
+                let (a, b) = (grid.cell_xy(t.2), grid.cell_xy(t.3));
+                (a.0, a.1, b.0, b.1)
+            })
+            .collect();
+        for &(x0, y0, x1, y1) in &ranges {
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
+                    grid.offsets[cy * nx + cx + 1] += 1;
+                }
+            }
+        }
+        for i in 0..nx * ny {
+            grid.offsets[i + 1] += grid.offsets[i];
+        }
+        let mut fill = grid.offsets.clone();
+        grid.members = vec![0u32; grid.offsets[nx * ny]];
+        for (k, &(x0, y0, x1, y1)) in ranges.iter().enumerate() {
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
+                    grid.members[fill[cy * nx + cx]] = k as u32;
+                    fill[cy * nx + cx] += 1;
+                }
+            }
+        }
+        Some(grid)
+    }
+
+    /// The cell column and row holding `p` (clamped to the grid).
+    fn cell_xy(&self, p: DVec2) -> (usize, usize) {
+        let cx = (((p.x - self.lo.x) / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
+        let cy = (((p.y - self.lo.y) / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
+        (cx, cy)
+    }
+
+    /// The index of the cell holding `p` (clamped to the grid).
+    fn cell_of(&self, p: DVec2) -> usize {
+        let (cx, cy) = self.cell_xy(p);
+        cy * self.nx + cx
+    }
+
+    /// The entries of `tris` whose box touches cell `c`.
+    fn members(&self, c: usize) -> &[u32] {
+        &self.members[self.offsets[c]..self.offsets[c + 1]]
+    }
 }
 
 /// Checks a mesh given as raw parts, which may break any rule (see [`ValidationReport`]). Never panics.
@@ -422,6 +565,7 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
         keys.windows(2).filter(|w| w[0] == w[1]).count()
     };
     let overlaps = find_overlaps(positions, triangles, MAX_EXAMPLES);
+    let cracks = find_cracks(positions, triangles, MAX_EXAMPLES);
     let precision = precision_report(positions, min_edge_xy);
 
     let mut warnings = Vec::new();
@@ -442,6 +586,11 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
     warn(
         overlaps.count,
         "pairs of triangles overlapping in x,y: not a height field",
+    );
+    warn(
+        cracks.count,
+        "vertices on an edge of a triangle that does not use them, at another height (cracks in the surface): not a \
+         height field",
     );
     warn(
         near_degenerate_triangles,
@@ -484,6 +633,8 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
         non_manifold_edges,
         overlapping_pairs: overlaps.count,
         overlap_examples: overlaps.first,
+        cracks: cracks.count,
+        crack_examples: cracks.first,
         near_degenerate_triangles,
         slivers: slivers.len(),
         sliver_examples: examples(&slivers),

@@ -408,9 +408,12 @@ fn overlapping_faces_are_not_a_height_field() {
     // Both counter-clockwise, sharing a vertex, one inside the other.
     let text = "v 0 0 0\nv 4 0 0\nv 0 4 0\nv 3 1 1\nv 1 3 1\nf 1 2 3\n# the other\nf 1 4 5\n";
     assert_eq!(line_error(keep(text)), (8, K::Overlap { other_line: 6 }));
-    // Touching along an edge without sharing it (a T-junction) is not an overlap.
+    // Touching along an edge without sharing it (a T-junction) is not an overlap; at the edge's height there it
+    // leaves the surface whole, at another height it is a crack, named by the face and the vertex.
     let text = "v 0 0 0\nv 4 0 0\nv 0 4 0\nv 2 0 0\nv 3 -1 0\nf 1 2 3\nf 4 5 2\n";
     assert!(keep(text).is_ok());
+    let text = "v 0 0 0\nv 4 0 0\nv 0 4 0\nv 2 0 7\nv 3 -1 0\nf 1 2 3\nf 4 5 2\n";
+    assert_eq!(line_error(keep(text)), (6, K::Crack { vertex: 4 }));
 }
 
 #[test]

@@ -234,3 +234,94 @@ fn a_terrain_under_a_metre_across_is_warned_about() {
     let metre = grid(11, 11, 0.1, DVec3::ZERO).validate();
     assert!(metre.warnings.is_empty(), "{:?}", metre.warnings);
 }
+
+/// A crack: a vertex on an edge of a triangle that does not use it (a T-junction) at another height than the edge
+/// there. The triangles only touch, so no overlap is found, but the surface has two heights (0 and 50) at the vertex's
+/// x,y. At the edge's own height, or split at the vertex, it is a height field.
+#[test]
+fn a_crack_is_not_a_height_field() {
+    let p = DVec3::new;
+    let mut positions = vec![
+        p(0.0, 0.0, 0.0),
+        p(10.0, 0.0, 0.0),
+        p(5.0, 10.0, 0.0),
+        p(5.0, -10.0, 0.0),
+        p(5.0, 0.0, 50.0),
+    ];
+    let t_junction = [[0, 1, 2], [0, 3, 4], [4, 3, 1]];
+    let r = validate_parts(&positions, &t_junction);
+    assert_eq!(
+        (r.overlapping_pairs, r.cracks, r.crack_examples.clone()),
+        (0, 1, vec![[4, 0]])
+    );
+    assert!(!r.is_height_field());
+    assert!(
+        r.warnings.iter().any(|w| w.contains("cracks in the surface")),
+        "{:?}",
+        r.warnings
+    );
+    let split = validate_parts(&positions, &[[0, 4, 2], [4, 1, 2], [0, 3, 4], [4, 3, 1]]);
+    assert!(split.is_height_field() && split.cracks == 0, "{:?}", split.warnings);
+    // The same T-junction at the edge's height (and within rounding of it) leaves the surface whole.
+    for z in [0.0, 1e-12] {
+        positions[4].z = z;
+        let r = validate_parts(&positions, &t_junction);
+        assert!(r.is_height_field() && r.cracks == 0, "z {z}: {:?}", r.warnings);
+    }
+}
+
+/// Every (vertex, triangle) pair of the crack test, by brute force over all pairs with the same exact predicate.
+fn cracks_brute(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let used: std::collections::BTreeSet<u32> = triangles.iter().flatten().copied().collect();
+    let mut out = Vec::new();
+    for &v in &used {
+        let q = positions[v as usize];
+        for (t, tri) in triangles.iter().enumerate() {
+            let c = tri.map(|i| positions[i as usize].truncate());
+            let o = tin::orient2d(c[0], c[1], c[2]);
+            if o == 0.0 || tri.contains(&v) || c.contains(&q.truncate()) {
+                continue;
+            }
+            let sides = [0, 1, 2].map(|k| o.signum() * tin::orient2d(c[k], c[(k + 1) % 3], q.truncate()));
+            let Some(k) = sides.iter().position(|&s| s == 0.0) else {
+                continue;
+            };
+            if sides.iter().any(|&s| s < 0.0) {
+                continue;
+            }
+            let (a, b) = (positions[tri[k] as usize], positions[tri[(k + 1) % 3] as usize]);
+            let d = b - a;
+            let s = if d.x.abs() >= d.y.abs() {
+                (q.x - a.x) / d.x
+            } else {
+                (q.y - a.y) / d.y
+            };
+            if (q.z - (a.z + s * d.z)).abs() > 1e-9 * (1.0 + a.z.abs() + b.z.abs() + q.z.abs()) {
+                out.push([v, t as u32]);
+            }
+        }
+    }
+    out
+}
+
+proptest::proptest! {
+    /// The gridded search finds exactly the pairs that brute force finds, on random triangle soups over a small
+    /// integer lattice (so that vertices often fall on edges, at corners and on edge lines outside the edge, at the
+    /// edge's height or not).
+    #[test]
+    fn cracks_match_brute_force(
+        points in proptest::collection::vec((0i32..6, 0i32..6, 0i32..3), 3..14),
+        tris in proptest::collection::vec((0usize..14, 0usize..14, 0usize..14), 1..10),
+    ) {
+        let positions: Vec<DVec3> =
+            points.iter().map(|&(x, y, z)| DVec3::new(f64::from(x), f64::from(y), f64::from(z))).collect();
+        let n = positions.len();
+        let triangles: Vec<[u32; 3]> =
+            tris.iter().map(|&(a, b, c)| [(a % n) as u32, (b % n) as u32, (c % n) as u32]).collect();
+        let found = tin::find_cracks(&positions, &triangles, usize::MAX);
+        let mut want = cracks_brute(&positions, &triangles);
+        want.sort_unstable();
+        proptest::prop_assert_eq!(found.count, want.len());
+        proptest::prop_assert_eq!(found.first, want);
+    }
+}
