@@ -528,6 +528,7 @@ fn a_whole_regular_grid_builds_and_culls() {
             "--classes",
             "ground,high",
             "--no-per-triangle",
+            "--json",
             "-q",
         ]);
     }

@@ -258,6 +258,7 @@ fn seeds_have_one_name_each() {
         "--classes",
         "sky",
         "--no-per-triangle",
+        "--json",
         "-q",
     ];
     let mut with_view = base.to_vec();

@@ -314,8 +314,8 @@ pub struct Cracks {
 const CRACK_TOLERANCE: f64 = 1e-9;
 
 /// Finds every vertex used by some triangle that lies, exactly in x,y, on an edge of a triangle that does not use it
-/// (a T-junction: not at one of its corners) at a height other than the edge's there (by more than
-/// [`CRACK_TOLERANCE`] relative): the surface has a *crack* along that edge, two heights at the vertex's x,y. Such a
+/// (a T-junction: not at one of its corners) at a height other than the edge's there (by more than 1e-9 times
+/// `1 + |z|` of the three vertices): the surface has a *crack* along that edge, two heights at the vertex's x,y. Such a
 /// mesh passes the overlap test (the triangles only touch) but is not a height field. A T-junction at the edge's own
 /// height leaves the surface whole and is not reported. A vertex at a corner's x,y is a duplicate x,y, reported as
 /// such; a vertex inside a triangle makes its own triangles overlap it. Triangles with an invalid index, a non-finite
