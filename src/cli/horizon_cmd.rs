@@ -149,7 +149,7 @@ fn export_json(tin: &Tin, field: &HorizonField, path: &std::path::Path, files: &
     let write = |w: &mut dyn Write| -> std::io::Result<()> {
         write!(
             w,
-            "{{\"sectors\":{},\"subsectors_per_sector\":{},\"undersampling\":{},\"vertices\":[",
+            "{{\"sectors\":{},\"subsectors\":{},\"undersampling\":{},\"vertices\":[",
             config.sectors(),
             config.subsectors(),
             json!(field.undersampling_radius())
