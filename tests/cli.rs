@@ -460,6 +460,18 @@ fn cull_above_ground() {
         v["rows"].clone()
     };
     assert_eq!(score(&relative, &["--above-ground"]), score(&absolute, &[]));
+    // An eye 1e12 m away: the exact checker's tolerance (1e-9 of the distance) would be a kilometre there, and it
+    // called half the terrain visible from it (found by a user's test): eval refuses it; cull takes it.
+    let far = dir.path().join("far.txt");
+    std::fs::write(&far, format!("{world}\n1e12,-1e12,500\n")).expect("eyes");
+    fails_with(
+        &["eval", s(&tch), "--eyes", s(&far), "--no-safe-regions"],
+        &format!(
+            "eye 2 ({}:2) at (1000000000000.000, -1000000000000.000, 500.000) lies 1e12 m from",
+            far.display()
+        ),
+    );
+    ok(&["cull", s(&tch), "--eyes", s(&far), "-q"]);
     fails_with(
         &[
             "eval",

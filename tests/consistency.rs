@@ -228,6 +228,46 @@ fn a_hierarchy_is_not_taken_for_a_mesh() {
         assert_eq!(v["build"]["rng_seed"], h.build.rng_seed);
     }
     assert!(!dir.path().join("x.tch").exists());
+    // A mesh named `.tch` is read as the mesh it is (found by a user's test: it was refused by its name), and a
+    // directory so named is named as a directory.
+    let obj_named_tch = dir.path().join("mesh.tch");
+    std::fs::copy(mesh("jacksboro-2k.obj"), &obj_named_tch).expect("copy");
+    ok(&["build", s(&obj_named_tch), "-o", s(&dir.path().join("y.tch")), "-q"]);
+    let folder = dir.path().join("folder.tch");
+    std::fs::create_dir(&folder).expect("mkdir");
+    fails_with(
+        &["build", s(&folder), "-o", s(&dir.path().join("z.tch"))],
+        "Is a directory",
+    );
+}
+
+/// `build --export-gltf` writes what `export --export-gltf` writes of the same hierarchy, as `--export-json` and
+/// `--export-obj` do.
+#[test]
+fn build_exports_the_formats_export_writes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (tch, glb, gltf) = (
+        dir.path().join("b.tch"),
+        dir.path().join("b.glb"),
+        dir.path().join("b.gltf"),
+    );
+    let m = mesh("jacksboro-2k.obj");
+    let text = String::from_utf8(ok(&["build", s(&m), "-o", s(&tch), "--export-gltf", s(&glb)]).stdout).expect("text");
+    assert!(text.contains(&format!("wrote {}", glb.display())), "{text}");
+    let exported = dir.path().join("e.glb");
+    ok(&["export", s(&tch), "--export-gltf", s(&exported), "-q"]);
+    assert_eq!(
+        std::fs::read(&glb).expect("glb"),
+        std::fs::read(&exported).expect("glb")
+    );
+    ok(&["build", s(&m), "-o", s(&tch), "--export-gltf", s(&gltf), "-q"]);
+    assert!(dir.path().join("b.bin").is_file(), "a .gltf has its .bin beside it");
+    // Checked before the work, as every output.
+    fails_with(
+        &["build", s(&m), "-o", s(&dir.path().join("c.tch")), "--export-gltf", "-"],
+        "--export-gltf -: glTF is written as a binary .glb",
+    );
+    assert!(!dir.path().join("c.tch").exists());
 }
 
 #[test]

@@ -192,7 +192,17 @@ fn errors_name_what_is_wrong() {
             "0",
             "--far-block 0: the far field's blocks must be at least 1",
         ),
-        ("--max-error", "inf", "--max-error inf: the error bound must be finite"),
+        (
+            "--max-error",
+            "inf",
+            "--max-error inf: the error bound must be 0 or between 1e-9 and 1e9 m",
+        ),
+        // Finite, but the halo and far field lowered by it would leave every height stage's range.
+        (
+            "--max-error",
+            "1e300",
+            "--max-error 1e300: the error bound must be 0 or between",
+        ),
     ] {
         fails_with(&["tiles", "plan", s(&grid), "-o", s(&other), flag, value], said);
     }
@@ -602,6 +612,58 @@ fn a_mesh_cut_into_too_many_squares_is_refused() {
     );
 }
 
+/// A tile whose samples lie in one row (a line of samples amid voids) cannot be triangulated alone: the plan leaves
+/// it out and says so, counting its samples, rather than calling it a tile without terrain (found by a user's test).
+#[test]
+fn a_tile_of_one_row_of_samples_is_left_out_with_a_warning() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asc = dir.path().join("line.asc");
+    let mut text = "ncols 21\nnrows 21\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n".to_string();
+    for i in 0..21 {
+        let row: Vec<String> = (0..21)
+            .map(|j| {
+                if j <= 10 || i == 15 {
+                    ((i * 7 + j * 13) % 50 + 1).to_string()
+                } else {
+                    "-9999".into()
+                }
+            })
+            .collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&asc, text).expect("grid");
+    let plan = dir.path().join("p.json");
+    let args = [
+        "tiles",
+        "plan",
+        s(&asc),
+        "-o",
+        s(&plan),
+        "--tile",
+        "5",
+        "--max-error",
+        "0",
+    ];
+    let v = json(&[&args[..], &["--json"]].concat());
+    assert_eq!(
+        (v["tiles"].as_u64(), v["void_tiles"].as_u64(), v["line_tiles"].as_u64()),
+        (Some(10), Some(2), Some(4)),
+        "{v}"
+    );
+    assert!(v["line_samples"].as_u64().is_some_and(|n| n > 0), "{v}");
+    let out = ok(&args);
+    let (text, warning) = (
+        String::from_utf8(out.stdout).expect("text"),
+        String::from_utf8(out.stderr).expect("text"),
+    );
+    assert!(text.contains("2 tiles of voids left out"), "{text}");
+    assert!(
+        warning.contains("4 tiles left out") && warning.contains("one row or column"),
+        "{warning}"
+    );
+}
+
 /// A tile whose samples are all voids holds no terrain: the plan leaves it out (its job could never build), and the
 /// other tiles build and merge into the terrain that `build` makes of the whole grid (the same triangles count).
 #[test]
@@ -646,10 +708,7 @@ fn a_tile_of_voids_is_left_out_of_the_plan() {
         "{v}"
     );
     let text = String::from_utf8(ok(&args).stdout).expect("text");
-    assert!(
-        text.contains("8 tiles (3 x 3, 1 tile without terrain left out)"),
-        "{text}"
-    );
+    assert!(text.contains("8 tiles (3 x 3, 1 tile of voids left out)"), "{text}");
     let built = json(&["tiles", "build", s(&plan), "--all", "--json", "-q"]);
     let far = built["tiles"].as_array().expect("tiles").iter();
     assert_eq!(

@@ -169,6 +169,11 @@ impl ParamArgs {
                 anyhow::bail!("{given}: unknown grouping {other:?}; expected crystal or quadtree")
             }
         }
+        // A value out of range is named with the file it may come from (the build checks them again).
+        if let Some(path) = file {
+            p.validate()
+                .with_context(|| format!("the parameters of the command line and {}", path.display()))?;
+        }
         Ok(p)
     }
 }
@@ -197,6 +202,9 @@ pub struct BuildArgs {
     /// Also write the mesh as OBJ with one group per leaf and the orphans, with a .mtl beside it.
     #[arg(long, value_name = "FILE")]
     pub export_obj: Option<PathBuf>,
+    /// Also write the mesh as glTF 2.0, as `tincull export --export-gltf` does (`.glb`, or `.gltf` with its `.bin`).
+    #[arg(long, visible_alias = "gltf", value_name = "FILE")]
+    pub export_gltf: Option<PathBuf>,
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -298,6 +306,9 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     if let Some(path) = &args.export_obj {
         files.check_grouped_obj(path, "--export-obj")?;
     }
+    if let Some(path) = &args.export_gltf {
+        files.check_gltf(path, "--export-gltf")?;
+    }
     let started = Instant::now();
     let (tin, _) = args.mesh.load(out)?;
     if let Some(w) = tin::validate::small_terrain_warning(tin.positions()) {
@@ -312,6 +323,10 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     }
     if let Some(path) = &args.export_obj {
         files.add_grouped_obj(&result.hierarchy, path)?;
+    }
+    let mut gltf_written = Vec::new();
+    if let Some(path) = &args.export_gltf {
+        gltf_written = files.add_gltf(&result.hierarchy, path)?;
     }
     files.commit()?;
     let write_seconds = started.elapsed().as_secs_f64();
@@ -333,6 +348,10 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     }
     if let Some(path) = &args.export_obj {
         out.say(format!("wrote {} and its .mtl", path.display()));
+    }
+    if !gltf_written.is_empty() {
+        let names: Vec<String> = gltf_written.iter().map(|p| p.display().to_string()).collect();
+        out.say(format!("wrote {}", names.join(" and ")));
     }
     let mut j = serde_json::to_value(&result.report)?;
     j["output"] = json!(args.out);

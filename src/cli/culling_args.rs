@@ -104,6 +104,10 @@ impl SafeArgs {
     }
 }
 
+/// How far from the terrain's box (in any coordinate) `eval` takes an eye: 10,000 km, where its exact checker's
+/// tolerance is still 1 cm.
+pub const EVAL_REACH: f64 = 1e7;
+
 /// Eye positions, each with where it was given, to name it in errors.
 #[derive(Clone, Debug)]
 pub struct Eyes {
@@ -155,6 +159,32 @@ impl Eyes {
         }
         anyhow::ensure!(!eyes.points.is_empty(), "{}: no eye positions", path.display());
         Ok(eyes)
+    }
+
+    /// Refuses an eye farther than [`EVAL_REACH`] from the box of `h`'s vertices in any coordinate: the exact checker
+    /// that scores `eval` works to `1e-9` of the distance (`truth::walk`), a kilometre at 1e12 m, where it would call
+    /// visible what is not.
+    pub fn check_within_reach(&self, h: &cull::Hierarchy) -> Result<()> {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in &h.mesh.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        for (i, e) in self.points.iter().enumerate() {
+            let far = (0..3).map(|k| (lo[k] - e[k]).max(e[k] - hi[k])).fold(0.0, f64::max);
+            anyhow::ensure!(
+                far <= EVAL_REACH,
+                "{} at {} lies {} m from the terrain's box: eval scores eyes within {} m of it (its exact checker \
+                 works to 1e-9 of the distance)",
+                self.name(i),
+                super::output::point(e.to_owned()),
+                tin::compact_number(far),
+                tin::compact_number(EVAL_REACH)
+            );
+        }
+        Ok(())
     }
 
     /// How errors name eye `i`: `eye 2 (eyes.txt:3)`.

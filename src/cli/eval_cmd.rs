@@ -149,6 +149,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         } else {
             eyes.check_not_below_ground(&h, true)?;
         }
+        eyes.check_within_reach(&h)?;
     }
     let tin = hierarchy_tin(&h)?;
     if let Some(w) = tin::validate::small_terrain_warning(tin.positions()) {

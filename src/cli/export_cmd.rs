@@ -7,9 +7,8 @@ use clap::Args;
 
 use super::{Output, OutputArgs};
 use pipeline::export::to_json;
-use pipeline::gltf::{bin_path, gltf_files, is_glb};
 
-use super::files::{Outputs, refuse_other_format, refuse_other_formats};
+use super::files::{Outputs, refuse_other_format};
 
 /// Arguments of `tincull export`.
 #[derive(Debug, Args)]
@@ -45,16 +44,7 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         files.check_grouped_obj(path, "--export-obj")?;
     }
     if let Some(path) = &args.export_gltf {
-        // The name's format first: `--export-gltf x.mtl` beside `--export-obj x.obj` is a wrong name, not a clash.
-        refuse_other_formats(path, "glTF", &["glb", "gltf"])?;
-        files.check_file(
-            path,
-            "--export-gltf",
-            "glTF is written as a binary .glb, or as a .gltf with its .bin beside it (two files)",
-        )?;
-        if !is_glb(path) {
-            files.check(&bin_path(path)?.0)?;
-        }
+        files.check_gltf(path, "--export-gltf")?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(path) = &args.export_json {
@@ -65,10 +55,7 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     }
     let mut gltf_written = Vec::new();
     if let Some(path) = &args.export_gltf {
-        for (p, bytes) in gltf_files(&h, path)? {
-            files.add_bytes(&p, &bytes)?;
-            gltf_written.push(p);
-        }
+        gltf_written = files.add_gltf(&h, path)?;
     }
     files.commit()?;
     if !gltf_written.is_empty() {

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, bail};
 use cull::Hierarchy;
 use pipeline::export::{mtl_path, write_grouped_obj_to, write_mtl_to};
+use pipeline::gltf::{bin_path, gltf_files, is_glb};
 
 use super::Output;
 
@@ -87,6 +88,32 @@ impl Outputs {
         refuse_other_format(obj, "an OBJ mesh (with its .mtl)", "obj")?;
         self.check(obj)?;
         self.check(&mtl)
+    }
+
+    /// Checks a glTF output (given with `flag`): named `.glb` (one binary file) or `.gltf` (with its `.bin` beside
+    /// it, also checked).
+    pub fn check_gltf(&mut self, path: &Path, flag: &str) -> Result<()> {
+        // The name's format first: `--export-gltf x.mtl` beside `--export-obj x.obj` is a wrong name, not a clash.
+        refuse_other_formats(path, "glTF", &["glb", "gltf"])?;
+        self.check_file(
+            path,
+            flag,
+            "glTF is written as a binary .glb, or as a .gltf with its .bin beside it (two files)",
+        )?;
+        if !is_glb(path) {
+            self.check(&bin_path(path)?.0)?;
+        }
+        Ok(())
+    }
+
+    /// Adds the glTF of `h` (and its `.bin` for a `.gltf`); returns the files it adds.
+    pub fn add_gltf(&mut self, h: &Hierarchy, path: &Path) -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        for (p, bytes) in gltf_files(h, path)? {
+            self.add_bytes(&p, &bytes)?;
+            written.push(p);
+        }
+        Ok(written)
     }
 
     /// Writes the content of a checked output to its temporary file (or keeps it for standard output).

@@ -30,7 +30,13 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
         args.mesh.refuse_for_hierarchy()?;
         return hierarchy(&args.mesh.mesh, out);
     }
-    if super::mesh_input::file_kind(&args.mesh.mesh) == super::mesh_input::FileKind::Pvs {
+    // By content, or by name (then the PVS reader says what is wrong with it: empty, truncated, another format).
+    let named_pvs = args
+        .mesh
+        .mesh
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pvs"));
+    if named_pvs || super::mesh_input::file_kind(&args.mesh.mesh) == super::mesh_input::FileKind::Pvs {
         args.mesh.refuse_import_flags("a PVS file (.pvs) holds no mesh")?;
         return pvs_file(&args.mesh.mesh, out);
     }

@@ -499,7 +499,8 @@ impl MeshArgs {
 
     /// [`MeshArgs::load`], also returning what was read when the input is a DEM grid.
     pub fn load_with_source(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
-        if is_hierarchy(&self.mesh) {
+        // By content: a mesh named `.tch` is read as the mesh it is, and a directory so named is named as one.
+        if file_kind(&self.mesh) == FileKind::Hierarchy {
             bail!(
                 "{} is a tincull hierarchy (.tch), not a mesh: this command reads an OBJ mesh or a DEM grid (commands \
                  that read a hierarchy: info, cull, eval, export, pvs, failmap, render, view)",

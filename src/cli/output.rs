@@ -131,7 +131,15 @@ impl Output {
 
 /// A point for human text: `(x, y, z)` in metres to the millimetre (JSON output keeps every digit).
 pub fn point(p: [f64; 3]) -> String {
-    format!("({:.3}, {:.3}, {:.3})", p[0], p[1], p[2])
+    // To the millimetre; beyond 1e15 m (where f64 has no millimetres left) in scientific notation, not 300 digits.
+    let c = |v: f64| {
+        if v.abs() < 1e15 {
+            format!("{v:.3}")
+        } else {
+            format!("{v:e}")
+        }
+    };
+    format!("({}, {}, {})", c(p[0]), c(p[1]), c(p[2]))
 }
 
 /// `n` and `noun` (given in the singular) for human text, the noun in the plural unless `n` is 1: `count(1,
@@ -152,7 +160,13 @@ pub fn count(n: usize, noun: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::count;
+    use super::{count, point};
+
+    #[test]
+    fn points_are_printed_to_the_millimetre_and_huge_ones_briefly() {
+        assert_eq!(point([1.0, -2.5, 1234.56789]), "(1.000, -2.500, 1234.568)");
+        assert_eq!(point([1e300, 0.0, -2e15]), "(1e300, 0.000, -2e15)");
+    }
 
     #[test]
     fn counts_agree_with_their_nouns() {

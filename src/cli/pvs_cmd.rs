@@ -108,7 +108,11 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         (None, None) => Height::AboveGround([0.0, 2.0]),
     };
     // Before the hierarchy is read and prepared (seconds on a large one).
-    height.validate()?;
+    height.validate().context(if args.height_band.is_some() {
+        "--height-band"
+    } else {
+        "--above-ground"
+    })?;
     out.require_a_result(args.out.is_some(), "give -o FILE.pvs or --json")?;
     if args.method == Some(Method::Regions) {
         for (flag, given) in [
@@ -195,7 +199,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
                 probe.check_over_terrain(&cell).context("--cell")?;
                 vec![cell]
             }
-            (None, Some(size)) => probe.grid(size, height)?,
+            (None, Some(size)) => probe.grid(size, height).context("--grid")?,
             (None, None) => bail!("give --cell, --grid or --check"),
         }
     };
@@ -293,11 +297,16 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
             out.say(format!("… and {} more cells", cells.len() - 20));
         }
         out.say(format!(
-            "{}, method {} at {}², mean PVS {:.0} of {} triangles, {:.3} s per cell, {:.2} s in all \
+            "{}, method {}{}, mean PVS {:.0} of {} triangles, {:.3} s per cell, {:.2} s in all \
              (+{:.2} s preparation), {} bytes{}",
             count(cells.len(), "cell"),
             params.method.name(),
-            params.resolution,
+            // The conservative regions have no ray-space bitmap.
+            if params.method == Method::Regions {
+                String::new()
+            } else {
+                format!(" at {}²", params.resolution)
+            },
             mean_size,
             nt,
             mean_s,

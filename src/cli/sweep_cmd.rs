@@ -232,7 +232,17 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     }
     // A combination that lost a line (or holds another evaluation's) is run again when this run's ranges hold it,
     // else kept as it is for a run that does.
-    for key in table.incomplete(&expected_rows(&spec.base, &eval)) {
+    let expected = expected_rows(&spec.base, &eval);
+    for (line, method, class) in table.unexpected(&expected) {
+        out.warn(format!(
+            "{}: line {line}: method {method:?} with class {class:?} is not a line this sweep writes (methods {}; \
+             classes {}): its combination is incomplete",
+            args.out.display(),
+            names(expected.iter().map(|(m, _)| m)),
+            names(expected.iter().map(|(_, c)| c))
+        ));
+    }
+    for key in table.incomplete(&expected) {
         let name = format!(
             "{}: sectors {} x subsectors {} (seeds {}, rng seed {})",
             args.out.display(),
@@ -344,4 +354,15 @@ fn first_of(notes: &[String], what: &str, where_all: &str) -> Vec<String> {
         ));
     }
     shown
+}
+
+/// The distinct names of `items`, in their first order, joined by commas.
+fn names<'a>(items: impl Iterator<Item = &'a String>) -> String {
+    let mut seen: Vec<&str> = Vec::new();
+    for i in items {
+        if !seen.contains(&i.as_str()) {
+            seen.push(i);
+        }
+    }
+    seen.join(", ")
 }

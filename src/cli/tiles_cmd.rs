@@ -191,7 +191,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let dem = args.read.options();
     super::mesh_input::warn_about_dem_file(&args.dem, &dem, out);
     let bar = out.progress(0, "reading DEM rows");
-    let (mut plan, field) = tiles::make_plan(&source, dem, options.clone(), &tiles_dir, |done, rows| {
+    let (mut plan, field, left) = tiles::make_plan(&source, dem, options.clone(), &tiles_dir, |done, rows| {
         bar.set_length(rows as u64);
         bar.set_position(done as u64);
     })?;
@@ -216,12 +216,20 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     })?;
     warn_of_earlier_files(&plan, &args.out, &dir, out);
     let [rows, cols] = tiles::plan::tile_grid([grid.rows, grid.cols], options.tile);
-    let void_tiles = rows * cols - plan.tiles.len();
-    let left_out = if void_tiles > 0 {
-        format!(", {} without terrain left out", count(void_tiles, "tile"))
+    let left_out = if left.void_tiles > 0 {
+        format!(", {} of voids left out", count(left.void_tiles, "tile"))
     } else {
         String::new()
     };
+    if left.line_tiles > 0 {
+        out.warn(format!(
+            "{} left out: their {} lie in one row or column (or are fewer than 3), which a tile cannot triangulate \
+             alone; those on a side shared with another tile stay, the others are not in the tiled terrain (the \
+             untiled `tin` and `build` keep them; a larger --tile may too)",
+            count(left.line_tiles, "tile"),
+            count(left.line_samples, "sample")
+        ));
+    }
     out.say(format!(
         "{} ({} x {} samples) -> {}: {} ({rows} x {cols}{left_out}) of at most {} intervals, halo {} samples, far \
          field {} blocks (at most {} points per tile); tiles write to {}",
@@ -241,7 +249,9 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "tiles": plan.tiles.len(),
         "tile_rows": rows,
         "tile_cols": cols,
-        "void_tiles": void_tiles,
+        "void_tiles": left.void_tiles,
+        "line_tiles": left.line_tiles,
+        "line_samples": left.line_samples,
         "far_blocks": field.finest(),
         "far_points_max": far_points,
         "tiles_dir": dir,
@@ -543,18 +553,27 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     files.check_binary_or_stdout(&args.out, &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     let start = Instant::now();
-    // Every tile must be built before any is read.
-    for t in &plan.tiles {
-        let path = Plan::resolve(&args.plan, &t.output);
-        if !path.exists() {
-            bail!(
-                "tile {} has not been built ({} is missing): run `tincull tiles build {} --tile {}`",
-                t.index,
-                path.display(),
-                args.plan.display(),
-                t.index
-            );
-        }
+    // Every tile must be built before any is read; every missing one is named (the first 20 by number).
+    let missing: Vec<usize> = plan
+        .tiles
+        .iter()
+        .filter(|t| !Plan::resolve(&args.plan, &t.output).exists())
+        .map(|t| t.index)
+        .collect();
+    if let Some(&first) = missing.first() {
+        let shown: Vec<String> = missing.iter().take(20).map(usize::to_string).collect();
+        let more = match missing.len() {
+            1 => String::new(),
+            n if n <= 20 => format!(", nor tiles {}", shown[1..].join(", ")),
+            n => format!(", nor {} more tiles ({}, ...)", n - 1, shown[1..].join(", ")),
+        };
+        bail!(
+            "tile {first} has not been built ({} is missing){more}: run `tincull tiles build {} --tile {}`{}",
+            Plan::resolve(&args.plan, &plan.tiles[first].output).display(),
+            args.plan.display(),
+            shown.join(" --tile "),
+            if missing.len() > 20 { " and the others" } else { "" }
+        );
     }
     let bar = out.progress(plan.tiles.len() as u64, "merging");
     let h = tiles::merge::merge_with(&plan, |i| {

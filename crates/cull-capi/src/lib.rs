@@ -271,10 +271,11 @@ pub unsafe extern "C" fn tc_load_buffer(data: *const u8, len: usize, method_id: 
         }
         // SAFETY: the caller passes `len` readable bytes at `data`, and `len` is at most `isize::MAX`.
         let bytes = unsafe { std::slice::from_raw_parts(data, len) };
-        let m = method(method_id, "tc_load_buffer: memory buffer")?;
-        let h = Hierarchy::from_bytes(bytes).map_err(|e| load_error("memory buffer", e))?;
+        let what = "tc_load_buffer: memory buffer";
+        let m = method(method_id, what)?;
+        let h = Hierarchy::from_bytes(bytes).map_err(|e| load_error(what, e))?;
         m.check(&h)
-            .map_err(|e| Failure(TC_ERR_INVALID, format!("memory buffer: {e}")))?;
+            .map_err(|e| Failure(TC_ERR_INVALID, format!("{what}: {e}")))?;
         // SAFETY: `out` checked non-null.
         unsafe { store(h, m, out) };
         Ok(())
@@ -283,7 +284,8 @@ pub unsafe extern "C" fn tc_load_buffer(data: *const u8, len: usize, method_id: 
 
 /// Culls from a camera at `eye` (3 doubles, world coordinates in metres) looking at azimuth `yaw_deg` (degrees,
 /// counter-clockwise from +x) with a horizontal field of view of `fov_deg` degrees (in (0, 360]; 360 looks all
-/// around), exactly like `tincull cull --eye x,y,z --yaw Y --fov F`. Writes the ranges to draw, ascending and merged,
+/// around; the yaw is then ignored, where `tincull cull` refuses a `--yaw`), with the ranges of `tincull cull --eye
+/// x,y,z --yaw Y --fov F`. Writes the ranges to draw, ascending and merged,
 /// into `ranges[0..*count]`. When `capacity` is too small nothing is written, `*count` receives the number needed
 /// and the result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough). Any finite eye is culled
 /// from, one below the terrain too (nothing is visible from there, so no triangle culled is wrong).

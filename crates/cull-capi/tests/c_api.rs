@@ -247,7 +247,17 @@ fn errors_are_codes_with_messages() {
             tc_load_buffer(junk.as_ptr(), junk.len(), TC_METHOD_SAFE, &mut c),
             TC_ERR_FORMAT
         );
-        assert!(last_error().contains("memory buffer"), "{}", last_error());
+        assert!(
+            last_error().starts_with("tc_load_buffer: memory buffer: not a tincull hierarchy"),
+            "{}",
+            last_error()
+        );
+        // Empty, said as such; every message of a buffer starts as every other one.
+        assert_eq!(tc_load_buffer(junk.as_ptr(), 0, TC_METHOD_SAFE, &mut c), TC_ERR_FORMAT);
+        assert_eq!(
+            last_error(),
+            "tc_load_buffer: memory buffer: empty hierarchy file (0 bytes)"
+        );
         // A length no buffer can have is refused before anything is read.
         assert_eq!(
             tc_load_buffer(junk.as_ptr(), usize::MAX, TC_METHOD_SAFE, &mut c),
@@ -324,7 +334,7 @@ fn a_method_of_the_wrong_grouping_and_a_non_finite_yaw_are_invalid() {
         assert!(c.is_null());
         let e = last_error();
         assert!(
-            e.starts_with("memory buffer: method `stewart` needs a quadtree hierarchy"),
+            e.starts_with("tc_load_buffer: memory buffer: method `stewart` needs a quadtree hierarchy"),
             "{e}"
         );
         assert_eq!(tc_load_path(path.as_ptr(), TC_METHOD_STEWART, &mut c), TC_ERR_INVALID);

@@ -70,7 +70,9 @@ impl std::error::Error for FrameError {}
 /// shorter than its header, or one shorter than the length its header declares (truncated, or the length field
 /// corrupt, as a declared length far beyond any file is).
 pub(crate) fn truncation(file: &str, expected: u64, found: u64) -> String {
-    if expected == HEADER_LEN as u64 {
+    if found == 0 {
+        format!("empty{file} (0 bytes)")
+    } else if expected == HEADER_LEN as u64 {
         format!("truncated{file}: {found} bytes, fewer than the {HEADER_LEN} of its header")
     } else {
         format!("truncated or corrupt{file}: its header declares {expected} bytes, the file has {found}")
@@ -110,6 +112,13 @@ fn fill_header(magic: &[u8; 8], version: u32, mut out: Vec<u8>) -> Vec<u8> {
 /// The version and payload of bytes written by [`frame`] with `magic`, after checking the magic, the length (no
 /// byte missing, none after the payload) and the checksum.
 pub fn unframe<'a>(bytes: &'a [u8], magic: &[u8; 8]) -> Result<(u32, &'a [u8]), FrameError> {
+    // Empty: said as such rather than as a wrong magic number.
+    if bytes.is_empty() {
+        return Err(FrameError::Truncated {
+            expected: HEADER_LEN as u64,
+            found: 0,
+        });
+    }
     if bytes.len() < magic.len() || bytes[..magic.len()] != magic[..] {
         return Err(FrameError::BadMagic);
     }

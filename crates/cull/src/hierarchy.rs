@@ -9,6 +9,17 @@ use serde::{Deserialize, Serialize};
 use crate::error::HierarchyError;
 use crate::sector::sector_direction;
 
+/// Largest coordinate magnitude of a vertex (2^100), the limit of the mesh readers (`tin::COORDINATE_LIMIT`, equal
+/// by a test); non-zero magnitudes below its inverse are refused too. A file beyond it is refused on load: its
+/// coordinates would not survive the f32 of exports.
+pub const COORDINATE_LIMIT: f64 = 1.267_650_600_228_229_4e30;
+
+/// Whether `value` is 0 or a magnitude in `[1 / COORDINATE_LIMIT, COORDINATE_LIMIT]` (NaN and infinities are not).
+fn coordinate_in_range(value: f64) -> bool {
+    let m = value.abs();
+    m == 0.0 || (1.0 / COORDINATE_LIMIT..=COORDINATE_LIMIT).contains(&m)
+}
+
 /// One sector's occlusion region of a node, in the sector's vertical plane relative to the local origin:
 /// `t = r_i · (xy − origin.xy)`, `z − origin.z`. The region is `t > points[0].t` and `z <` the boundary through
 /// `points`, continued beyond the last point with slope `tail_slope`.
@@ -237,14 +248,18 @@ impl Hierarchy {
     /// Checks every structural invariant, so that a loaded file can never make the culler index out of range or
     /// loop: counts and indices in range, regions well formed and in increasing sector order, node ranges nested
     /// (a parent's range is exactly the union of its children's, which are contiguous), the nodes form a forest whose
-    /// roots are `roots`, and the always-visible range closes the triangle order.
+    /// roots are `roots`, the roots' ranges and the always-visible range (which closes the triangle order) hold every
+    /// triangle once, and coordinates lie within the mesh readers' limits.
     pub fn check_invariants(&self) -> Result<(), HierarchyError> {
         let invalid = |m: String| Err(HierarchyError::Invalid(m));
         if self.sectors == 0 || self.sectors > 1024 {
             return invalid(format!("sector count {} is out of range 1..=1024", self.sectors));
         }
-        if !self.origin.iter().all(|c| c.is_finite()) {
-            return invalid("the origin is not finite".into());
+        if !self.origin.iter().all(|c| c.abs() <= COORDINATE_LIMIT) {
+            return invalid(format!(
+                "the origin {:?} is not finite or beyond 2^100 in magnitude",
+                self.origin
+            ));
         }
         let nv = self.mesh.positions.len();
         let nt = self.mesh.triangles.len() as u64;
@@ -252,9 +267,13 @@ impl Hierarchy {
             .mesh
             .positions
             .iter()
-            .position(|p| !p.iter().all(|c| c.is_finite()))
+            .position(|p| !p.iter().all(|&c| coordinate_in_range(c)))
         {
-            return invalid(format!("vertex {i} is not finite"));
+            return invalid(format!(
+                "vertex {i} at {:?} has a coordinate that is not finite, or not 0 and outside 2^-100 ..= 2^100 in \
+                 magnitude (the range every mesh reader accepts)",
+                self.mesh.positions[i]
+            ));
         }
         if let Some(t) = self
             .mesh
@@ -326,11 +345,22 @@ impl Hierarchy {
         if let Some(i) = (0..n).find(|&i| parent[i] == u32::MAX && !is_root[i]) {
             return invalid(format!("node {i} has no parent and is not a root"));
         }
-        // Levels strictly decrease from parent to child, so there is no cycle; roots' ranges must not overlap.
+        // Levels strictly decrease from parent to child, so there is no cycle. The roots' ranges tile the triangles
+        // before the always-visible ones, without overlap or gap: a triangle in no node would never be drawn.
         let mut ranges: Vec<[u32; 2]> = self.roots.iter().map(|&r| self.nodes[r as usize].triangles).collect();
         ranges.sort_unstable();
         if ranges.windows(2).any(|w| w[0][1] > w[1][0]) {
             return invalid("top-level nodes overlap".into());
+        }
+        let mut at = 0;
+        for [s, e] in ranges {
+            if s != at {
+                return invalid(format!("triangles [{at}, {s}) are in no node and not always visible"));
+            }
+            at = e;
+        }
+        if at != av0 {
+            return invalid(format!("triangles [{at}, {av0}) are in no node and not always visible"));
         }
         Ok(())
     }

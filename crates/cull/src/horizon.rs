@@ -107,11 +107,16 @@
 //!   spans (of a triangle, or of a set of vertices for the vertex bound) widened by `REL (1 + |u|)` before they are
 //!   turned into columns; column boundaries `a_j` are exact dyadic numbers; a span's ends are turned into column
 //!   indices by a floor or ceiling that saturates (a vertex almost beside the camera, `f` near 0, has `|u|` up to
-//!   about 1e308) and then clamped to the face, so a span always covers every column its `u` interval meets; the
-//!   partial column left of a cover's first full column is found by a saturating subtraction too (it is then outside
+//!   `1e300`: a larger `|u|` or `|v|` leaves that face out of the vertex's, see below) and then clamped to the
+//!   face, so a span always covers every column its `u` interval meets; the partial column left of a cover's first full column is found by a saturating subtraction too (it is then outside
 //!   the face, never wrapped into it), so no index arithmetic can overflow;
 //! - the vertex bound compares the vertices' raised values `hi` themselves (each above the exact `v` of the raised
 //!   vertex, see above) with `H_j`: no further arithmetic;
+//! - values beyond f64: a vertex gets face `k` only when its `|u|`, `|lo|` and `|hi|` there are at most `1e300`
+//!   (`f` subnormal beside a large `l` or `dz` would overflow them); then differences of `u` and `v` stay finite,
+//!   so no edge value is NaN. An edge whose slope or margin is not finite makes its triangle or segment unusable
+//!   (neither written nor called hidden), and an occludee's bound is NaN, hence "not hidden", when any of its terms
+//!   is (`f64::max` alone would drop the NaN term and keep a bound of the other edge only);
 //! - disks: `f_lo` is decreased and `f_hi` increased by `REL` relative; the tangent values `u±` are computed from a
 //!   square root and a division, each correctly rounded, and moved outward by `1e-9 (1 + |u|)` (also covering the
 //!   cancellation in `m_f² − r²`, which is why a disk with `m_f < (1 + 1e-6) r` takes the whole face).
@@ -167,6 +172,58 @@ pub(crate) struct Reach {
 /// No vertex: covers that end here never meet another one exactly.
 pub(crate) const NO_VERTEX: u32 = u32::MAX;
 
+/// What a culler's height margin `μ` depends on, computed from the mesh's positions (not from a file's origin
+/// field, which a file may set anywhere): the lowest and highest corners of the box of the vertices, the extent `e`
+/// (sum of the box's sides) and the largest `|z|` (`h`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Scale {
+    /// Lowest corner of the vertices' box (`+∞` for no vertex).
+    pub lo: [f64; 3],
+    /// Highest corner of the vertices' box (`−∞` for no vertex).
+    pub hi: [f64; 3],
+    extent: f64,
+    zabs: f64,
+}
+
+impl Scale {
+    /// The scale of `positions`.
+    pub(crate) fn of(positions: &[[f64; 3]]) -> Scale {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let (extent, zabs) = if positions.is_empty() {
+            (0.0, 0.0)
+        } else {
+            (
+                (hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]),
+                lo[2].abs().max(hi[2].abs()),
+            )
+        };
+        Scale { lo, hi, extent, zabs }
+    }
+
+    /// The height margin `μ = 1e-7 (1 + e + |c − o|₁ + |c.z| + h)` metres for a camera at `eye`, `o` the centre of
+    /// the vertices' box in x,y: every vertex lies within `e / 2` of `o` (1-norm), so `μ` exceeds
+    /// `1e-7 (1 + |p − c| + |p.z|)` for every vertex `p`, over 100 times the exact checker's tolerance of
+    /// `1e-9 (1 + distance + |z|)` (`truth::walk`).
+    pub(crate) fn margin(&self, eye: [f64; 3]) -> f64 {
+        // No vertex: no box (and nothing to cull).
+        let o = if self.lo[0].is_finite() {
+            [0.5 * (self.lo[0] + self.hi[0]), 0.5 * (self.lo[1] + self.hi[1])]
+        } else {
+            [0.0; 2]
+        };
+        1e-7 * (1.0 + self.extent + (eye[0] - o[0]).abs() + (eye[1] - o[1]).abs() + eye[2].abs() + self.zabs)
+    }
+}
+
+/// Largest `|u|` or `|v|` of a projection (see [`project`]).
+const PROJ_MAX: f64 = 1e300;
+
 /// Projects the offset `d = p − c` of mesh vertex `id` into every face where `f > 0`, with the height margin `mu`.
 #[inline]
 pub(crate) fn project(d: [f64; 3], mu: f64, id: u32) -> Projected {
@@ -182,12 +239,18 @@ pub(crate) fn project(d: [f64; 3], mu: f64, id: u32) -> Projected {
             let inv = 1.0 / f;
             let lo = dz_lo * inv;
             let hi = dz_hi * inv;
-            out.mask |= 1 << k;
-            out.face[k] = Proj {
+            let p = Proj {
                 u: l * inv,
                 lo: lo - REL * lo.abs(),
                 hi: hi + REL * hi.abs(),
             };
+            // A `u` or `v` beyond `PROJ_MAX` (`f` tiny beside `l` or `dz`: coordinates near 0 with subnormal
+            // differences) is no projection: the face is not one of this vertex's (its triangles are then neither
+            // written nor hidden there). Below it, no difference of two values overflows and no NaN can arise.
+            if p.u.abs() <= PROJ_MAX && p.lo.abs() <= PROJ_MAX && p.hi.abs() <= PROJ_MAX {
+                out.mask |= 1 << k;
+                out.face[k] = p;
+            }
         }
     }
     out.wedge = wedge_of(&out);
@@ -203,23 +266,34 @@ struct Edge {
     margin: f64,
 }
 
+/// An edge [`Edge::new`] cannot bound: a value not finite, or a slope or margin beyond f64. The triangle or segment
+/// it belongs to is then unusable (not written as an occluder, not called hidden): standing in for it with the other
+/// short edge, as for an edge without width, would bound nothing.
+#[derive(Clone, Copy, Debug)]
+struct Unusable;
+
 impl Edge {
+    /// The edge `P Q`, or `None` when it has no width (`P.u = Q.u`: the other short edge stands in for it).
     #[inline(always)]
-    fn new(p: (f64, f64), q: (f64, f64)) -> Option<Edge> {
+    fn new(p: (f64, f64), q: (f64, f64)) -> Result<Option<Edge>, Unusable> {
         let (p, q) = if p.0 <= q.0 { (p, q) } else { (q, p) };
+        if !(p.0.is_finite() && q.0.is_finite() && p.1.is_finite() && q.1.is_finite()) {
+            return Err(Unusable);
+        }
         if q.0 <= p.0 {
-            return None;
+            return Ok(None);
         }
         let slope = (q.1 - p.1) / (q.0 - p.0);
-        if !slope.is_finite() {
-            return None;
+        let margin = REL * (p.1.abs() + q.1.abs() + slope.abs() * (p.0.abs() + q.0.abs() + 2.0));
+        if !(slope.is_finite() && margin.is_finite()) {
+            return Err(Unusable);
         }
-        Some(Edge {
+        Ok(Some(Edge {
             u0: p.0,
             v0: p.1,
             slope,
-            margin: REL * (p.1.abs() + q.1.abs() + slope.abs() * (p.0.abs() + q.0.abs() + 2.0)),
-        })
+            margin,
+        }))
     }
 
     #[inline(always)]
@@ -260,7 +334,7 @@ struct Top {
 impl Top {
     #[inline(always)]
     fn new(p: [(f64, f64, u32); 3]) -> Option<Top> {
-        // Sorting network on `u` (NaNs end up anywhere; `Edge::new` then refuses the long edge).
+        // Sorting network on `u` (a NaN ends up anywhere; `Edge::new` refuses every edge with a value not finite).
         let [mut a, mut b, mut c] = p;
         if b.0 < a.0 {
             std::mem::swap(&mut a, &mut b);
@@ -272,9 +346,9 @@ impl Top {
             std::mem::swap(&mut a, &mut b);
         }
         let (a2, b2, c2) = ((a.0, a.1), (b.0, b.1), (c.0, c.1));
-        let ac = Edge::new(a2, c2)?;
-        let ab = Edge::new(a2, b2);
-        let bc = Edge::new(b2, c2);
+        let ac = Edge::new(a2, c2).ok()??;
+        let ab = Edge::new(a2, b2).ok()?;
+        let bc = Edge::new(b2, c2).ok()?;
         Some(Top {
             ac,
             left: ab.or(bc).unwrap_or(NO_EDGE),
@@ -292,7 +366,7 @@ impl Top {
     #[inline(always)]
     fn segment(p: (f64, f64, u32), q: (f64, f64, u32)) -> Option<Top> {
         let (a, c) = if q.0 < p.0 { (q, p) } else { (p, q) };
-        let ac = Edge::new((a.0, a.1), (c.0, c.1))?;
+        let ac = Edge::new((a.0, a.1), (c.0, c.1)).ok()??;
         Some(Top {
             ac,
             left: NO_EDGE,
@@ -319,12 +393,19 @@ impl Top {
         (self.ac.at(u) - self.ac.margin).max(e.at(u) - e.margin)
     }
 
-    /// An upper bound of `top(u)` for `u` in `[ua, uc]` (occludees).
+    /// An upper bound of `top(u)` for `u` in `[ua, uc]` (occludees); NaN when either edge's value is (`f64::max`
+    /// would drop it, and the other edge alone bounds nothing).
     #[inline(always)]
     fn high(&self, u: f64) -> f64 {
         let e = self.piece(u);
-        (self.ac.at(u) + self.ac.margin).max(e.at(u) + e.margin)
+        max_or_nan(self.ac.at(u) + self.ac.margin, e.at(u) + e.margin)
     }
+}
+
+/// The larger of `a` and `b`, or NaN when either is NaN (for upper bounds, where a NaN must answer "not hidden").
+#[inline(always)]
+fn max_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) }
 }
 
 /// Partial covers of one column: left-anchored (`[a_j, reach]`) and right-anchored (`[start, a_{j+1}]`), two
@@ -827,13 +908,13 @@ impl Horizon {
             }
             let l = self.boundary(j).max(top.ua);
             let r = self.boundary(j + 1).min(top.uc);
-            let mut m = top.high(l).max(top.high(r));
+            let mut m = max_or_nan(top.high(l), top.high(r));
             if l < top.ub && top.ub < r {
-                m = m.max(top.high(top.ub));
+                m = max_or_nan(m, top.high(top.ub));
             }
             // Ends that fall just outside the computed span (inside the margin) are bounded by the end vertices.
             if l > r {
-                m = top.high(top.ua).max(top.high(top.uc)).max(top.high(top.ub));
+                m = max_or_nan(max_or_nan(top.high(top.ua), top.high(top.uc)), top.high(top.ub));
             }
             if !(m < h) {
                 return false;
@@ -915,7 +996,7 @@ pub(crate) struct DiskSpan {
 }
 
 /// `⌊x⌋` for column arithmetic: an `x` beyond the range of `isize` saturates to its end (a vertex almost beside the
-/// camera has `|u|` up to about 1e308), a NaN gives 0; callers clamp.
+/// camera has `|u|` up to `1e300`, a disk's tangent more), a NaN gives 0; callers clamp.
 #[inline(always)]
 fn floor(x: f64) -> isize {
     let t = x as isize;
@@ -1036,8 +1117,8 @@ mod tests {
         assert!(!h.disk_hidden([25.0, 0.0], 3.0, 12.0, false));
     }
 
-    /// Regression: a vertex almost exactly beside the camera (forward distance `f` of 1e-300 m in face 0, so its
-    /// `u` is about −1e302) once made `⌊column⌋` overflow to the last column, so the span of columns checked in
+    /// Regression: a vertex almost exactly beside the camera (forward distance `f` of 1e-298 m in face 0, so its
+    /// `u` is about −2e299, within [`PROJ_MAX`]) once made `⌊column⌋` overflow to the last column, so the span of columns checked in
     /// face 0 was empty and the patch was called hidden there without any test: the visible vertices in face 0 were
     /// culled. Every face's span must reach from the first column.
     #[test]
@@ -1049,10 +1130,10 @@ mod tests {
         let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
         h.write_triangle([&p[0], &p[1], &p[2]]);
         // A patch in the quadrant x > 0, y < 0: one vertex in plain view in face 0, one hidden behind the wall in
-        // face 3, and one south of the camera at x = 1e-300 (in face 0 with f > 0, but at u ≈ −1e302).
-        let patch = [[30.0, -5.0, 0.0], [5.0, -30.0, 0.0], [1e-300, -20.0, 0.0]];
+        // face 3, and one south of the camera at x = 1e-298 (in face 0 with f > 0, but at u ≈ −2e299).
+        let patch = [[30.0, -5.0, 0.0], [5.0, -30.0, 0.0], [1e-298, -20.0, 0.0]];
         let q: Vec<Projected> = patch.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
-        assert!(q[2].face[0].u < -1e300, "{:?}", q[2].face[0]);
+        assert!(q[2].mask & 1 != 0 && q[2].face[0].u < -1e299, "{:?}", q[2].face[0]);
         assert!(!h.vertices_hidden(&q, false), "the vertex in face 0 is in plain view");
         assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         assert_eq!(floor(-1e302), isize::MIN);
@@ -1062,7 +1143,7 @@ mod tests {
     }
 
     /// Regression (found by a library user's fuzzing of `.tch` files): a segment reaching from a vertex almost beside
-    /// the camera (`u` about −2e301, so `⌈column⌉` saturates to `isize::MIN`) took one column off that minimum to
+    /// the camera (`u` about −2e299, so `⌈column⌉` saturates to `isize::MIN`) took one column off that minimum to
     /// find its left partial column: an overflow, which panicked in debug builds and in release wrapped to
     /// `isize::MAX`, so neither of its partial covers was written. The cover at its right end, which pairs with the
     /// next segment's at their shared vertex, must be written.
@@ -1072,12 +1153,12 @@ mod tests {
         let mut h = Horizon::new(64);
         // Face 0 (+x): u = y / x. The first vertex's lowered v is exactly 0 (height μ), so the segment's rounding
         // margin stays small however far its u reaches.
-        let p: Vec<Projected> = [[1e-300, -20.0, mu], [10.0, 3.0, 5.0], [10.0, 9.0, 5.0]]
+        let p: Vec<Projected> = [[1e-298, -20.0, mu], [10.0, 3.0, 5.0], [10.0, 9.0, 5.0]]
             .iter()
             .enumerate()
             .map(|(i, &d)| project(d, mu, i as u32))
             .collect();
-        assert!(p[0].face[0].u < -1e301 && p[0].face[0].lo == 0.0, "{:?}", p[0].face[0]);
+        assert!(p[0].face[0].u < -1e299 && p[0].face[0].lo == 0.0, "{:?}", p[0].face[0]);
         h.write_segment([&p[0], &p[1]]);
         h.write_segment([&p[1], &p[2]]);
         // u = 0.3 lies inside column ⌊(0.3 + 1) · 32⌋ = 41, covered by the two segments' partial covers, which meet

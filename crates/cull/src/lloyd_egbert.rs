@@ -94,7 +94,7 @@ use std::time::{Duration, Instant};
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::{Grouping, Hierarchy};
-use crate::horizon::{Horizon, NO_VERTEX, Projected, project};
+use crate::horizon::{Horizon, NO_VERTEX, Projected, Scale, project};
 use crate::sector::circle_outside_view;
 
 /// The finest grid of occluders: `2^8 = 256` cells a side (about 130 000 cell edges).
@@ -215,9 +215,7 @@ pub struct LloydEgbertCuller {
     occluders: Vec<Occluder>,
     /// Occluders of edge `e`: `occluders[edge_start[e]..edge_start[e + 1]]`.
     edge_start: Vec<u32>,
-    origin: [f64; 3],
-    extent: f64,
-    zabs: f64,
+    scale: Scale,
     precompute: Duration,
 }
 
@@ -233,21 +231,8 @@ impl LloydEgbertCuller {
     pub fn new(h: &Hierarchy, columns_per_face: usize) -> LloydEgbertCuller {
         let start = Instant::now();
         let pos = &h.mesh.positions;
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for p in pos {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        let (extent, zabs) = if pos.is_empty() {
-            (0.0, 0.0)
-        } else {
-            (
-                (hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]),
-                lo[2].abs().max(hi[2].abs()),
-            )
-        };
+        let scale = Scale::of(pos);
+        let (lo, hi) = (scale.lo, scale.hi);
         let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count().max(1);
         let depth = match h.build.grouping {
             Grouping::Quadtree { stored_depth, .. } => stored_depth,
@@ -316,9 +301,7 @@ impl LloydEgbertCuller {
             grid,
             occluders: Vec::new(),
             edge_start: Vec::new(),
-            origin: h.origin,
-            extent,
-            zabs,
+            scale,
             precompute: Duration::ZERO,
         };
         for (i, node) in h.nodes.iter().enumerate() {
@@ -402,13 +385,7 @@ impl LloydEgbertCuller {
             s.round = 0;
         }
         s.round += 1;
-        let mu = 1e-7
-            * (1.0
-                + self.extent
-                + (eye[0] - self.origin[0]).abs()
-                + (eye[1] - self.origin[1]).abs()
-                + eye[2].abs()
-                + self.zabs);
+        let mu = self.scale.margin(eye);
         let frustum = camera.frustum();
         let dmin_of = |n: &BoxNode| {
             let dx = (n.lo[0] - eye[0]).max(eye[0] - n.hi[0]).max(0.0);

@@ -44,6 +44,16 @@
 //!   triangle);
 //! - otherwise visible: an inner node queues its children, a patch is drawn and queued as an occluder.
 //!
+//! *Why every occluder lies nearer than the node tested.* A child's circle need not lie inside its parent's, so a
+//! child's key can be below its parent's and below keys popped before it: "nodes are taken nearest first" holds for
+//! their points, not for their keys. Let node `A` be popped with key `d_A`. Every node `B` tested after it is a
+//! descendant of `A` or of a node that was in the queue when `A` was popped (whose key was `≥ d_A`), and its points are
+//! points of that ancestor, inside the ancestor's circle: every point of `B` lies at a horizontal distance `≥ d_A`. A
+//! patch made eligible at `A` has `d_max < d_A`, so whenever it is written (lazily, maybe while `B` is tested) it lies
+//! nearer than every point of `B`, which is what the theorem needs with `D = d_A`. The keys are computed in f64 as
+//! `|m − c| − r` from circles grown by a relative 1e-12 (and an absolute 1e-9 m), more than the rounding of the
+//! distance and of the subtraction, so a computed key never exceeds the true least distance of the circle's points.
+//!
 //! ## Coarse nodes
 //!
 //! With [`SafeParams::coarse_columns`] `n > 0`, a visible inner node (not containing the camera) whose circle is small
@@ -90,8 +100,9 @@
 //! outside it is culled by the same azimuth test as [`crate::Culler`]'s (a node outside the view cannot be seen).
 //! A non-finite camera draws everything.
 //!
-//! The height margin is `μ = 1e-7 (1 + e + |c − o|₁ + |c.z| + h)` metres with `e` the mesh's extent, `o` its
-//! lowest corner and `h` its largest `|z|`: more than 100 times the exact checker's tolerance (`truth::walk`), so a
+//! The height margin is `μ = 1e-7 (1 + e + |c − o|₁ + |c.z| + h)` metres with `e` the mesh's extent, `o` the
+//! centre of its box (computed from the vertices, not read from the file's origin field) and `h` its largest `|z|`
+//! ([`crate::horizon`]'s `Scale`): more than 100 times the exact checker's tolerance (`truth::walk`), so a
 //! sight line called blocked here is blocked there, and far above every rounding error of the arithmetic.
 
 // Comparisons are written so that a NaN anywhere answers "not hidden" (`!(a < b)`), on purpose.
@@ -102,7 +113,7 @@ use std::collections::BinaryHeap;
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
-use crate::horizon::{FACES, Horizon, Projected, REL, Reach, face_coords, project};
+use crate::horizon::{FACES, Horizon, Projected, REL, Reach, Scale, face_coords, project};
 use crate::sector::circle_outside_view;
 
 /// The default [`SafeParams::work_budget`]: far above what any view of the bundled 10k-vertex meshes needs (at most
@@ -231,9 +242,7 @@ pub struct SafeCuller {
     /// Normal `(b − a) × (c − a)` of every entry of `tris`.
     normals: Vec<[f64; 3]>,
     triangles: u32,
-    origin: [f64; 3],
-    extent: f64,
-    zabs: f64,
+    scale: Scale,
 }
 
 /// The work of one cull, in the units of [`SafeParams::work_budget`].
@@ -441,21 +450,8 @@ impl SafeCuller {
             edges: Vec::new(),
             normals: Vec::new(),
             triangles: h.mesh.triangles.len() as u32,
-            origin: h.origin,
-            extent: 0.0,
-            zabs: 0.0,
+            scale: Scale::of(pos),
         };
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for p in pos {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        if !pos.is_empty() {
-            c.extent = (hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]);
-            c.zabs = lo[2].abs().max(hi[2].abs());
-        }
         // Hierarchy nodes first (same ids), then the halving trees. A hierarchy node's extent is its children's
         // together (they partition its range): computed bottom-up, by increasing level.
         let n = h.nodes.len();
@@ -837,13 +833,7 @@ impl SafeCuller {
         scratch.projected.clear();
         scratch.drawn.clear();
         scratch.eligible.clear();
-        let mu = 1e-7
-            * (1.0
-                + self.extent
-                + (eye[0] - self.origin[0]).abs()
-                + (eye[1] - self.origin[1]).abs()
-                + eye[2].abs()
-                + self.zabs);
+        let mu = self.scale.margin(eye);
         let frustum = camera.frustum();
         let distance = |n: &TreeNode| {
             let (dx, dy) = (n.centre[0] - eye[0], n.centre[1] - eye[1]);

@@ -74,7 +74,10 @@ fn corruption_is_a_clear_error() {
         Hierarchy::from_bytes(b"P3\n1 1\n"),
         Err(HierarchyError::BadMagic)
     ));
-    assert!(matches!(Hierarchy::from_bytes(&[]), Err(HierarchyError::BadMagic)));
+    // Empty: said as such, not as a wrong magic number.
+    let empty = Hierarchy::from_bytes(&[]).expect_err("empty");
+    assert!(matches!(empty, HierarchyError::Truncated { found: 0, .. }), "{empty:?}");
+    assert_eq!(empty.to_string(), "empty hierarchy file (0 bytes)");
     for cut in [10, 24, bytes.len() / 2, bytes.len() - 1] {
         assert!(
             matches!(
@@ -128,6 +131,57 @@ fn invalid_structure_is_rejected() {
         h.check_invariants().is_err(),
         "always-visible range must end the triangles"
     );
+}
+
+/// Regression (found by an audit of the proofs): a file whose roots and always-visible range leave a triangle out
+/// passed the checks, and every culler then never drew that triangle, in plain view or not. Every triangle must be
+/// in a root's range or always visible.
+#[test]
+fn a_triangle_in_no_node_is_rejected() {
+    // Leaf 1 ([2, 4)) made a root of its own range only, its parent gone: triangles [0, 2) are in no node.
+    let mut h = tiny();
+    h.nodes = vec![h.nodes[1].clone()];
+    h.roots = vec![0];
+    let e = h.check_invariants().expect_err("a gap").to_string();
+    assert!(e.contains("[0, 2) are in no node"), "{e}");
+    // A gap between the roots and the always-visible range.
+    let mut h = tiny();
+    h.mesh.triangles.push([3, 7, 6]);
+    h.always_visible = [5, 6];
+    let e = h.check_invariants().expect_err("a gap").to_string();
+    assert!(e.contains("[4, 5) are in no node"), "{e}");
+    // Through the file too.
+    let bytes = h.to_bytes().expect("encodes");
+    assert!(Hierarchy::from_bytes(&bytes).is_err());
+}
+
+/// A file whose coordinates no mesh reader accepts (here 1e300, beyond f32: an export would write `null`) is refused
+/// on load, naming the vertex; the limit is the mesh readers' own.
+#[test]
+fn coordinates_beyond_the_readers_limit_are_rejected() {
+    assert_eq!(cull::hierarchy::COORDINATE_LIMIT, tin::COORDINATE_LIMIT);
+    for bad in [1e300, -9e42, 1e-300, f64::NAN, f64::INFINITY] {
+        let mut h = tiny();
+        h.mesh.positions[1][0] = bad;
+        let e = h.check_invariants().expect_err("refused").to_string();
+        assert!(e.contains("vertex 1") && e.contains("2^100"), "{e}");
+        let mut h = tiny();
+        h.origin[2] = bad;
+        if bad.abs() > 1.0 || bad.is_nan() {
+            assert!(h.check_invariants().is_err(), "origin {bad}");
+        }
+    }
+    let mut h = tiny();
+    h.mesh.positions[1] = [0.0, -tin::COORDINATE_LIMIT, 1.0 / tin::COORDINATE_LIMIT];
+    h.check_invariants().expect("the limits themselves are accepted");
+    // Through the file: the same refusal, naming the file.
+    let dir = tempfile::tempdir().expect("tmp");
+    let path = dir.path().join("huge.tch");
+    let mut h = tiny();
+    h.mesh.positions[0][1] = 1e300;
+    std::fs::write(&path, h.to_bytes().expect("encoded")).expect("written");
+    let e = Hierarchy::load(&path).expect_err("refused").to_string();
+    assert!(e.contains("huge.tch") && e.contains("vertex 0"), "{e}");
 }
 
 #[test]

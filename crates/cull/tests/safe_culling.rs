@@ -283,6 +283,81 @@ fn eyes_a_hair_beside_a_vertex() {
     assert_safe("a hair beside a vertex", &tin, &eyes);
 }
 
+/// Regression (found by an audit of the proofs): an eye 8e-307 m west of x = 0 puts the vertex (0, 200) at
+/// `f = 8e-307` in face +x, where its `u = 200 / f` overflowed to +∞ while its `v` stayed finite. The long edge to it
+/// then had a NaN margin, `f64::max` dropped that edge from the bound of the triangle's top, and the triangle
+/// (80, 30, 0), (40, 80, 0), (0, 200, 104), in plain view, was culled behind a low ridge. A face where a vertex's
+/// `u` or `v` is not finite is now no face of that vertex, and an edge whose slope or margin is not finite makes its
+/// triangle unusable (neither occluder nor hidden).
+#[test]
+fn an_eye_a_subnormal_beside_a_face_boundary() {
+    let mut pts = vec![
+        DVec3::new(80.0, 30.0, 0.0),
+        DVec3::new(40.0, 80.0, 0.0),
+        DVec3::new(0.0, 200.0, 104.0),
+    ];
+    // A low ridge at x = 10 (0.15 m below the eye) and a high wall along y = 14.
+    pts.extend((0..11).map(|i| DVec3::new(10.0, 2.5 + 0.85 * i as f64, 1.85)));
+    pts.extend([16.7, 15.0, 13.0, 11.0, 9.0, 7.0, 5.0, 3.0, 1.0, -1.4].map(|x| DVec3::new(x, 14.0, 16.0)));
+    for (x, y) in [
+        (-8.0, -8.0),
+        (8.0, -8.0),
+        (-8.0, 5.0),
+        (4.0, 0.5),
+        (-4.0, -1.0),
+        (8.5, 1.5),
+        (8.5, 5.0),
+        (8.5, 9.0),
+        (16.0, 0.0),
+        (16.0, 12.5),
+        (18.5, 14.0),
+        (18.0, 16.0),
+        (12.0, 12.5),
+        (8.0, 12.5),
+        (11.5, 8.0),
+        (-6.0, 14.0),
+        (5.0, 17.0),
+        (-40.0, -40.0),
+        (300.0, -90.0),
+        (320.0, 520.0),
+        (-40.0, 500.0),
+        (40.0, 40.0),
+        (40.0, 15.0),
+        (25.0, 10.0),
+        (25.0, 25.0),
+    ] {
+        pts.push(DVec3::new(x, y, 0.0));
+    }
+    let (tin, _) = triangulate(&pts, DedupePolicy::Reject).expect("a TIN");
+    let eyes = [
+        DVec3::new(-8e-307, 0.0, 2.0),
+        DVec3::new(-1e-300, 0.0, 2.0),
+        DVec3::new(0.0, 0.0, 2.0),
+        DVec3::new(-f64::from_bits(1), 0.0, 2.0),
+        DVec3::new(0.0, -8e-307, 2.0),
+    ];
+    // One triangle per leaf, as the audit's hierarchy had it, and the usual leaves.
+    let truth = GroundTruth::new(&tin);
+    let (h, order) = hierarchy_of(&tin, 1, 0);
+    for culler in [
+        AnyCuller::Safe(SafeCuller::new(&h, SafeParams::default())),
+        AnyCuller::LloydEgbert(LloydEgbertCuller::new(&h, 256)),
+    ] {
+        for &eye in &eyes {
+            let visible = truth.visible_triangles(eye);
+            let mask = culler.cull(&Camera::all_around(eye.to_array())).mask(order.len());
+            for (i, &t) in order.iter().enumerate() {
+                assert!(
+                    !visible[t as usize] || mask[i],
+                    "false cull of triangle {t} {:?} from {eye:?}",
+                    tin.corners(t as usize)
+                );
+            }
+        }
+    }
+    assert_safe("a subnormal beside a face boundary", &tin, &eyes_over(&tin, &eyes));
+}
+
 #[test]
 fn slivers() {
     // Rows 20 m apart, each doubled 5 cm away with the points staggered: the triangles between a row and its double

@@ -254,9 +254,9 @@ const METHOD_COLUMN: usize = 17;
 enum Column {
     /// A whole number.
     Count,
-    /// A number.
+    /// A number, 0 or more (times, fractions, bytes: none is negative).
     Number,
-    /// A number, or empty where the evaluation has none (e.g. no hidden triangle).
+    /// A number, 0 or more, or empty where the evaluation has none (e.g. no hidden triangle).
     MaybeNumber,
     /// A method or class name.
     Name,
@@ -281,15 +281,24 @@ fn column_kind(name: &str) -> Column {
 }
 
 /// The lines of a sweep file, grouped by combination.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct SweepTable {
     /// Each combination's lines, without their last column (`setup`).
     rows: BTreeMap<SweepKey, Vec<String>>,
+    /// The line number of every (combination, method, class).
+    line_of: BTreeMap<(SweepKey, String, String), usize>,
     /// The setup of every line ([`setup_digest`]); `None` for an empty table.
     setup: Option<String>,
     /// The number of a last line that was cut short (no newline: a write that was interrupted), left out of the
     /// table.
     truncated: Option<usize>,
+}
+
+impl PartialEq for SweepTable {
+    /// The same lines, setup and cut line (where the lines were read from, if they were, does not count).
+    fn eq(&self, other: &Self) -> bool {
+        (&self.rows, &self.setup, self.truncated) == (&other.rows, &other.setup, other.truncated)
+    }
 }
 
 impl SweepTable {
@@ -331,15 +340,17 @@ impl SweepTable {
             for (j, (field, name)) in fields.iter().zip(&names).enumerate() {
                 let ok = match column_kind(name) {
                     Column::Count => field.parse::<u64>().is_ok(),
-                    Column::Number => field.parse::<f64>().is_ok_and(f64::is_finite),
-                    Column::MaybeNumber => field.is_empty() || field.parse::<f64>().is_ok_and(f64::is_finite),
+                    Column::Number => field.parse::<f64>().is_ok_and(|x| x.is_finite() && x >= 0.0),
+                    Column::MaybeNumber => {
+                        field.is_empty() || field.parse::<f64>().is_ok_and(|x| x.is_finite() && x >= 0.0)
+                    }
                     Column::Name => !field.is_empty(),
                 };
                 if !ok {
                     let what = match column_kind(name) {
                         Column::Count => "a whole number",
-                        Column::Number => "a finite number",
-                        Column::MaybeNumber => "a finite number or empty",
+                        Column::Number => "a finite number, 0 or more",
+                        Column::MaybeNumber => "a finite number, 0 or more, or empty",
                         Column::Name => "a name",
                     };
                     bail!("line {}, column {} ({name}): {field:?} is not {what}", i + 1, j + 1);
@@ -385,7 +396,21 @@ impl SweepTable {
             let data = &line[..line.len() - setup.len() - 1];
             table.rows.entry(key).or_default().push(data.to_string());
         }
+        table.line_of = seen;
         Ok(table)
+    }
+
+    /// The lines whose method or class is none of `expected` (hand-edited, or of another version's evaluation):
+    /// `(line number, method, class)`, in line order. Their combinations are incomplete.
+    pub fn unexpected(&self, expected: &[(String, String)]) -> Vec<(usize, String, String)> {
+        let mut found: Vec<(usize, String, String)> = self
+            .line_of
+            .iter()
+            .filter(|((_, m, c), _)| !expected.iter().any(|(em, ec)| em == m && ec == c))
+            .map(|((_, m, c), &line)| (line, m.clone(), c.clone()))
+            .collect();
+        found.sort();
+        found
     }
 
     /// The line number of a last line that was cut short and left out by [`SweepTable::parse`], if any.
@@ -412,6 +437,7 @@ impl SweepTable {
     /// Drops the lines of the combination `key` (to run it again).
     pub fn remove(&mut self, key: &SweepKey) {
         self.rows.remove(key);
+        self.line_of.retain(|(k, _, _), _| k != key);
     }
 
     /// Takes `setup` as this table's: refused when its lines were written for another one.
@@ -625,6 +651,9 @@ mod tests {
             (",720,", ",abc,", "column 11 (visibility_bytes)"),
             (",0.1,0.2,", ",abc,0.2,", "column 8 (horizon_seconds)"),
             (",1500,", ",inf,", "column 29 (cull_ns)"),
+            // A negative time or mean: no column holds one.
+            (",1500,", ",-1500,", "column 29 (cull_ns)"),
+            (",0,0,0,0,0.5,", ",-1,0,0,0,0.5,", "column 21 (false_culls_mean)"),
         ] {
             let bad = text.replacen(from, to, 1);
             let e = SweepTable::parse(&bad).unwrap_err().to_string();
@@ -635,6 +664,14 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("line 2, column 18 (method)"), "{e}");
+        // A method or class this sweep does not write: named by its line, its combination incomplete.
+        let edited = SweepTable::parse(&text.replacen(",none,low,", ",bogus,low,", 1)).unwrap();
+        assert_eq!(
+            edited.unexpected(&expected),
+            vec![(4, "bogus".to_string(), "low".to_string())]
+        );
+        assert_eq!(edited.incomplete(&expected), vec![key]);
+        assert_eq!(whole.unexpected(&expected), vec![]);
         // A repeated line.
         let repeated = format!("{text}{}\n", lines[1]);
         let e = SweepTable::parse(&repeated).unwrap_err().to_string();

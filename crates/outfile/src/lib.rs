@@ -170,6 +170,9 @@ pub enum ErrorKind {
     IsInput(PathBuf),
     /// An I/O error (creating, writing, syncing or renaming).
     Io(io::Error),
+    /// An I/O error on the temporary file in the target's directory: what was being done (`create`, `write`,
+    /// `rename`), the directory, the error.
+    InDirectory(&'static str, PathBuf, io::Error),
 }
 
 impl fmt::Display for Error {
@@ -206,6 +209,14 @@ impl fmt::Display for Error {
                 input.display()
             ),
             ErrorKind::Io(e) => write!(f, "{p}: {e}"),
+            ErrorKind::InDirectory(what, dir, e) => {
+                write!(
+                    f,
+                    "{p}: cannot {what} a file in the directory {}: {}",
+                    dir.display(),
+                    without_temp_path(e)
+                )
+            }
         }
     }
 }
@@ -218,7 +229,7 @@ impl Error {
     /// The kind of the I/O error behind this one (a reader of standard output that went away: `BrokenPipe`).
     pub fn io_kind(&self) -> Option<io::ErrorKind> {
         match &self.kind {
-            ErrorKind::Io(e) => Some(e.kind()),
+            ErrorKind::Io(e) | ErrorKind::InDirectory(_, _, e) => Some(e.kind()),
             _ => None,
         }
     }
@@ -226,6 +237,21 @@ impl Error {
 
 /// Results of this crate.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// The message of an error of `tempfile`, without the name of the temporary file that it appends (` at path
+/// "dir/.tmpXXXX"`): a name the user never gave, of a file that no longer exists.
+fn without_temp_path(e: &io::Error) -> String {
+    let message = e.to_string();
+    match message.rfind(" at path \"") {
+        Some(i) => message[..i].to_string(),
+        None => message,
+    }
+}
+
+/// An error on the temporary file of `given` in `dir`, while doing `what`.
+fn in_dir(given: &Path, what: &'static str, dir: &Path, e: io::Error) -> Error {
+    err(given, ErrorKind::InDirectory(what, dir.to_path_buf(), e))
+}
 
 fn err(path: &Path, kind: ErrorKind) -> Error {
     Error {
@@ -360,7 +386,7 @@ pub fn check(path: &Path) -> Result<Target> {
         _ => return Err(err(path, ErrorKind::NoDirectory(dir.to_path_buf()))),
     }
     // The only reliable test of writability: create (and drop, which removes) a temporary file there.
-    NamedTempFile::new_in(dir).map_err(|e| err(path, ErrorKind::Io(e)))?;
+    NamedTempFile::new_in(dir).map_err(|e| in_dir(path, "create", dir, e))?;
     Ok(Target::File {
         given: path.to_path_buf(),
         resolved,
@@ -402,8 +428,8 @@ fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
             })
         }
         Target::File { given, resolved, .. } => {
-            let io = |e| err(given, ErrorKind::Io(e));
             let dir = dir_of(resolved);
+            let io = |e| in_dir(given, "write", dir, e);
             let mut builder = tempfile::Builder::new();
             builder.prefix(".tincull-").suffix(".tmp");
             #[cfg(unix)]
@@ -412,7 +438,8 @@ fn stage(target: Target, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -
                 // A new file gets the usual 0666 less the umask (the mode given to open() is masked).
                 builder.permissions(fs::Permissions::from_mode(0o666));
             }
-            let (temp, registered) = Registered::create(|| builder.tempfile_in(dir)).map_err(io)?;
+            let (temp, registered) =
+                Registered::create(|| builder.tempfile_in(dir)).map_err(|e| in_dir(given, "create", dir, e))?;
             // Keep the permissions of the file being replaced, exactly (set after creation: no umask).
             if let Ok(m) = fs::metadata(resolved)
                 && m.is_file()
@@ -447,7 +474,7 @@ impl Staged {
             return Err(err(&given, ErrorKind::NotRegular(what)));
         }
         temp.persist(&resolved)
-            .map_err(|e| err(&given, ErrorKind::Io(e.error)))?;
+            .map_err(|e| in_dir(&given, "rename", dir_of(&resolved), e.error))?;
         Ok(())
     }
 }

@@ -181,12 +181,30 @@ fn a_read_only_directory_is_refused_unless_privileged() {
         write_bytes(&p, b"x").expect("written");
     } else {
         let e = result.expect_err("read-only");
-        assert!(matches!(e.kind, ErrorKind::Io(_)), "{e}");
-        assert!(e.to_string().contains("x.txt"), "{e}");
+        assert!(matches!(e.kind, ErrorKind::InDirectory("create", _, _)), "{e}");
+        assert!(
+            e.to_string().contains("x.txt") && !e.to_string().contains(".tmp"),
+            "{e}"
+        );
         assert!(write_bytes(&p, b"x").is_err());
         assert_eq!(names(&ro), Vec::<String>::new());
     }
     fs::set_permissions(&ro, fs::Permissions::from_mode(0o755)).expect("chmod back");
+}
+
+/// A directory that takes no new file (here /proc) is named in the error, not the temporary file that could not be
+/// created there.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_directory_that_refuses_new_files_is_named() {
+    let e = check(Path::new("/proc/tincull-out.json")).expect_err("/proc takes no new file");
+    let message = e.to_string();
+    assert!(matches!(e.kind, ErrorKind::InDirectory("create", _, _)), "{message}");
+    assert!(
+        message.starts_with("/proc/tincull-out.json: cannot create a file in the directory /proc: "),
+        "{message}"
+    );
+    assert!(!message.contains(".tmp") && !message.contains("at path"), "{message}");
 }
 
 #[test]

@@ -112,13 +112,19 @@ pub struct ViewCell {
     pub height: Height,
 }
 
+/// A rectangle `x0,y0,x1,y1` for messages, each number as short as it reads exactly (`1e300`, not 301 digits).
+fn rect_text(rect: [f64; 4]) -> String {
+    rect.map(tin::compact_number).join(",")
+}
+
 impl ViewCell {
     /// Checks the rectangle and the band (finite, non-empty, ordered).
     pub fn validate(&self) -> Result<(), PvsError> {
         let [x0, y0, x1, y1] = self.rect;
         if !(self.rect.iter().all(|v| v.is_finite()) && x0 < x1 && y0 < y1) {
             return Err(PvsError::BadCell(format!(
-                "the rectangle {x0},{y0},{x1},{y1} must be finite with x0 < x1 and y0 < y1"
+                "the rectangle {} must be finite with x0 < x1 and y0 < y1",
+                rect_text(self.rect)
             )));
         }
         self.height.validate()
@@ -361,16 +367,17 @@ impl<'a> Pvs<'a> {
     /// cells are not checked: they cover the footprint's bounding box, whose corners may hold no terrain.
     pub fn check_over_terrain(&self, cell: &ViewCell) -> Result<(), PvsError> {
         cell.validate()?;
-        let [x0, y0, x1, y1] = cell.rect;
         let (ground, _) = self.ground_under(cell.rect);
         match (cell.height, ground) {
             (Height::AboveGround(_), None) => Err(PvsError::BadCell(format!(
-                "the cell {x0},{y0},{x1},{y1} lies off the terrain: heights above the ground need ground under \
-                 the cell (give an absolute band for a cell beside the terrain)"
+                "the cell {} lies off the terrain: heights above the ground need ground under the cell (give an \
+                 absolute band for a cell beside the terrain)",
+                rect_text(cell.rect)
             ))),
             (Height::Band([_, z1]), Some([lo, _])) if z1 < lo => Err(PvsError::BadCell(format!(
-                "the height band up to {z1} m lies below the terrain under the cell {x0},{y0},{x1},{y1} (its \
-                 lowest vertex there is at {lo} m): an eye below the ground sees none of the terrain"
+                "the height band up to {z1} m lies below the terrain under the cell {} (its lowest vertex there is \
+                 at {lo} m): an eye below the ground sees none of the terrain",
+                rect_text(cell.rect)
             ))),
             _ => Ok(()),
         }

@@ -30,7 +30,7 @@ use std::path::PathBuf;
 
 pub use job::{TileReport, build_tile};
 pub use merge::merge;
-pub use plan::{MeshExtent, Plan, PlanOptions, TileSpec, make_mesh_plan, make_plan};
+pub use plan::{LeftOut, MeshExtent, Plan, PlanOptions, TileSpec, make_mesh_plan, make_plan};
 
 /// Errors of tiled builds.
 #[derive(Debug, thiserror::Error)]

@@ -5,7 +5,9 @@
 //!   not the same z were built from different terrains (the DEM changed between their jobs) and are refused, as the
 //!   joined mesh would have a crack there;
 //!   the tiles' grouped triangles come first, tile after tile in Morton order of the tile grid, then every tile's
-//!   always-visible triangles. The joined mesh is checked to be edge-manifold ([`tin::Tin`]).
+//!   always-visible triangles. The joined mesh is checked to be edge-manifold ([`tin::Tin`]) and to have no crack
+//!   ([`tin::find_cracks`]: a tile's side vertex on its neighbour's edge at another height, as tiles built from plans
+//!   with other `--max-error`s would join).
 //! - **Nodes.** Every tile's nodes keep their children, levels and regions, re-expressed relative to the merged
 //!   origin with [`cull::StoredRegion::from_f64`] (which only shrinks a region) and circles that only grow. Each
 //!   tile becomes one node whose children are the tile's roots, and tiles are joined 2 × 2 up a quadtree of the tile
@@ -193,6 +195,19 @@ pub fn merge_with(
             "the tiles do not join into one terrain (plan and build them again): {e}"
         ))
     })?;
+    // A vertex of one tile on a side edge of its neighbour at another height (a T-junction: the tiles were built
+    // from different plans, say with other `--max-error`s): the surface would have a crack there, which no culler's
+    // proof allows.
+    let cracks = tin::find_cracks(tin.positions(), tin.triangles(), 1);
+    if let Some(&[v, t]) = cracks.first.first() {
+        let p = tin.position(v);
+        return Err(TilesError::Parameter(format!(
+            "the tiles do not join into one terrain (plan and build them again): {} vertices lie on an edge of a \
+             neighbouring tile's triangle at another height than the edge's (a crack), the first at ({}, {}, {}) \
+             on triangle {t}; were the tiles built from this plan?",
+            cracks.count, p.x, p.y, p.z
+        )));
+    }
     let origin = tin.origin();
 
     // The tiles' nodes, then one node per tile.

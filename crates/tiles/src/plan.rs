@@ -163,9 +163,12 @@ impl PlanOptions {
         if self.far_block < 1 {
             return bad("--far-block 0: the far field's blocks must be at least 1 (samples; metres for a mesh)".into());
         }
-        if !(self.max_error.is_finite() && self.max_error >= 0.0) {
+        // The halo and the far field are lowered by the bound: between 1 nm and 1,000 km, the lowered heights stay
+        // heights every stage accepts (0 or 2^-100 ..= 2^100 in magnitude).
+        if !(self.max_error == 0.0 || (1e-9..=1e9).contains(&self.max_error)) {
             return bad(format!(
-                "--max-error {}: the error bound must be finite and non-negative",
+                "--max-error {}: the error bound must be 0 or between 1e-9 and 1e9 m (the halo and far field are \
+                 lowered by it)",
                 tin::compact_number(self.max_error)
             ));
         }
@@ -280,9 +283,20 @@ fn cuts(n: usize, k: usize) -> Vec<usize> {
         .collect()
 }
 
+/// The tiles of a DEM's tile grid that a plan leaves out ([`make_plan`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LeftOut {
+    /// Tiles whose samples are all voids.
+    pub void_tiles: usize,
+    /// Tiles with samples too few or all in one row or column, which a tile job cannot triangulate alone.
+    pub line_tiles: usize,
+    /// The samples of those tiles (those on a side shared with a kept tile stay in the terrain, the others do not).
+    pub line_samples: usize,
+}
+
 /// Reads the DEM at `source` (with `dem`) in strips of rows, computing its far field ([`FarField::read_each_strip`];
 /// memory bounded by a strip and the far field's blocks, not the grid; `progress(rows read, rows)`) and every tile's
-/// window digest, and cuts it into tiles. `tiles_dir` is where the jobs will write, relative to the plan's folder.
+/// window digest, and cuts it into tiles, leaving out those with no terrain to triangulate ([`LeftOut`]). `tiles_dir` is where the jobs will write, relative to the plan's folder.
 /// Each tile's far-field file ([`TileSpec::far`]) is to be written beside the plan with [`Plan::far_file`].
 pub fn make_plan(
     source: &Path,
@@ -290,7 +304,7 @@ pub fn make_plan(
     options: PlanOptions,
     tiles_dir: &Path,
     progress: impl FnMut(usize, usize),
-) -> Result<(Plan, FarField), TilesError> {
+) -> Result<(Plan, FarField, LeftOut), TilesError> {
     options.validate()?;
     let header = tin::read_dem_header(source, &dem)?;
     let [kr, kc] = tile_grid([header.rows, header.cols], options.tile);
@@ -357,6 +371,15 @@ pub fn make_plan(
     }
     // Tiles whose samples are voids, or too few to triangulate, hold no terrain: left out (their neighbours' halos
     // and the far field still see what lies around them), the others numbered anew.
+    let mut left_out = LeftOut::default();
+    for t in terrain.iter().filter(|t| !t.can_triangulate()) {
+        if t.samples == 0 {
+            left_out.void_tiles += 1;
+        } else {
+            left_out.line_tiles += 1;
+            left_out.line_samples += t.samples;
+        }
+    }
     let mut kept: Vec<TileSpec> = tiles
         .into_iter()
         .zip(&terrain)
@@ -384,7 +407,7 @@ pub fn make_plan(
         tiles,
         tiles_dir: tiles_dir.to_path_buf(),
     };
-    Ok((plan, field))
+    Ok((plan, field, left_out))
 }
 
 /// Most squares a mesh's plan cuts its footprint into, for its tiles or for its far field's blocks.

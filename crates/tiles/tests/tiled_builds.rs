@@ -46,7 +46,7 @@ fn plan_grid_grouped(
         max_error,
         params,
     };
-    let (plan, field) =
+    let (plan, field, _) =
         tiles::make_plan(&npy, DemOptions::default(), options, Path::new("plan.tiles"), |_, _| {}).expect("plan");
     let path = dir.join("plan.json");
     std::fs::write(&path, plan.to_json().expect("json")).expect("write plan");
@@ -397,6 +397,32 @@ fn another_tiles_file_in_a_tiles_place_is_named() {
             && e.contains(&file)
             && e.contains("outside the tile's samples")
             && e.contains("--tile 5"),
+        "{e}"
+    );
+}
+
+/// Regression (found by a user's test): a tile built from a plan with another `--max-error`, copied into its place,
+/// lies within its samples but keeps other side vertices than its neighbours: T-junctions at other heights than the
+/// neighbours' edges, a crack. The merge exited 0 and the safe culler culled hundreds of visible triangles through
+/// the cracks; it must refuse.
+#[test]
+fn a_tile_from_another_max_error_is_refused_as_a_crack() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let other = tempfile::tempdir().expect("tempdir");
+    let grid = synth(33 * 33, 3);
+    let (plan, path) = plan_grid(dir.path(), &grid, 10, 2, 0.5);
+    let (plan_b, path_b) = plan_grid(other.path(), &grid, 10, 2, 3.0);
+    let mut tiles = build_tiles(&plan, &path);
+    let foreign = (0..plan.tiles.len())
+        .find_map(|i| {
+            let t = tiles::build_tile(&plan_b, &path_b, i, None).expect("tile").0;
+            (plan.check_built_tile(i, &t).is_ok() && t.mesh.positions != tiles[i].mesh.positions).then_some((i, t))
+        })
+        .expect("a tile that differs between the two plans");
+    tiles[foreign.0] = foreign.1;
+    let e = tiles::merge(&plan, &tiles).expect_err("a crack").to_string();
+    assert!(
+        e.contains("(a crack)") && e.contains("plan and build them again"),
         "{e}"
     );
 }
