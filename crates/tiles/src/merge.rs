@@ -197,17 +197,33 @@ pub fn merge_with(
     })?;
     // A vertex of one tile on a side edge of its neighbour at another height (a T-junction: the tiles were built
     // from different plans, say with other `--max-error`s): the surface would have a crack there, which no culler's
-    // proof allows.
-    let cracks = tin::find_cracks(tin.positions(), tin.triangles(), 1);
+    // proof allows. Such a vertex and such an edge both lie on the joined mesh's border (the edge has its one
+    // triangle in its tile, the vertex's side edges theirs in the other), so only the triangles with a border edge
+    // are searched: every crack between tiles is among theirs, and one found among them is one of the whole mesh.
+    let border: Vec<[u32; 3]> = tin
+        .triangles()
+        .iter()
+        .zip(tin.neighbours())
+        .filter(|(_, n)| n.contains(&tin::NO_NEIGHBOUR))
+        .map(|(t, _)| *t)
+        .collect();
+    let cracks = tin::find_cracks(tin.positions(), &border, 1);
     if let Some(&[v, t]) = cracks.first.first() {
-        let p = tin.position(v);
+        let point = |v: u32| {
+            let p = tin.position(v);
+            format!("({}, {}, {})", p.x, p.y, p.z)
+        };
+        let corners = border[t as usize].map(point);
         return Err(TilesError::Parameter(format!(
             "the tiles do not join into one terrain (plan and build them again): {} vertices lie on an edge of a \
-             neighbouring tile's triangle at another height than the edge's (a crack), the first at ({}, {}, {}) \
-             on triangle {t}; were the tiles built from this plan?",
-            cracks.count, p.x, p.y, p.z
+             neighbouring tile's triangle at another height than the edge's (a crack), the first at {} on the \
+             triangle {}; were the tiles built from this plan?",
+            cracks.count,
+            point(v),
+            corners.join(", ")
         )));
     }
+    drop(border);
     let origin = tin.origin();
 
     // The tiles' nodes, then one node per tile.
