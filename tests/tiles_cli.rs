@@ -612,27 +612,29 @@ fn a_mesh_cut_into_too_many_squares_is_refused() {
     );
 }
 
+/// Writes an `n` × `n` ESRI ASCII grid of `cell` m with `sample(row, column)` (`None`: a void, -9999), heights to the
+/// centimetre.
+fn write_asc(path: &std::path::Path, n: usize, cell: f64, sample: impl Fn(usize, usize) -> Option<f64>) {
+    let mut text = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize {cell}\nNODATA_value -9999\n");
+    for r in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|c| sample(r, c).map_or_else(|| "-9999".to_string(), |z| format!("{z:.2}")))
+            .collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(path, text).expect("grid");
+}
+
 /// A tile whose samples lie in one row (a line of samples amid voids) cannot be triangulated alone: the plan leaves
 /// it out and says so, counting its samples, rather than calling it a tile without terrain (found by a user's test).
 #[test]
 fn a_tile_of_one_row_of_samples_is_left_out_with_a_warning() {
     let dir = tempfile::tempdir().expect("tempdir");
     let asc = dir.path().join("line.asc");
-    let mut text = "ncols 21\nnrows 21\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n".to_string();
-    for i in 0..21 {
-        let row: Vec<String> = (0..21)
-            .map(|j| {
-                if j <= 10 || i == 15 {
-                    ((i * 7 + j * 13) % 50 + 1).to_string()
-                } else {
-                    "-9999".into()
-                }
-            })
-            .collect();
-        text.push_str(&row.join(" "));
-        text.push('\n');
-    }
-    std::fs::write(&asc, text).expect("grid");
+    write_asc(&asc, 21, 10.0, |i, j| {
+        (j <= 10 || i == 15).then(|| ((i * 7 + j * 13) % 50 + 1) as f64)
+    });
     let plan = dir.path().join("p.json");
     let args = [
         "tiles",
@@ -670,25 +672,9 @@ fn a_tile_of_one_row_of_samples_is_left_out_with_a_warning() {
 fn a_tile_of_voids_is_left_out_of_the_plan() {
     let dir = tempfile::tempdir().expect("tempdir");
     let asc = dir.path().join("v.asc");
-    let n = 60;
-    let mut text = format!("ncols {n}\nnrows {n}\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n");
-    for r in 0..n {
-        let row: Vec<String> = (0..n)
-            .map(|c| {
-                if r < 30 && c < 30 {
-                    "-9999".to_string()
-                } else {
-                    format!(
-                        "{:.2}",
-                        100.0 + 20.0 * ((r as f64) / 7.0).sin() * ((c as f64) / 5.0).cos()
-                    )
-                }
-            })
-            .collect();
-        text.push_str(&row.join(" "));
-        text.push('\n');
-    }
-    std::fs::write(&asc, text).expect("grid");
+    write_asc(&asc, 60, 30.0, |r, c| {
+        (r >= 30 || c >= 30).then(|| 100.0 + 20.0 * ((r as f64) / 7.0).sin() * ((c as f64) / 5.0).cos())
+    });
     let plan = dir.path().join("p.json");
     let args = [
         "tiles",
