@@ -493,27 +493,61 @@ pub fn per_triangle_hierarchy(tin: &Tin, triangle_regions: &RegionTable) -> Hier
 
 /// `h` with every node's regions replaced by conservative ones ([`occlusion::conservative`]): the thesis' run-time
 /// test over them never culls a visible triangle. Computed from the hierarchy's own mesh and circles (widened to
-/// cover their f32 storage), so it applies to any hierarchy, crystal or not.
+/// cover their f32 storage), so it applies to any hierarchy, crystal or not. The proof needs every point of a node
+/// inside its circle, which a file does not promise (its circles are data): a circle that misses a vertex of its
+/// node is replaced, here and in the result, by one computed from the vertices. With fewer than 3 sectors a sector's
+/// wedge is not convex (the proof's barrier needs `cos w > 0`), so no region is made.
 pub fn conservative_hierarchy(h: &Hierarchy) -> Hierarchy {
     let positions: Vec<glam::DVec3> = h.mesh.positions.iter().map(|&p| glam::DVec3::from_array(p)).collect();
     let order: Vec<u32> = (0..h.mesh.triangles.len() as u32).collect();
     let [ox, oy, oz] = h.origin;
-    let shapes: Vec<occlusion::NodeShape> = h
+    let mut out = h.clone();
+    let circles: Vec<(glam::DVec2, f64)> = h
         .nodes
         .iter()
-        .map(|n| {
+        .zip(out.nodes.iter_mut())
+        .map(|(n, stored)| {
             let centre = glam::DVec2::new(ox + f64::from(n.centre[0]), oy + f64::from(n.centre[1]));
             // The world centre is rounded once (relative error ε): grow the radius by far more.
             let slack = 1e-12 * (centre.x.abs() + centre.y.abs()) + 1e-9;
-            occlusion::NodeShape {
-                triangles: &order[n.triangles[0] as usize..n.triangles[1] as usize],
-                centre,
-                radius: f64::from(n.radius) + slack,
+            let radius = f64::from(n.radius) + slack;
+            let points: Vec<glam::DVec2> = h.mesh.triangles[n.triangles[0] as usize..n.triangles[1] as usize]
+                .iter()
+                .flatten()
+                .map(|&v| positions[v as usize].truncate())
+                .collect();
+            // Inside, the computed distance grown for its own rounding (a built file's circles pass: their slack
+            // above is far more).
+            if points.iter().all(|p| p.distance(centre) * (1.0 + 1e-15) <= radius) {
+                return (centre, radius);
+            }
+            match tin::bounding_circle_of_points(&points) {
+                Some(c) => {
+                    (stored.centre, stored.radius) = stored_circle(&c, h.origin);
+                    let slack = 1e-12 * (c.centre.x.abs() + c.centre.y.abs()) + 1e-9;
+                    (c.centre, c.radius * (1.0 + 1e-12) + slack)
+                }
+                None => (centre, radius),
             }
         })
         .collect();
+    let shapes: Vec<occlusion::NodeShape> = h
+        .nodes
+        .iter()
+        .zip(&circles)
+        .map(|(n, &(centre, radius))| occlusion::NodeShape {
+            triangles: &order[n.triangles[0] as usize..n.triangles[1] as usize],
+            centre,
+            radius,
+        })
+        .collect();
+    if h.sectors < 3 {
+        for node in &mut out.nodes {
+            node.regions.clear();
+        }
+        return out;
+    }
     let regions = occlusion::conservative_regions(&positions, &h.mesh.triangles, &shapes, h.sectors);
-    let mut out = h.clone();
     for (node, rows) in out.nodes.iter_mut().zip(regions) {
         node.regions = rows
             .into_iter()

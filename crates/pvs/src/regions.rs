@@ -4,10 +4,14 @@
 //!
 //! **Proof.** The conservative region of node `N` in sector `i` is a set of cameras `c` hidden from every point `p`
 //! of `N` whose direction `c − p` lies in sector `i` (theorem in `occlusion::conservative`; its f32 storage only
-//! shrinks it). In the sector's plane `(t, z) = (r_i · xy, z)` it is `{t > t0, z < h(t)}` with `h` concave, a convex
-//! set closed downwards, and the map from 3-D to `(t, z)` is linear: so the cell box lies in it if its four top
-//! corners do (every point of the box is a convex combination of corners and lies below a top one), tested with the
-//! strict [`cull::StoredRegion::contains`]. For `p` in `N`'s bounding circle `(m, r)` and `c` in the cell's circle
+//! shrinks it). In the sector's plane `(t, z) = (r_i · xy, z)` it is `{t > t0, z < h(t)}` with `h` piecewise linear
+//! (its stored points, then its tail), a set closed downwards, and the map from 3-D to `(t, z)` is linear: the box's
+//! points have `t` in `[t_lo, t_hi]`, the least and greatest `t` of its corners, and `z` at most its top `z_top`. The
+//! box lies in the region if `t_lo > t0` and `z_top < h(t)` for every `t` in `[t_lo, t_hi]`; `h` being linear between
+//! its vertices (not concave: a union of half-planes joins a falling line to a later rising one, a V), its least value
+//! on the interval is at an end or at a vertex inside it. So the four top corners and every region vertex with `t`
+//! strictly between `t_lo` and `t_hi` are tested, with the strict [`cull::StoredRegion::contains`] (which evaluates
+//! `h` in f64 from the stored f32 points, the same value at a vertex as on either side of it). For `p` in `N`'s bounding circle `(m, r)` and `c` in the cell's circle
 //! `(m_c, r_c)` (`c − p` then lies in the disc of radius `r + r_c` around `m_c − m`), the direction of `c − p` is within
 //! `asin((r + r_c) / |m_c − m|)` of the azimuth of `m_c − m`; the culler's own interval test ([`cull::for_each_sector_in`],
 //! closed interval, widened by a relative 1e-12) visits every sector it may fall in. A cell whose circle meets the
@@ -57,6 +61,16 @@ pub fn hidden_by_regions(h: &Hierarchy, index: usize, cell: &Box3) -> bool {
             return false;
         };
         let [rx, ry] = h.sector_direction(sector);
-        corners.iter().all(|c| region.contains(rx * c[0] + ry * c[1], z))
+        let ts = corners.map(|c| rx * c[0] + ry * c[1]);
+        let (t_lo, t_hi) = (
+            ts.iter().copied().fold(f64::INFINITY, f64::min),
+            ts.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        );
+        // The corners, then every vertex of the boundary between them: `h` is piecewise linear but not concave.
+        ts.iter().all(|&t| region.contains(t, z))
+            && region.points.iter().all(|p| {
+                let t = f64::from(p[0]);
+                !(t_lo < t && t < t_hi) || region.contains(t, z)
+            })
     })
 }

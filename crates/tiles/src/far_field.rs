@@ -6,10 +6,12 @@
 //! first in row-major order) at that sample's position, lowered by the tiles' error bound `E`. Every tile's TIN
 //! reproduces every sample within `E` (its simplification stops at `E`; its sides are simplified to `E`,
 //! [`crate::boundary`]), so the merged terrain at that position is at least `z_min − E`: each far-field point lies on
-//! or below the terrain. A horizon computed over points on or below the terrain is on or below the horizon the
-//! terrain itself casts (a lower point subtends a smaller elevation angle from every eye), so regions built from
-//! it claim no more occlusion than the terrain gives. The halo's samples are lowered by `E` for the same reason
-//! ([`crate::job`]). Leaving points out only lowers horizons further, so any subset of these points is as safe.
+//! or below the terrain. A horizon vertex found among points on or below the terrain is never higher than the
+//! terrain at its position (a lower point subtends a smaller elevation angle from every eye). The halo's samples are
+//! lowered by `E` for the same reason ([`crate::job`]). This bounds the horizons' elevation, not the regions built
+//! from them: a region also depends on how far its horizon lies (its left bound), which a lower far field can bring
+//! nearer, and with `--undersampling` the edges between these points are chords that can pass above the terrain. The
+//! regions serve the thesis' test, which is not conservative in any case; the safe culler reads only the mesh.
 //!
 //! ## Coarser with distance: a min-pyramid
 //!

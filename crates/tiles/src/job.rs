@@ -6,8 +6,9 @@
 //!    shared vertex has bit-identical coordinates in both tiles.
 //! 2. **Horizons.** Every vertex's horizons are swept over the tile's vertices, the halo (every valid sample within
 //!    `halo` samples outside the tile, lowered by the error bound) and the far-field points outside the halo
-//!    ([`crate::far_field`]). Halo and far field lie on or below the merged terrain, so no horizon rises above the
-//!    terrain's own.
+//!    ([`crate::far_field`]). Halo and far field lie on or below the merged terrain, so a horizon vertex found among
+//!    them is never higher than the terrain there (the regions built from them are not bounded by an untiled
+//!    build's: see [`crate::far_field`]).
 //! 3. **Hierarchy.** The grouping of the plan's parameters (crystals and their merge hierarchy, or a quadtree) over the
 //!    tile's triangles, exactly as an untiled build ([`pipeline::build_from_regions`]).
 //!

@@ -14,8 +14,9 @@
 //! **Safety.** The default culler (`safe`) decides at run time from the mesh alone, so the merged hierarchy culls
 //! as safely as any other: its proof needs only that every node's range holds the triangles its bounds cover, which
 //! [`cull::Hierarchy::check_invariants`] and the merge's circles (they only grow) give. The stored regions (the
-//! thesis' test) come from horizons over points on or below the terrain, so tiling never makes them claim more
-//! than an untiled build's horizons over the same terrain would.
+//! thesis' test, not conservative in any case) come from horizons over points on or below the terrain, whose
+//! vertices are never higher than the terrain there; they may still differ from an untiled build's either way (see
+//! [`crate::far_field`]).
 #![warn(missing_docs)]
 
 pub mod boundary;
