@@ -3,7 +3,7 @@
 sets (log scale), and seconds per cell, against the ray-space resolution, per cell size and height band.
 
 Reads the JSON reports in docs/pvs/ (one `tincull pvs FILE.tch --check N --cell-size S --above-ground H0,H1
---resolution 16,32,64,128,256 --json` per file, named MESH_SIZE_H0,H1.json) and writes docs/pvs.png. Needs
+--resolution 16,64,256 --view-seed 1 --json` per file, named MESH_SIZE_H0,H1.json) and writes docs/pvs.png. Needs
 matplotlib (`scripts/charts` installs it into .venv-notebooks):
 
     .venv-notebooks/bin/python scripts/pvs_chart.py
