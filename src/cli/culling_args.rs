@@ -28,7 +28,7 @@ pub struct SafeArgs {
     pub occluder_budget: Option<usize>,
     /// Safe culler: most work units per cull (nodes tested while refining, occluder edges and chains written; a
     /// count, so culls stay reproducible). Once spent, the nodes still queued are tested against the horizon as it
-    /// stands, largest first, split up to N/8 more times and otherwise drawn whole: the cost of a cull is bounded
+    /// stands, largest first, split at most ⌈N/8⌉ more times and otherwise drawn whole: the cost of a cull is bounded
     /// whatever the view, at the price of drawing more in views that see much terrain (never of culling a visible
     /// triangle). The default caps views that see most of a 1M-vertex terrain (from the sky) and is not reached by
     /// smaller or less open views; about 5000 kept a cull of a 1M-vertex terrain near 1 ms, drawing much more
@@ -37,8 +37,9 @@ pub struct SafeArgs {
     pub work_budget: Option<usize>,
     /// Safe culler: a visible node whose circle spans fewer than N horizon columns is drawn whole instead of being
     /// refined down to its patches, and writes only its two crests (bottleneck paths of its TIN edges, across x and
-    /// across y) as occluders: cheaper culls of views that see much distant terrain, drawing more. 0 (the default)
-    /// refines every visible node.
+    /// across y) as occluders: cheaper culls of views that see much distant terrain, drawing more. Only inner nodes
+    /// of at most 2048 triangles have crests and can be drawn so; larger ones and patches are refined as usual. 0
+    /// (the default) refines every visible node.
     #[arg(long, value_name = "N")]
     pub coarse_columns: Option<usize>,
 }

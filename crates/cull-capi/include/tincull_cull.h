@@ -98,7 +98,9 @@ typedef struct TcStats {
    */
   uint32_t nodes_tested;
   /**
-   * Nodes never tested because an ancestor was culled.
+   * Nodes never tested: below a culled node, or below a node drawn whole without being refined (the safe culler's
+   * coarse nodes, and its nodes drawn once the work budget is spent). With `nodes_tested`, the nodes of the tree the
+   * culler walks: the hierarchy's, and for `safe` also the patches below its leaves.
    */
   uint32_t nodes_skipped;
   /**
@@ -201,7 +203,7 @@ int32_t tc_load_buffer(const uint8_t *data,
 /**
  * Culls from a camera at `eye` (3 doubles, world coordinates in metres) looking at azimuth `yaw_deg` (degrees,
  * counter-clockwise from +x) with a horizontal field of view of `fov_deg` degrees (in (0, 360]; 360 looks all
- * around; the yaw is then ignored, where `tincull cull` refuses a `--yaw`), with the ranges of `tincull cull --eye
+ * around; the yaw is then ignored, though it must be finite, where `tincull cull` refuses a `--yaw`), with the ranges of `tincull cull --eye
  * x,y,z --yaw Y --fov F`. Writes the ranges to draw, ascending and merged,
  * into `ranges[0..*count]`. When `capacity` is too small nothing is written, `*count` receives the number needed
  * and the result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough). Any finite eye is culled
@@ -220,12 +222,14 @@ int32_t tc_cull(struct TcCuller *culler,
                 size_t *count);
 
 /**
- * The counters of the last [`tc_cull`] on `culler` (zeros before the first).
+ * The counters of the last [`tc_cull`] on `culler` that culled (zeros before the first): a call refused before culling
+ * (`TC_ERR_NULL`, `TC_ERR_INVALID`) leaves them as they were; one that returned `TC_ERR_BUFFER_TOO_SMALL` culled.
  *
  * # Safety
  * `culler` comes from a `tc_load_*` call; `out` is writable.
  */
-int32_t tc_stats(const struct TcCuller *culler, struct TcStats *out);
+int32_t tc_stats(const struct TcCuller *culler,
+                 struct TcStats *out);
 
 /**
  * What the hierarchy behind `culler` holds ([`TcInfo`]).

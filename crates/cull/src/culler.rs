@@ -36,7 +36,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use crate::hierarchy::Hierarchy;
 #[cfg(doc)]
 use crate::hierarchy::StoredRegion;
-use crate::sector::{azimuth, for_each_sector_in};
+use crate::sector::{azimuth, circle_outside_view, for_each_sector_in};
 
 /// A camera: position in world coordinates and an optional horizontal view restriction.
 ///
@@ -117,9 +117,19 @@ impl Camera {
     }
 
     /// The view restriction every culler applies: `(yaw, half the field of view)` when `hfov` is in `(0, 2π)` and
-    /// `yaw` is finite, else none (all around).
+    /// `yaw` is finite, else none (all around). A yaw beyond one turn (`|yaw| > 2π`) is first reduced to `[−π, π]`
+    /// through its sine and cosine, whose argument reduction is exact: subtracting a direction from a yaw of 1e17
+    /// rad directly would lose every digit of the difference (and then hide what lies straight ahead).
     pub fn frustum(&self) -> Option<(f64, f64)> {
-        (self.hfov > 0.0 && self.hfov < TAU && self.yaw.is_finite()).then_some((self.yaw, self.hfov * 0.5))
+        if !(self.hfov > 0.0 && self.hfov < TAU && self.yaw.is_finite()) {
+            return None;
+        }
+        let yaw = if self.yaw.abs() <= TAU {
+            self.yaw
+        } else {
+            self.yaw.sin().atan2(self.yaw.cos())
+        };
+        Some((yaw, self.hfov * 0.5))
     }
 }
 
@@ -128,7 +138,9 @@ impl Camera {
 pub struct CullStats {
     /// Nodes whose test ran.
     pub nodes_tested: u32,
-    /// Nodes never tested because an ancestor was culled.
+    /// Nodes never tested: below a culled node, or below a node drawn whole without being refined (the safe culler's
+    /// coarse nodes, and its nodes drawn once the work budget is spent). With `nodes_tested`, the nodes of the tree the
+    /// culler walks: the hierarchy's, and for `safe` also the patches below its leaves.
     pub nodes_skipped: u32,
     /// Nodes culled by the occlusion test.
     pub culled_by_occlusion: u32,
@@ -461,13 +473,10 @@ impl Culler {
         // asin(r / d) ≤ π/2; rounding of r / d can only be compensated by the strict tests below, so widen slightly.
         let half = (radius / dist2.sqrt()).min(1.0).asin() * (1.0 + 1e-12);
         let to_eye = azimuth(dx, dy);
-        if let Some((yaw, half_fov)) = frustum {
-            // Directions from the eye to the node's points lie within the opposite interval.
-            let to_node = to_eye + PI;
-            let gap = (to_node - yaw + PI).rem_euclid(TAU) - PI;
-            if gap.abs() > half_fov + half {
-                return Verdict::CulledByFrustum;
-            }
+        if let Some((yaw, half_fov)) = frustum
+            && circle_outside_view([-dx, -dy], radius, yaw, half_fov)
+        {
+            return Verdict::CulledByFrustum;
         }
         let base = index * self.sectors as usize;
         let hidden = for_each_sector_in(self.sectors, to_eye, half, |sector| {

@@ -7,7 +7,8 @@
 //! - **The grid.** The root square of the quadtree (`crates/quadtree`): lower-left corner the mesh's lowest x,y,
 //!   side the larger extent; `n = 2^d` cells a side with `d` the hierarchy's stored depth (its leaves are these
 //!   cells), at most [`MAX_GRID_DEPTH`]. Over a crystal hierarchy (no cells) `d` is the depth at which there are at
-//!   least as many cells as leaf groups; the culler works on both, only the quadtree is Lloyd & Egbert's.
+//!   least as many cells as leaf groups; `d` is at least 1 (2 × 2 cells) in both. The culler works on both, only the
+//!   quadtree is Lloyd & Egbert's.
 //! - **Occluders (§4.2).** For every cell edge (a segment of a grid line between two neighbouring grid corners,
 //!   shared by the two cells it separates), the TIN's exact profile along it: the edge cuts every triangle it
 //!   crosses in a chord on which the height is linear, so the profile is piecewise linear with breakpoints where the
@@ -417,7 +418,10 @@ impl LloydEgbertCuller {
                     0.5 * (node.lo[1] + node.hi[1]) - eye[1],
                 ];
                 let radius = 0.5 * (node.hi[0] - node.lo[0]).hypot(node.hi[1] - node.lo[1]);
-                let radius = radius * (1.0 + 1e-12) + 1e-12 * (centre[0].abs() + centre[1].abs()) + 1e-9;
+                // Grown by more than the rounding of the box's centre and of its offset from the eye (a few ulps of
+                // the world coordinates: the offset's magnitude plus the eye's bounds them).
+                let world = centre[0].abs() + centre[1].abs() + eye[0].abs() + eye[1].abs();
+                let radius = radius * (1.0 + 1e-12) + 1e-12 * world + 1e-9;
                 if circle_outside_view(centre, radius, yaw, half_fov) {
                     out.stats.culled_by_frustum += 1;
                     continue;

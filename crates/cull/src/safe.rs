@@ -92,8 +92,10 @@
 //! hierarchy and its halving trees), at most `⌈B / 8⌉` splits pushing `c` each, and every pushed node tested once: at
 //! most `(1 + c) B + c ⌈B / 8⌉ + r` nodes tested (`r` roots; `3.25 B + 2 + r` with `c = 2`), and at most `B` edges and
 //! chains written. The verdicts "hidden" are the
-//! same theorem's; with a spent budget the culler draws more, never less, than without one (its horizon is never
-//! higher when any node is tested).
+//! same theorem's; without coarse nodes, with a spent budget the culler draws more, never less, than without one (its
+//! horizon is never higher when any node is tested). With coarse nodes neither draw list need hold the other: a node
+//! that the cull without a budget draws whole as coarse may be split in the budget phase and some of its children
+//! culled.
 //!
 //! Every "hidden" is thus an instance of the theorem, whatever the order, the tree or the parameters; the order and
 //! the parameters only decide how much is culled. With a horizontal field of view below 360°, a node entirely
@@ -139,7 +141,8 @@ pub struct SafeParams {
     /// (split at most `⌈B / 8⌉` times in all) and drawn whole unless hidden. A count, not a time, so culls are reproducible; see the module documentation.
     pub work_budget: usize,
     /// A visible inner node whose circle spans fewer than this many columns (about `radius · columns / distance`)
-    /// is drawn whole instead of refined, and writes its crests as occluders; 0 refines every visible node.
+    /// is drawn whole instead of refined, and writes its crests as occluders; 0 refines every visible node. Only inner
+    /// nodes of at most 2048 triangles have crests and can be drawn so; larger ones and patches are refined as usual.
     pub coarse_columns: usize,
 }
 

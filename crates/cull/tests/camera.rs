@@ -139,3 +139,44 @@ fn yaws_a_turn_apart_are_the_same_view() {
         }
     }
 }
+
+/// A camera built field by field with a yaw of many turns (radians) once hid what lies straight ahead, for every culler:
+/// the view test subtracted the node's direction from the yaw itself, and at `|yaw| ≈ 1e17` that difference keeps no
+/// digit (found by an audit). [`Camera::frustum`] now reduces such a yaw through its sine and cosine.
+#[test]
+fn a_yaw_of_many_turns_built_field_by_field_still_shows_what_lies_ahead() {
+    let tin = grid_tin(21, 200.0, DVec3::ZERO, |_, _| 0.0);
+    let (h, order) = hierarchy_of(&tin, 8, 0);
+    let locator = truth::Locator::new(&tin);
+    let eye = DVec3::new(100.0, 100.0, 2.0);
+    for yaw in [1e3, 1e6, 1e9, 1e12, 1e15, 1e17, -1e17, 1e300, -f64::MAX] {
+        let camera = Camera {
+            position: eye.to_array(),
+            yaw,
+            hfov: 1.0,
+        };
+        let (yaw_reduced, half) = camera.frustum().expect("a finite yaw and a field of view in (0, 2π)");
+        assert!(
+            yaw_reduced.abs() <= std::f64::consts::PI && half == 0.5,
+            "{yaw}: {yaw_reduced}"
+        );
+        // 50 m straight ahead on flat ground, in plain view.
+        let ahead = eye + DVec3::new(50.0 * yaw.cos(), 50.0 * yaw.sin(), -2.0);
+        let t = locator.locate(&tin, ahead.truncate()).expect("on the grid");
+        let i = order
+            .iter()
+            .position(|&o| o as usize == t)
+            .expect("every triangle ordered");
+        for method in [CullMethod::Safe, CullMethod::Thesis, CullMethod::LloydEgbert] {
+            let list = AnyCuller::new(&h, method).cull(&camera);
+            assert!(
+                list.mask(order.len())[i],
+                "{method:?}, yaw {yaw:e}: triangle {t} straight ahead culled"
+            );
+            assert!(
+                list.stats.culled_by_frustum > 0,
+                "{method:?}, yaw {yaw:e}: the view must leave something out"
+            );
+        }
+    }
+}

@@ -247,6 +247,12 @@ impl<'a> GroundTruth<'a> {
 /// truth of a view narrower than 360° is [`visible_triangles`] restricted to them (`eval --fov`, the viewer).
 pub fn in_view(tin: &Tin, eye: DVec3, yaw: f64, half: f64) -> Vec<bool> {
     use std::f64::consts::{PI, TAU};
+    // A yaw beyond one turn is reduced exactly first (through its sine and cosine), as `cull::Camera::frustum` does.
+    let yaw = if yaw.abs() <= TAU {
+        yaw
+    } else {
+        yaw.sin().atan2(yaw.cos())
+    };
     let inside = |p: DVec3| {
         let d = p - eye;
         if d.x == 0.0 && d.y == 0.0 {
