@@ -11,6 +11,11 @@
 //! | [`LloydEgbertCuller`] (`lloyd-egbert`) | [`lloyd_egbert`], cell-edge occluders over the same horizon | the same theorem, with occluders on or below the terrain's exact profile along the cell edges and the node's bounding box as occludee |
 //! | [`Culler`] (`thesis`) | [`culler`] | the thesis' test of the camera against the precomputed sector regions; not conservative unless the regions are (see `occlusion::conservative`) |
 //!
+//! Eyes below the ground: every verdict is about sight lines from an eye on or above the terrain. From under the
+//! surface a camera sees none of it, yet the cullers do not look for that case (this crate holds no point location in
+//! the TIN, to stay light) and return a draw list all the same; the `tincull` commands refuse such eyes with
+//! `truth::ground_heights`. A renderer keeps its camera above the ground, as it must to draw anything.
+//!
 //! In a renderer (the `pipeline` crate's documentation has a whole build and cull that runs):
 //!
 //! ```no_run

@@ -22,8 +22,14 @@ use glam::{DVec2, DVec3};
 use proptest::prelude::*;
 use tin::Tin;
 
+/// A TIN edge, by its two ends.
+type Edge = (DVec3, DVec3);
+
+/// An arc of azimuths: its centre and half-width (radians).
+type Arc = (f64, f64);
+
 /// The undirected edges of `tin`, each once.
-fn edges(tin: &Tin) -> Vec<(DVec3, DVec3)> {
+fn edges(tin: &Tin) -> Vec<Edge> {
     let mut keys: Vec<(u32, u32)> = tin
         .triangles()
         .iter()
@@ -44,7 +50,7 @@ fn cross(a: DVec2, b: DVec2) -> f64 {
 /// The least height of the segment `eye`–`p` above the terrain where its x,y projection meets one of `edges` (ends
 /// of the edge included), leaving out a stretch of a millionth of the segment at `p` (where it leaves `p`'s own
 /// triangle at clearance 0). `+inf` when it meets none.
-fn clearance(edges: &[(DVec3, DVec3)], eye: DVec3, p: DVec3) -> f64 {
+fn clearance(edges: &[Edge], eye: DVec3, p: DVec3) -> f64 {
     let (e, d) = (eye.truncate(), (p - eye).truncate());
     let mut least = f64::INFINITY;
     for &(a, b) in edges {
@@ -70,7 +76,7 @@ fn clearance(edges: &[(DVec3, DVec3)], eye: DVec3, p: DVec3) -> f64 {
 /// triangle's corners), or the whole circle when they come within a micrometre of surrounding it. Only edges whose arc
 /// meets a triangle's arc can cross a sight line to a point of the triangle; this filter is what keeps the brute force
 /// fast, and it only drops edges that no sight line to the triangle meets.
-fn arc(eye: DVec2, ps: &[DVec2]) -> (f64, f64) {
+fn arc(eye: DVec2, ps: &[DVec2]) -> Arc {
     let whole = (0.0, std::f64::consts::PI);
     let v: Vec<DVec2> = ps.iter().map(|&p| p - eye).collect();
     if v.iter().any(|d| d.length() < 1e-6) {
@@ -100,7 +106,7 @@ fn arc(eye: DVec2, ps: &[DVec2]) -> (f64, f64) {
 }
 
 /// The edges of `edges` (with their arcs from the eye) whose arc meets `within`, with a slack for rounding.
-fn edges_within(edges: &[((DVec3, DVec3), (f64, f64))], within: (f64, f64)) -> Vec<(DVec3, DVec3)> {
+fn edges_within(edges: &[(Edge, Arc)], within: Arc) -> Vec<Edge> {
     edges
         .iter()
         .filter(|(_, (c, h))| {
@@ -112,7 +118,7 @@ fn edges_within(edges: &[((DVec3, DVec3), (f64, f64))], within: (f64, f64)) -> V
 }
 
 /// The largest clearance found over triangle `t` seen from `eye`, and where.
-fn best_clearance(tin: &Tin, edges: &[(DVec3, DVec3)], eye: DVec3, t: usize) -> (f64, DVec3) {
+fn best_clearance(tin: &Tin, edges: &[Edge], eye: DVec3, t: usize) -> (f64, DVec3) {
     let c = tin.corners(t);
     let at = |l: [f64; 2]| {
         let (u, v) = (l[0].clamp(0.0, 1.0), l[1].clamp(0.0, 1.0));

@@ -148,7 +148,8 @@ pub struct ViewpointResult {
     pub eye: [f64; 3],
     /// View direction (degrees), when the field of view is below 360°.
     pub yaw_deg: Option<f64>,
-    /// Per method, in [`METHODS`] order (methods not evaluated are left out).
+    /// Per method, in [`METHODS`] order (methods not evaluated are left out): its name, its metrics, and its cull
+    /// time in nanoseconds (in the exported JSON, the third element of each `[name, metrics, ns]`).
     pub methods: Vec<(String, ViewMetrics, u64)>,
     /// `|V| / |A|`.
     pub visible_fraction: f64,

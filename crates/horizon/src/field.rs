@@ -310,13 +310,17 @@ impl HorizonField {
     }
 }
 
+/// Checks an undersampling radius as [`compute`] does: off (`None`) or a positive finite number of metres.
+pub fn check_undersampling_radius(radius: Option<f64>) -> Result<(), HorizonError> {
+    match radius {
+        Some(radius) if !(radius.is_finite() && radius > 0.0) => Err(HorizonError::InvalidRadius { radius }),
+        _ => Ok(()),
+    }
+}
+
 /// Checks the input of [`compute`] and [`brute_force`].
 fn validate(tin: &Tin, opts: &HorizonOptions) -> Result<(), HorizonError> {
-    if let Some(radius) = opts.undersampling_radius
-        && !(radius.is_finite() && radius > 0.0)
-    {
-        return Err(HorizonError::InvalidRadius { radius });
-    }
+    check_undersampling_radius(opts.undersampling_radius)?;
     let limit = NO_HORIZON as usize - 1;
     if tin.num_vertices() > limit {
         return Err(HorizonError::TooManyVertices {

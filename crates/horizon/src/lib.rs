@@ -24,8 +24,8 @@ pub mod undersampling;
 
 pub use error::HorizonError;
 pub use field::{
-    EdgeHorizon, HorizonField, HorizonOptions, HorizonPoint, Progress, SectorHorizon, brute_force, compute,
-    projection_origin,
+    EdgeHorizon, HorizonField, HorizonOptions, HorizonPoint, Progress, SectorHorizon, brute_force,
+    check_undersampling_radius, compute, projection_origin,
 };
 pub use sector::{MAX_TOTAL_SUBSECTORS, SectorConfig, SectorGeometry, Wedge};
 

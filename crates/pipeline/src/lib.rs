@@ -13,6 +13,9 @@
 //! Besides [`build`] it owns the content for people and other tools ([`export`]: the grouped OBJ + MTL and the
 //! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
 //!
+//! The crates whose types its functions take and return are re-exported, so that a library user needs only this one
+//! dependency: `pipeline::tin` (the terrain, its readers) and `pipeline::cull` (the hierarchy, cameras, cullers).
+//!
 //! From a mesh to a `.tch` file and a cull, as `tincull build` and `tincull cull` do it (the file's bytes are
 //! [`cull::Hierarchy::to_bytes`]; [`cull::Hierarchy::load`] reads them back):
 //!
@@ -46,6 +49,9 @@
 pub mod export;
 pub mod gltf;
 pub mod palette;
+
+pub use cull;
+pub use tin;
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -111,10 +117,11 @@ impl Default for BuildParams {
 }
 
 impl BuildParams {
-    /// Checks the values (the sectors and subsectors, the grouping's parameters), as [`build`] does before any work:
-    /// a tile plan checks them before its jobs run.
+    /// Checks the values (the sectors and subsectors, the undersampling radius, the grouping's parameters), as
+    /// [`build`] does before any work: a tile plan checks them before its jobs run.
     pub fn validate(&self) -> Result<()> {
         SectorConfig::new(self.sectors, self.subsectors)?;
+        horizon::check_undersampling_radius(self.undersampling)?;
         match &self.grouping {
             Grouping::Crystal => self.crystal.validate()?,
             Grouping::Quadtree(q) => q.validate()?,

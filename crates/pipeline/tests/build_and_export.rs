@@ -1,5 +1,6 @@
 //! The pipeline on a small synthetic terrain: the build's figures agree with its hierarchy, the JSON form round
-//! trips, and the grouped OBJ has one group per leaf with its own material.
+//! trips, the grouped OBJ has one group per leaf with its own material, parameters are checked as `build` checks them,
+//! and the crates of the API are reachable through this one.
 
 use std::path::Path;
 
@@ -137,4 +138,32 @@ fn an_obj_named_like_its_materials_is_refused() {
     let e = mtl_path(Path::new("same.mtl")).expect_err("would overwrite its own materials");
     assert!(e.to_string().contains("same.mtl"), "{e}");
     assert!(mtl_path(Path::new("noext")).is_ok());
+}
+
+#[test]
+fn validate_refuses_what_build_refuses() {
+    for radius in [f64::NAN, -1.0, 0.0, f64::INFINITY] {
+        let params = BuildParams {
+            undersampling: Some(radius),
+            ..BuildParams::default()
+        };
+        let err = params
+            .validate()
+            .expect_err("a radius that is not a positive number of metres");
+        assert!(err.to_string().contains("undersampling radius"), "{err}");
+        let tin = synth_tin(&SynthOptions::new(50, 1)).expect("a small synthetic terrain");
+        assert!(build(&tin, &params, None).is_err(), "build of radius {radius}");
+    }
+    assert!(BuildParams::default().validate().is_ok());
+}
+
+#[test]
+fn a_user_of_pipeline_alone_reaches_tin_and_cull() {
+    let options = pipeline::tin::SynthOptions::new(50, 1);
+    let tin: pipeline::tin::Tin = pipeline::tin::synth_tin(&options).expect("a small synthetic terrain");
+    let built = build(&tin, &BuildParams::default(), None).expect("build");
+    let culler = pipeline::cull::AnyCuller::new(&built.hierarchy, pipeline::cull::CullMethod::default());
+    let eye = [0.0, 0.0, tin.bbox().max.z + 10.0];
+    let camera = pipeline::cull::Camera::all_around(eye);
+    assert!(culler.cull(&camera).stats.triangles_drawn > 0);
 }
