@@ -387,6 +387,44 @@ fn a_geotiff_mask_is_applied() {
     assert_eq!(v["dem"]["voids"], 1, "{v}");
 }
 
+/// `cull` reports the safe culler's work units and occluder edges (JSON and text), so a user tuning `--work-budget`
+/// sees when the budget binds; the other methods report none.
+#[test]
+fn cull_reports_the_work_it_spent_against_the_budget() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("j.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "-q"]);
+    let eye = ["--eye", "10000,12000,2", "--above-ground"];
+    let free = json(&[&["cull", s(&tch)][..], &eye, &["--json"]].concat());
+    let (work, edges) = (
+        free["work"].as_u64().expect("work"),
+        free["occluder_edges"].as_u64().expect("edges"),
+    );
+    assert!(work > 0 && work < 200_000 && edges > 0 && edges < work, "{free}");
+    let said = String::from_utf8_lossy(&ok(&[&["cull", s(&tch)][..], &eye].concat()).stdout).into_owned();
+    assert!(
+        said.contains(&format!("{work} work units of 200000, {edges} occluder edges written")),
+        "{said}"
+    );
+    // A budget of 5 units is spent exactly, and the text says so.
+    let tight = json(&[&["cull", s(&tch)][..], &eye, &["--work-budget", "5", "--json"]].concat());
+    assert_eq!(tight["work"], 5, "{tight}");
+    let said = ok(&[&["cull", s(&tch)][..], &eye, &["--work-budget", "5"]].concat()).stdout;
+    assert!(
+        String::from_utf8_lossy(&said).contains("5 work units of 5 (the budget: spent)"),
+        "{}",
+        String::from_utf8_lossy(&said)
+    );
+    let thesis = json(&[&["cull", s(&tch)][..], &eye, &["--method", "thesis", "--json"]].concat());
+    assert_eq!(
+        (&thesis["work"], &thesis["occluder_edges"]),
+        (&0.into(), &0.into()),
+        "{thesis}"
+    );
+    let said = ok(&[&["cull", s(&tch)][..], &eye, &["--method", "thesis"]].concat()).stdout;
+    assert!(!String::from_utf8_lossy(&said).contains("work units"));
+}
+
 /// `cull --above-ground` (and `eval --eyes --above-ground`) reads z as a height above the terrain: the same cull as
 /// with the world z it reports, and an eye off the terrain is an error naming it.
 #[test]

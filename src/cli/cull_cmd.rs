@@ -91,7 +91,8 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     args.method
         .check(&h)
         .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
-    let culler = AnyCuller::with_params(&h, args.method, args.safe.params()?);
+    let params = args.safe.params()?;
+    let culler = AnyCuller::with_params(&h, args.method, params);
     let mut eyes = match (&args.eye, &args.eyes) {
         (Some(e), _) => Eyes::given(*e),
         (None, Some(path)) => Eyes::read(path)?,
@@ -118,12 +119,30 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
                 "nodes_skipped": s.nodes_skipped,
                 "culled_by_occlusion": s.culled_by_occlusion,
                 "culled_by_frustum": s.culled_by_frustum,
+                "work": s.work,
+                "occluder_edges": s.occluder_edges,
                 "cull_ns": ns,
             }))?;
         } else {
+            // The safe culler's work units against its budget: a user tuning --work-budget sees when it binds.
+            let work = if args.method == CullMethod::Safe {
+                let spent = if s.work as usize >= params.work_budget {
+                    " (the budget: spent)"
+                } else {
+                    ""
+                };
+                format!(
+                    "; {} work units of {}{spent}, {} written",
+                    s.work,
+                    params.work_budget,
+                    count(s.occluder_edges as usize, "occluder edge")
+                )
+            } else {
+                String::new()
+            };
             out.say(format!(
                 "eye {}: draw {} of {} in {}; {} tested, of which {} hidden and {} outside the view (culled \
-                 with their descendants); {:.2} µs",
+                 with their descendants){work}; {:.2} µs",
                 super::output::point(eye),
                 s.triangles_drawn,
                 count((s.triangles_drawn + s.triangles_culled) as usize, "triangle"),
