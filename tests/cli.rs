@@ -662,6 +662,27 @@ fn bad_input_gives_clear_errors() {
     );
     fails_with(&["info", s(&void)], "void.asc: cannot triangulate");
     fails_with(&["cull", "/no/such.tch", "--eye", "0,0,0"], "such.tch");
+    // A device given as an input is refused, not read: `/dev/zero` read whole would take all memory.
+    let tch = dir.path().join("j2k.tch");
+    ok(&["build", s(&mesh("jacksboro-2k.obj")), "-o", s(&tch), "-q"]);
+    for args in [
+        vec!["info", "/dev/zero"],
+        vec!["build", "/dev/zero", "-o", "x.tch"],
+        vec!["cull", "/dev/zero", "--eye", "0,0,0"],
+        vec!["cull", s(&tch), "--eyes", "/dev/zero"],
+        vec!["eval", s(&tch), "--eyes", "/dev/zero"],
+        vec![
+            "build",
+            s(&mesh("jacksboro-2k.obj")),
+            "-o",
+            "x.tch",
+            "--config",
+            "/dev/zero",
+        ],
+        vec!["tiles", "build", "/dev/zero", "--all"],
+    ] {
+        fails_with(&args, "/dev/zero: a character device, not a file");
+    }
     fails_with(
         &["cull", s(&mesh("jacksboro-2k.obj")), "--eye", "0,0,0"],
         "jacksboro-2k.obj is an OBJ mesh, not a tincull hierarchy: build one with `tincull build",

@@ -237,7 +237,7 @@ fn a_hierarchy_is_not_taken_for_a_mesh() {
     std::fs::create_dir(&folder).expect("mkdir");
     fails_with(
         &["build", s(&folder), "-o", s(&dir.path().join("z.tch"))],
-        "Is a directory",
+        "folder.tch: a directory, not a file",
     );
 }
 

@@ -67,7 +67,7 @@ impl ParamArgs {
     /// The parameters of a `--config` TOML file (keys as the long options of these parameters, with underscores;
     /// any other key is refused).
     pub fn read(path: &Path) -> Result<ParamArgs> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let text = infile::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
         toml::from_str(&text).with_context(|| format!("{}: invalid parameters", path.display()))
     }
 

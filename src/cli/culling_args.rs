@@ -136,7 +136,7 @@ impl Eyes {
     /// Reads a file of eye positions: one `x,y,z` a line; `#` starts a comment (to the end of the line), blank lines
     /// are skipped, and a leading byte-order mark is ignored.
     pub fn read(path: &Path) -> Result<Eyes> {
-        let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let bytes = infile::read(path).with_context(|| format!("cannot read {}", path.display()))?;
         let text = String::from_utf8(bytes).map_err(|_| {
             anyhow::anyhow!(
                 "{}: a binary file, not a text file of eye positions (one x,y,z a line)",

@@ -241,7 +241,7 @@ const PVS_CELLS_LISTED: usize = 20;
 
 /// Describes a `.pvs` file: the hierarchy it refers to, its parameters and every viewcell's PVS.
 fn pvs_file(path: &std::path::Path, out: Output) -> Result<()> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = infile::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let file = pvs::PvsFile::from_bytes(&bytes).with_context(|| format!("{}", path.display()))?;
     let nt = u64::from(file.triangles);
     let sizes: Vec<u64> = file

@@ -307,7 +307,7 @@ fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path) -> Option<String> {
 /// The extents (x, y, z) of the `v` lines of an OBJ file, for [`y_up_hint`] once its import failed; None when the
 /// file cannot be read or has no vertex.
 fn read_extents(path: &std::path::Path) -> Option<[f64; 3]> {
-    let text = std::fs::read(path).ok()?;
+    let text = infile::read(path).ok()?;
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for line in text.split(|&b| b == b'\n') {
         let Some(rest) = line.strip_prefix(b"v ") else { continue };

@@ -194,7 +194,7 @@ impl Hierarchy {
     /// other way, [`Hierarchy::to_bytes`] gives what to write.
     pub fn load(path: impl AsRef<Path>) -> Result<Hierarchy, HierarchyError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| HierarchyError::Io {
+        let bytes = infile::read(path).map_err(|source| HierarchyError::Io {
             path: path.to_path_buf(),
             source,
         })?;

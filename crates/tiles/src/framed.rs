@@ -42,7 +42,7 @@ pub(crate) fn decode<T: DeserializeOwned>(
 
 /// Reads the file at `path` whole.
 pub(crate) fn read(path: &Path) -> Result<Vec<u8>, TilesError> {
-    std::fs::read(path).map_err(|source| TilesError::Io {
+    infile::read(path).map_err(|source| TilesError::Io {
         path: path.to_path_buf(),
         source,
     })

@@ -477,11 +477,7 @@ pub fn make_mesh_plan(
 impl Plan {
     /// Reads and checks a plan file.
     pub fn load(path: &Path) -> Result<Plan, TilesError> {
-        let bytes = std::fs::read(path).map_err(|source| TilesError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Plan::parse(bytes, path)
+        Plan::parse(crate::framed::read(path)?, path)
     }
 
     /// Checks and parses the content of a plan file; `path` names it in errors.

@@ -470,7 +470,7 @@ fn parse_lines(text: &[u8], path: &Path) -> Result<Parsed> {
 /// Reads an OBJ file into a TIN (see the module documentation for the two modes and every check).
 pub fn read_obj(path: impl AsRef<Path>, opts: &ObjImportOptions) -> Result<(Tin, ObjImportReport)> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| TinError::io(path, e))?;
+    let bytes = infile::read(path).map_err(|e| TinError::io(path, e))?;
     import(&bytes, path, opts)
 }
 

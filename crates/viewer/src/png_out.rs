@@ -43,7 +43,7 @@ pub fn read_png(path: &Path) -> Result<RgbaImage> {
         path: path.to_path_buf(),
         message,
     };
-    let file = std::fs::File::open(path).map_err(|source| ViewerError::Io {
+    let file = infile::open(path).map_err(|source| ViewerError::Io {
         path: path.to_path_buf(),
         source,
     })?;

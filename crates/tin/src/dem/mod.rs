@@ -412,7 +412,7 @@ fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
 
 /// Reads a whole file, naming it in the error.
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| TinError::io(path, e))
+    infile::read(path).map_err(|e| TinError::io(path, e))
 }
 
 /// Scales the heights (voids stay NaN) and builds the grid, naming the file in any error.
@@ -459,7 +459,7 @@ fn scale(z: &mut [f64], opts: &DemOptions) {
 
 /// Opens a file, naming it in the error.
 fn open(path: &Path) -> Result<std::fs::File> {
-    std::fs::File::open(path).map_err(|e| TinError::io(path, e))
+    infile::open(path).map_err(|e| TinError::io(path, e))
 }
 
 /// The length of an open file, naming it in the error.
