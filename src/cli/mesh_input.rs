@@ -307,6 +307,10 @@ fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path) -> Option<String> {
 /// The extents (x, y, z) of the `v` lines of an OBJ file, for [`y_up_hint`] once its import failed; None when the
 /// file cannot be read or has no vertex.
 fn read_extents(path: &std::path::Path) -> Option<[f64; 3]> {
+    // A pipe was read by the import already: what it held is gone.
+    if !sniffable(path) {
+        return None;
+    }
     let text = infile::read(path).ok()?;
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for line in text.split(|&b| b == b'\n') {
@@ -331,8 +335,15 @@ pub fn is_dem(path: &std::path::Path) -> bool {
     matches!(ext.as_str(), "npy" | "asc" | "hgt" | "png" | "tif" | "tiff")
 }
 
-/// Whether `path` is a tincull hierarchy: named `.tch`, or starting with the `.tch` magic number whatever its name
-/// (an unreadable file is left to the reader that opens it, which names the error).
+/// Whether the first bytes of `path` may be looked at before its reader opens it: only for a regular file. A pipe
+/// gives its bytes once (a look would take them from the reader), so a pipe is read as its command's default kind
+/// (a mesh, or a hierarchy where only one is read); anything else is left to the reader, which names what it is.
+fn sniffable(path: &std::path::Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.is_file())
+}
+
+/// Whether `path` is a tincull hierarchy: named `.tch`, or a regular file starting with the `.tch` magic number
+/// whatever its name (an unreadable file is left to the reader that opens it, which names the error).
 pub fn is_hierarchy(path: &std::path::Path) -> bool {
     use std::io::Read;
     if path
@@ -343,9 +354,10 @@ pub fn is_hierarchy(path: &std::path::Path) -> bool {
         return true;
     }
     let mut head = [0u8; cull::MAGIC.len()];
-    std::fs::File::open(path)
-        .and_then(|mut f| f.read_exact(&mut head))
-        .is_ok()
+    sniffable(path)
+        && std::fs::File::open(path)
+            .and_then(|mut f| f.read_exact(&mut head))
+            .is_ok()
         && head == cull::MAGIC
 }
 
@@ -364,10 +376,13 @@ pub enum FileKind {
     Other,
 }
 
-/// What `path` holds by its first bytes ([`FileKind`]).
+/// What `path` holds by its first bytes ([`FileKind`]); [`FileKind::Other`] for what is not a regular file.
 pub fn file_kind(path: &std::path::Path) -> FileKind {
     use std::io::Read;
     let mut head = Vec::with_capacity(4096);
+    if !sniffable(path) {
+        return FileKind::Other;
+    }
     if std::fs::File::open(path)
         .and_then(|f| f.take(4096).read_to_end(&mut head))
         .is_err()
