@@ -1,4 +1,5 @@
-//! The one opener of every tincull input file (meshes, DEMs, `.tch`, `.pvs`, tile plans, eye lists, configs).
+//! The one opener of every tincull input file (meshes, DEMs, `.tch`, `.pvs`, tile plans, eye lists, configs), and
+//! the one description of a file type in messages ([`non_regular`]).
 //!
 //! A path given as an input is read whole, so what it names must end: a regular file or a pipe (`<(gen)`,
 //! `/dev/stdin` fed by a pipe or a file). A character or block device (`/dev/zero`, `/dev/urandom`, a disk, a
@@ -44,6 +45,19 @@ pub fn read_to_string(path: &Path) -> io::Result<String> {
 
 /// What a file of this type is, when it is not one to read whole; `None` for a regular file or a pipe.
 fn refused(kind: &FileType) -> Option<&'static str> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_fifo() {
+            return None;
+        }
+    }
+    non_regular(kind)
+}
+
+/// What a file type is, for messages (`"a directory"`, `"a FIFO (named pipe)"`, `"a character device"`, ...); `None`
+/// for a regular file. Shared with `outfile`, which refuses to replace what is not a regular file.
+pub fn non_regular(kind: &FileType) -> Option<&'static str> {
     if kind.is_file() {
         return None;
     }
@@ -54,7 +68,7 @@ fn refused(kind: &FileType) -> Option<&'static str> {
     {
         use std::os::unix::fs::FileTypeExt;
         if kind.is_fifo() {
-            return None;
+            return Some("a FIFO (named pipe)");
         }
         if kind.is_char_device() {
             return Some("a character device");
