@@ -1283,4 +1283,145 @@ mod tests {
             }
         }
     }
+
+    /// The highest `v` of the lowered segment `a b` (offsets from the camera, heights already lowered) on the
+    /// vertical half-plane `u` of face `k`, if it meets it in front of the camera: where `l − u f`, linear along the
+    /// segment, is zero.
+    fn segment_v_at(k: usize, a: [f64; 3], b: [f64; 3], u: f64) -> Option<f64> {
+        let (fa, la) = face_coords(k, a[0], a[1]);
+        let (fb, lb) = face_coords(k, b[0], b[1]);
+        let (ga, gb) = (la - u * fa, lb - u * fb);
+        let t = if ga == gb {
+            if ga != 0.0 {
+                return None;
+            }
+            // The whole segment lies on the half-plane: its higher end.
+            return [(fa, a[2]), (fb, b[2])]
+                .into_iter()
+                .filter(|&(f, _)| f > 0.0)
+                .map(|(f, z)| z / f)
+                .reduce(f64::max);
+        } else {
+            ga / (ga - gb)
+        };
+        if !(-1e-12..=1.0 + 1e-12).contains(&t) {
+            return None;
+        }
+        let t = t.clamp(0.0, 1.0);
+        let f = fa + t * (fb - fa);
+        (f > 0.0).then(|| (a[2] + t * (b[2] - a[2])) / f)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 1000, ..Default::default() })]
+
+        /// The buffer's invariant, checked directly: after random TIN-like edges and flat chains are written, every
+        /// `u` sampled in a covered column (its ends, and points between) has a point of a written occluder on its
+        /// half-plane at least as high as the column's value; and a triangle called hidden has every sampled point
+        /// below the value of the column it falls in. Occluders share vertices (so partial covers pair up at them),
+        /// come from near the camera (wide, crossing faces) and far (narrower than a column), and the columns
+        /// are few or many.
+        #[test]
+        fn the_horizon_promises_only_what_its_occluders_give(
+            points in proptest::collection::vec((-100.0f64..100.0, -100.0f64..100.0, -20.0f64..20.0), 4..40),
+            links in proptest::collection::vec((0usize..40, 0usize..40), 1..60),
+            chains in proptest::collection::vec(proptest::collection::vec(0usize..40, 2..6), 0..4),
+            tris in proptest::collection::vec((0usize..40, 0usize..40, 0usize..40), 1..30),
+            log_w in 1u32..9, lift in 0.0f64..30.0,
+        ) {
+            let mu = 1e-6;
+            let pts: Vec<[f64; 3]> = points.iter().map(|&(x, y, z)| [x, y, z]).collect();
+            let n = pts.len();
+            let proj: Vec<Projected> = pts.iter().enumerate().map(|(i, &d)| project(d, mu, i as u32)).collect();
+            let lowered = |i: usize| [pts[i][0], pts[i][1], pts[i][2] - mu];
+            let mut h = Horizon::new(1 << log_w);
+            // Every occluder written, as lowered segments, for the check.
+            let mut written: Vec<(usize, usize)> = Vec::new();
+            for &(a, b) in &links {
+                let (a, b) = (a % n, b % n);
+                if a != b {
+                    h.write_segment([&proj[a], &proj[b]]);
+                    written.push((a, b));
+                }
+            }
+            for chain in &chains {
+                let chain: Vec<usize> = chain.iter().map(|&i| i % n).collect();
+                for k in 0..FACES {
+                    if !chain.iter().all(|&i| proj[i].mask & (1 << k) != 0) {
+                        continue;
+                    }
+                    let by_u = |&i: &usize| proj[i].face[k].u;
+                    let lo = *chain.iter().min_by(|x, y| by_u(x).total_cmp(&by_u(y))).expect("a chain");
+                    let hi = *chain.iter().max_by(|x, y| by_u(x).total_cmp(&by_u(y))).expect("a chain");
+                    let bound = chain.iter().map(|&i| proj[i].face[k].lo).fold(f64::INFINITY, f64::min);
+                    h.write_flat(k, (by_u(&lo), lo as u32), (by_u(&hi), hi as u32), bound);
+                }
+                written.extend(chain.windows(2).map(|w| (w[0], w[1])));
+            }
+            let w = h.w;
+            for k in 0..FACES {
+                for j in 0..w {
+                    let hj = h.h[k * w + j];
+                    if hj == f64::NEG_INFINITY {
+                        continue;
+                    }
+                    let (a, b) = (h.boundary(j), h.boundary(j + 1));
+                    for s in 0..=16 {
+                        let u = a + (b - a) * s as f64 / 16.0;
+                        let best = written
+                            .iter()
+                            .filter_map(|&(p, q)| segment_v_at(k, lowered(p), lowered(q), u))
+                            .fold(f64::NEG_INFINITY, f64::max);
+                        proptest::prop_assert!(
+                            best >= hj - 1e-9 * (1.0 + hj.abs()),
+                            "face {k} column {j} (of {w}) at u {u}: value {hj}, but the occluders reach only {best}"
+                        );
+                    }
+                }
+            }
+            // Occludees: raised triangles (lifted to vary how many are hidden).
+            let up: Vec<Projected> = pts
+                .iter()
+                .enumerate()
+                .map(|(i, &d)| project([d[0], d[1], d[2] - lift], mu, (n + i) as u32))
+                .collect();
+            for &(a, b, c) in &tris {
+                let (a, b, c) = (a % n, b % n, c % n);
+                let hidden = h.triangle_hidden([&up[a], &up[b], &up[c]], false);
+                let set_hidden = h.vertices_hidden(&[up[a], up[b], up[c]], false);
+                if !(hidden || set_hidden) {
+                    continue;
+                }
+                let corner = |i: usize| [pts[i][0], pts[i][1], pts[i][2] - lift + mu];
+                let (pa, pb, pc) = (corner(a), corner(b), corner(c));
+                for s in 0..=12 {
+                    for t in 0..=(12 - s) {
+                        let (x, y) = (s as f64 / 12.0, t as f64 / 12.0);
+                        let p: [f64; 3] = std::array::from_fn(|i| pa[i] + x * (pb[i] - pa[i]) + y * (pc[i] - pa[i]));
+                        for k in 0..FACES {
+                            let (f, l) = face_coords(k, p[0], p[1]);
+                            if !(f > 0.0 && l.abs() <= f) {
+                                continue;
+                            }
+                            let (u, v) = (l / f, p[2] / f);
+                            // A point on a column boundary is in both columns.
+                            let x = h.column_of(u);
+                            let cols = [x.floor(), x.ceil() - 1.0, x.ceil()];
+                            for col in cols {
+                                let col = (col as isize).clamp(0, w as isize - 1) as usize;
+                                if h.boundary(col) <= u && u <= h.boundary(col + 1) {
+                                    let hj = h.h[k * w + col];
+                                    proptest::prop_assert!(
+                                        v < hj + 1e-9 * (1.0 + hj.abs()),
+                                        "triangle {a} {b} {c} called hidden (alone {hidden}, by its vertices \
+                                         {set_hidden}): its point {p:?} in face {k} column {col} has v {v} over {hj}"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
