@@ -499,7 +499,11 @@ impl SafeCuller {
                 let [s, e] = node.triangles;
                 if node.kids[0] < node.kids[1] && e - s <= CREST_MAX {
                     let start = c.crests.len() as u32;
-                    crests_of(h, node.triangles, &mut c.crests);
+                    crests_of(
+                        &h.mesh.triangles[node.triangles[0] as usize..node.triangles[1] as usize],
+                        &h.mesh.positions,
+                        &mut c.crests,
+                    );
                     c.nodes[id].crests = [start, c.crests.len() as u32];
                 }
             }
@@ -1017,13 +1021,11 @@ impl SafeCuller {
     }
 }
 
-/// Appends the crests of the triangles `range` to `out`: for x and for y, the vertices within the first and the last
-/// quarter of the range's extent, and the bottleneck path between the two sets over the range's TIN edges (edges
-/// taken by decreasing lower end, union-find, until one component holds a vertex of each set; every vertex of the
-/// path joining them is at least as high as the last edge's lower end).
-fn crests_of(h: &Hierarchy, range: [u32; 2], out: &mut Vec<Crest>) {
-    let tris = &h.mesh.triangles[range[0] as usize..range[1] as usize];
-    let pos = &h.mesh.positions;
+/// Appends the crests of the triangles `tris` (indices into `pos`) to `out`: for x and for y, the vertices within
+/// the first and the last quarter of their extent, and the bottleneck path between the two sets over their TIN edges
+/// (edges taken by decreasing lower end, union-find, until one component holds a vertex of each set; every vertex of
+/// the path joining them is at least as high as the last edge's lower end).
+fn crests_of(tris: &[[u32; 3]], pos: &[[f64; 3]], out: &mut Vec<Crest>) {
     let mut vs: Vec<u32> = tris.iter().flatten().copied().collect();
     vs.sort_unstable();
     vs.dedup();
@@ -1108,4 +1110,90 @@ fn crests_of(h: &Hierarchy, range: [u32; 2], out: &mut Vec<Crest>) {
 fn outside_view(node: &TreeNode, eye: [f64; 3], yaw: f64, half_fov: f64) -> bool {
     let centre = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
     circle_outside_view(centre, node.radius, yaw, half_fov)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Whether the first and the last quarter of the extent along `axis` of the vertices `tris` use are joined by a
+    /// path of the triangles' edges whose vertices all lie at height `z` or above (from `from` to `to` when given).
+    /// A graph search, independent of the union-find of [`crests_of`].
+    fn joined(tris: &[[u32; 3]], pos: &[[f64; 3]], axis: usize, z: f64, ends: Option<[u32; 2]>) -> bool {
+        let used: Vec<u32> = tris.iter().flatten().copied().collect();
+        let (lo, hi) = used.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(pos[v as usize][axis]), hi.max(pos[v as usize][axis]))
+        });
+        let q = 0.25 * (hi - lo);
+        if !(q > 0.0) {
+            return false;
+        }
+        let first = |v: u32| pos[v as usize][axis] <= lo + q;
+        let last = |v: u32| pos[v as usize][axis] >= hi - q;
+        let high = |v: u32| pos[v as usize][2] >= z;
+        let mut stack: Vec<u32> = match ends {
+            Some([a, b]) if first(a) && last(b) && high(a) => vec![a],
+            Some(_) => return false,
+            None => used.iter().copied().filter(|&v| first(v) && high(v)).collect(),
+        };
+        let mut seen = vec![false; pos.len()];
+        for &v in &stack {
+            seen[v as usize] = true;
+        }
+        while let Some(v) = stack.pop() {
+            if ends.map_or(last(v), |[_, b]| v == b) {
+                return true;
+            }
+            for t in tris {
+                for k in 0..3 {
+                    let (p, q) = (t[k], t[(k + 1) % 3]);
+                    for (from, to) in [(p, q), (q, p)] {
+                        if from == v && !seen[to as usize] && high(to) {
+                            seen[to as usize] = true;
+                            stack.push(to);
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 500, ..ProptestConfig::default() })]
+
+        /// Every crest is what coarse nodes write it as, by a graph search: its ends lie in the first and the last
+        /// quarter of the extent along an axis and are joined by a path of the triangles' edges whose vertices all
+        /// lie at the crest's height or above, and no greater height joins those quarters (the bottleneck); an axis
+        /// whose quarters are joined at all has a crest. Random triangles over few vertices, repeated heights.
+        #[test]
+        fn crests_are_bottleneck_paths_between_the_quarters(
+            pos in proptest::collection::vec((0.0f64..10.0, 0.0f64..10.0, 0i32..6), 3..24),
+            tris in proptest::collection::vec((0usize..24, 0usize..24, 0usize..24), 1..40),
+        ) {
+            let pos: Vec<[f64; 3]> = pos.iter().map(|&(x, y, z)| [x, y, f64::from(z)]).collect();
+            let n = pos.len();
+            let tris: Vec<[u32; 3]> =
+                tris.iter().map(|&(a, b, c)| [(a % n) as u32, (b % n) as u32, (c % n) as u32]).collect();
+            let mut crests = Vec::new();
+            crests_of(&tris, &pos, &mut crests);
+            let heights: Vec<f64> = pos.iter().map(|p| p[2]).collect();
+            let bottleneck = |axis: usize| {
+                heights.iter().copied().filter(|&z| joined(&tris, &pos, axis, z, None)).reduce(f64::max)
+            };
+            let mut axes = (0..2).filter(|&axis| bottleneck(axis).is_some());
+            prop_assert_eq!(crests.len(), axes.clone().count());
+            for c in &crests {
+                let axis = axes.next().expect("one crest per joined axis");
+                prop_assert_eq!(c.a, pos[c.ids[0] as usize]);
+                prop_assert_eq!(c.b, pos[c.ids[1] as usize]);
+                prop_assert!(
+                    joined(&tris, &pos, axis, c.z, Some(c.ids)),
+                    "crest {:?} along axis {}: its ends are not joined at height {} or above", c, axis, c.z
+                );
+                prop_assert_eq!(Some(c.z), bottleneck(axis), "crest {:?} along axis {}", c, axis);
+            }
+        }
+    }
 }
