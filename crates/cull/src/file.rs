@@ -190,8 +190,9 @@ impl Hierarchy {
         Ok(h)
     }
 
-    /// Reads a `.tch` file; every error names it ([`HierarchyError::InFile`], or [`HierarchyError::Io`]). The
-    /// other way, [`Hierarchy::to_bytes`] gives what to write.
+    /// Reads a `.tch` file; every error names it ([`HierarchyError::InFile`], or [`HierarchyError::Io`], also for a
+    /// device or a directory, which is refused rather than read: see the `infile` crate). The other way,
+    /// [`Hierarchy::to_bytes`] gives what to write.
     pub fn load(path: impl AsRef<Path>) -> Result<Hierarchy, HierarchyError> {
         let path = path.as_ref();
         let bytes = infile::read(path).map_err(|source| HierarchyError::Io {

@@ -1,9 +1,9 @@
 //! Run-time side of tincull: sector geometry, the exported hierarchy and its `.tch` file format, and the cullers
 //! (the thesis' region test, named `stewart` over Stewart's 1997 quadtree hierarchies; see [`method`]).
 //!
-//! Light on dependencies (serde, postcard, crc32fast) so that a renderer can embed it: load a file with
-//! [`Hierarchy::load`], make an [`AnyCuller`] (or a [`SafeCuller`] directly), and call `cull_into` once per frame
-//! with a reused [`DrawList`].
+//! Light on dependencies (serde, postcard, crc32fast, and `infile`, the project's opener of input files, which has
+//! none) so that a renderer can embed it: load a file with [`Hierarchy::load`], make an [`AnyCuller`] (or a
+//! [`SafeCuller`] directly), and call `cull_into` once per frame with a reused [`DrawList`].
 //!
 //! | culler | module | verdict "hidden" |
 //! | --- | --- | --- |
