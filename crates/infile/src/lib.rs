@@ -1,9 +1,9 @@
 //! The one opener of every tincull input file (meshes, DEMs, `.tch`, `.pvs`, tile plans, eye lists, configs), and
 //! the one description of a file type in messages ([`non_regular`]).
 //!
-//! A path given as an input is read whole, so what it names must end: a regular file or a pipe (`<(gen)`,
-//! `/dev/stdin` fed by a pipe or a file). A character or block device (`/dev/zero`, `/dev/urandom`, a disk, a
-//! terminal), a socket or a directory is refused with an error of kind [`std::io::ErrorKind::InvalidInput`] that
+//! A path given as an input is read whole, so what it names must end: a regular file, a pipe (`<(gen)`,
+//! `/dev/stdin` fed by a pipe or a file) or a terminal (typed input, to Ctrl-D). Any other character or block device
+//! (`/dev/zero`, `/dev/urandom`, a disk), a socket or a directory is refused with an error of kind [`std::io::ErrorKind::InvalidInput`] that
 //! says what it is: read whole, `/dev/zero` would grow a buffer until the machine runs out of memory. The kind is
 //! taken from the opened file itself (`fstat`), not from the path, so a link or a rename between the check and the
 //! read changes nothing. The callers name the path in their own errors.
@@ -14,11 +14,13 @@ use std::fs::{File, FileType};
 use std::io::{self, Read};
 use std::path::Path;
 
-/// Opens `path` for reading, refusing what is not a regular file or a pipe (see the crate documentation).
+/// Opens `path` for reading, refusing what is not a regular file, a pipe or a terminal (see the crate documentation).
 pub fn open(path: &Path) -> io::Result<File> {
+    use std::io::IsTerminal;
     let file = File::open(path)?;
     match refused(&file.metadata()?.file_type()) {
         None => Ok(file),
+        Some(_) if file.is_terminal() => Ok(file),
         Some(what) => Err(io::Error::new(
             io::ErrorKind::InvalidInput,
             format!("{what}, not a file"),
