@@ -273,4 +273,21 @@ fn quadtree_build_eval_and_cull() {
         "--eye",
         eye,
     ]);
+    // Values out of their ranges are errors naming the flag and the range.
+    for (flag, value, message) in [
+        (
+            "--columns",
+            "96",
+            "--columns must be a power of two from 2 to 65536, got 96",
+        ),
+        (
+            "--columns",
+            "131072",
+            "--columns must be a power of two from 2 to 65536, got 131072",
+        ),
+        ("--patch", "0", "--patch must be from 1 to 64, got 0"),
+        ("--patch", "65", "--patch must be from 1 to 64, got 65"),
+    ] {
+        fails_with(&["cull", s(&crystal), flag, value, "--eye", eye], message);
+    }
 }

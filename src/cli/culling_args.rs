@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use cull::{CullMethod, SafeParams};
+use cull::{CullMethod, MAX_COLUMNS_PER_FACE, MAX_PATCH, SafeParams, SafeParamsError};
 
 use super::cull_cmd::parse_point;
 
@@ -86,22 +86,20 @@ impl SafeArgs {
     /// The parameters, checked.
     pub fn params(&self) -> Result<SafeParams> {
         let d = SafeParams::default();
-        let (columns, patch) = (
-            self.columns.unwrap_or(d.columns_per_face),
-            self.patch.unwrap_or(d.patch),
-        );
-        anyhow::ensure!(
-            columns.is_power_of_two() && (2..=65536).contains(&columns),
-            "--columns must be a power of two from 2 to 65536, got {columns}"
-        );
-        anyhow::ensure!((1..=64).contains(&patch), "--patch must be from 1 to 64, got {patch}");
-        Ok(SafeParams {
-            columns_per_face: columns,
-            patch,
+        let params = SafeParams {
+            columns_per_face: self.columns.unwrap_or(d.columns_per_face),
+            patch: self.patch.unwrap_or(d.patch),
             occluder_budget: self.occluder_budget.unwrap_or(d.occluder_budget),
             work_budget: self.work_budget.unwrap_or(d.work_budget),
             coarse_columns: self.coarse_columns.unwrap_or(d.coarse_columns),
-        })
+        };
+        match params.check() {
+            Ok(()) => Ok(params),
+            Err(SafeParamsError::Columns(n)) => {
+                anyhow::bail!("--columns must be a power of two from 2 to {MAX_COLUMNS_PER_FACE}, got {n}")
+            }
+            Err(SafeParamsError::Patch(n)) => anyhow::bail!("--patch must be from 1 to {MAX_PATCH}, got {n}"),
+        }
     }
 }
 

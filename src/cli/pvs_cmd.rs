@@ -131,7 +131,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     } else {
         args.resolution.clone()
     };
-    let patch = args.patch.unwrap_or(16);
+    let patch = args.patch.unwrap_or(cull::SafeParams::default().patch);
     for &r in &resolutions {
         ensure!(
             (1..=pvs::MAX_RESOLUTION).contains(&r),
@@ -143,7 +143,11 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         args.check.is_some() || resolutions.len() == 1,
         "--resolution takes a list only with --check"
     );
-    ensure!((1..=64).contains(&patch), "--patch must be from 1 to 64, got {patch}");
+    ensure!(
+        (1..=cull::MAX_PATCH).contains(&patch),
+        "--patch must be from 1 to {}, got {patch}",
+        cull::MAX_PATCH
+    );
     let safe_params = cull::SafeParams {
         patch,
         ..cull::SafeParams::default()

@@ -11,7 +11,7 @@
  * ABI version: `major << 16 | minor`. The major part changes when a function, struct or constant changes
  * incompatibly; the minor part when something is added.
  */
-#define TC_ABI_VERSION ((1 << 16) | 1)
+#define TC_ABI_VERSION ((1 << 16) | 2)
 
 /**
  * Success.
@@ -35,7 +35,8 @@
 
 /**
  * An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
- * yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix).
+ * yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix, a parameter out of its range or one
+ * the culler's method does not take).
  */
 #define TC_ERR_INVALID 4
 
@@ -66,7 +67,8 @@
 
 /**
  * Lloyd & Egbert's horizon culler (2002; conservative: never culls a visible triangle), meant for a quadtree-grouped
- * hierarchy; it takes the default horizon of `tincull cull --method lloyd-egbert` (256 columns per face).
+ * hierarchy; it takes the default horizon of `tincull cull --method lloyd-egbert` (256 columns per face) until
+ * `tc_set_params` sets another.
  */
 #define TC_METHOD_LLOYD_EGBERT 3
 
@@ -165,6 +167,52 @@ typedef struct TcInfo {
   double origin[3];
 } TcInfo;
 
+/**
+ * Run-time parameters of the horizon cullers, as `tincull cull`'s flags of the same names: all of them for
+ * `TC_METHOD_SAFE`, `columns_per_face` alone for `TC_METHOD_LLOYD_EGBERT`; the region cullers (`TC_METHOD_THESIS`,
+ * `TC_METHOD_STEWART`) have none. No value changes whether a triangle culled is hidden, only how much is culled and
+ * what a cull costs. `tc_default_params` gives the defaults.
+ */
+typedef struct TcParams {
+  /**
+   * `--columns`: horizon columns per 90° face, a power of two from 2 to 65536 (default 256).
+   */
+  uint32_t columns_per_face;
+  /**
+   * `--patch`: largest patch (triangles) the safe culler tests and draws below the hierarchy's leaves, 1 to 64
+   * (default 16).
+   */
+  uint32_t patch;
+  /**
+   * `--occluder-budget`: most occluder edges written per cull; `UINT32_MAX` (the default): unlimited.
+   */
+  uint32_t occluder_budget;
+  /**
+   * `--work-budget`: most work units per cull (nodes tested while refining, occluder edges and chains written),
+   * which bounds the cost of a cull (default 200000); `UINT32_MAX`: unlimited.
+   */
+  uint32_t work_budget;
+  /**
+   * `--coarse-columns`: a visible node spanning fewer columns is drawn whole (default 0: every visible node is
+   * refined).
+   */
+  uint32_t coarse_columns;
+} TcParams;
+
+/**
+ * The safe culler's work in the last cull, as `tincull cull --json` reports it; zeros for the other methods.
+ */
+typedef struct TcWork {
+  /**
+   * Work units spent (`work`), at most `TcParams::work_budget`.
+   */
+  uint32_t work;
+  /**
+   * Occluder edges written into the horizon (`occluder_edges`).
+   */
+  uint32_t occluder_edges;
+} TcWork;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -238,6 +286,47 @@ int32_t tc_stats(const struct TcCuller *culler,
  * `culler` comes from a `tc_load_*` call; `out` is writable.
  */
 int32_t tc_info(const struct TcCuller *culler, struct TcInfo *out);
+
+/**
+ * Writes the default [`TcParams`] (those of `tincull cull` without flags, and of a culler just loaded) to `*out`.
+ *
+ * # Safety
+ * `out` is writable, or NULL (then `TC_ERR_NULL`).
+ */
+int32_t tc_default_params(struct TcParams *out);
+
+/**
+ * The run-time parameters `culler` culls with ([`TcParams`]: the defaults until [`tc_set_params`]); for
+ * `TC_METHOD_LLOYD_EGBERT` only `columns_per_face` is used. `TC_ERR_INVALID` for the region cullers, which have none.
+ *
+ * # Safety
+ * `culler` comes from a `tc_load_*` call; `out` is writable.
+ */
+int32_t tc_get_params(const struct TcCuller *culler,
+                      struct TcParams *out);
+
+/**
+ * Prepares `culler` again with the run-time parameters `*params` (as long as a load takes, without reading the
+ * file again). Refused with `TC_ERR_INVALID`, the culler unchanged, when a value is out of its range
+ * (`columns_per_face` not a power of two from 2 to 65536, `patch` not from 1 to 64), for the region cullers (which
+ * have no parameters), and for `TC_METHOD_LLOYD_EGBERT` when a field other than `columns_per_face` differs from its
+ * default (that culler has no other parameter: refused rather than ignored). The counters of the last cull stay.
+ *
+ * # Safety
+ * `culler` comes from a `tc_load_*` call and is not used by another thread meanwhile; `params` is readable.
+ */
+int32_t tc_set_params(struct TcCuller *culler,
+                      const struct TcParams *params);
+
+/**
+ * The safe culler's work in the last [`tc_cull`] on `culler` that culled ([`TcWork`]; zeros before the first, and
+ * for the other methods).
+ *
+ * # Safety
+ * `culler` comes from a `tc_load_*` call; `out` is writable.
+ */
+int32_t tc_work(const struct TcCuller *culler,
+                struct TcWork *out);
 
 /**
  * The message of the last failed call on this thread (empty when none failed). The string belongs to the library

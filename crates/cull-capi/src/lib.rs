@@ -16,11 +16,11 @@ use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
-use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy, HierarchyError};
+use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy, HierarchyError, SafeParams, SafeParamsError};
 
 /// ABI version: `major << 16 | minor`. The major part changes when a function, struct or constant changes
 /// incompatibly; the minor part when something is added.
-pub const TC_ABI_VERSION: u32 = (1 << 16) | 1;
+pub const TC_ABI_VERSION: u32 = (1 << 16) | 2;
 
 /// Success.
 pub const TC_OK: i32 = 0;
@@ -31,7 +31,8 @@ pub const TC_ERR_IO: i32 = 2;
 /// The bytes are not a valid `.tch` hierarchy (bad magic, version, checksum, structure).
 pub const TC_ERR_FORMAT: i32 = 3;
 /// An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
-/// yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix).
+/// yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix, a parameter out of its range or one
+/// the culler's method does not take).
 pub const TC_ERR_INVALID: i32 = 4;
 /// The caller's range buffer is too small; `*count` holds the number of ranges needed.
 pub const TC_ERR_BUFFER_TOO_SMALL: i32 = 5;
@@ -45,14 +46,75 @@ pub const TC_METHOD_THESIS: u32 = 1;
 /// Stewart's region test over a quadtree-grouped hierarchy (`tincull build --grouping quadtree`; not conservative).
 pub const TC_METHOD_STEWART: u32 = 2;
 /// Lloyd & Egbert's horizon culler (2002; conservative: never culls a visible triangle), meant for a quadtree-grouped
-/// hierarchy; it takes the default horizon of `tincull cull --method lloyd-egbert` (256 columns per face).
+/// hierarchy; it takes the default horizon of `tincull cull --method lloyd-egbert` (256 columns per face) until
+/// `tc_set_params` sets another.
 pub const TC_METHOD_LLOYD_EGBERT: u32 = 3;
 
 /// A loaded hierarchy with its culler and working memory (opaque to C).
 pub struct TcCuller {
     hierarchy: Hierarchy,
     culler: AnyCuller,
+    /// The parameters `culler` was prepared with.
+    params: SafeParams,
     list: DrawList,
+}
+
+/// Run-time parameters of the horizon cullers, as `tincull cull`'s flags of the same names: all of them for
+/// `TC_METHOD_SAFE`, `columns_per_face` alone for `TC_METHOD_LLOYD_EGBERT`; the region cullers (`TC_METHOD_THESIS`,
+/// `TC_METHOD_STEWART`) have none. No value changes whether a triangle culled is hidden, only how much is culled and
+/// what a cull costs. `tc_default_params` gives the defaults.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TcParams {
+    /// `--columns`: horizon columns per 90° face, a power of two from 2 to 65536 (default 256).
+    pub columns_per_face: u32,
+    /// `--patch`: largest patch (triangles) the safe culler tests and draws below the hierarchy's leaves, 1 to 64
+    /// (default 16).
+    pub patch: u32,
+    /// `--occluder-budget`: most occluder edges written per cull; `UINT32_MAX` (the default): unlimited.
+    pub occluder_budget: u32,
+    /// `--work-budget`: most work units per cull (nodes tested while refining, occluder edges and chains written),
+    /// which bounds the cost of a cull (default 200000); `UINT32_MAX`: unlimited.
+    pub work_budget: u32,
+    /// `--coarse-columns`: a visible node spanning fewer columns is drawn whole (default 0: every visible node is
+    /// refined).
+    pub coarse_columns: u32,
+}
+
+impl TcParams {
+    /// The C form of `p` (`usize::MAX`, and anything beyond `u32`, as `UINT32_MAX`).
+    fn of(p: &SafeParams) -> TcParams {
+        let n = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+        TcParams {
+            columns_per_face: n(p.columns_per_face),
+            patch: n(p.patch),
+            occluder_budget: n(p.occluder_budget),
+            work_budget: n(p.work_budget),
+            coarse_columns: n(p.coarse_columns),
+        }
+    }
+
+    /// The culler's form (`UINT32_MAX` in a budget: unlimited).
+    fn params(&self) -> SafeParams {
+        let budget = |v: u32| if v == u32::MAX { usize::MAX } else { v as usize };
+        SafeParams {
+            columns_per_face: self.columns_per_face as usize,
+            patch: self.patch as usize,
+            occluder_budget: budget(self.occluder_budget),
+            work_budget: budget(self.work_budget),
+            coarse_columns: self.coarse_columns as usize,
+        }
+    }
+}
+
+/// The safe culler's work in the last cull, as `tincull cull --json` reports it; zeros for the other methods.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TcWork {
+    /// Work units spent (`work`), at most `TcParams::work_budget`.
+    pub work: u32,
+    /// Occluder edges written into the horizon (`occluder_edges`).
+    pub occluder_edges: u32,
 }
 
 /// A half-open range `[start, end)` of triangles, in the hierarchy's triangle order, to draw.
@@ -187,10 +249,12 @@ fn load_error(what: &str, e: HierarchyError) -> Failure {
 /// # Safety
 /// `out` is non-null and writable (checked by the callers).
 unsafe fn store(h: Hierarchy, m: CullMethod, out: *mut *mut TcCuller) {
-    let culler = AnyCuller::new(&h, m);
+    let params = SafeParams::default();
+    let culler = AnyCuller::with_params(&h, m, params);
     let boxed = Box::new(TcCuller {
         hierarchy: h,
         culler,
+        params,
         list: DrawList::default(),
     });
     // SAFETY: the caller checked that `out` is non-null; the C contract makes it writable.
@@ -399,6 +463,129 @@ pub unsafe extern "C" fn tc_info(culler: *const TcCuller, out: *mut TcInfo) -> i
         };
         // SAFETY: non-null and writable.
         unsafe { *out = info };
+        Ok(())
+    })
+}
+
+/// Writes the default [`TcParams`] (those of `tincull cull` without flags, and of a culler just loaded) to `*out`.
+///
+/// # Safety
+/// `out` is writable, or NULL (then `TC_ERR_NULL`).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tc_default_params(out: *mut TcParams) -> i32 {
+    guard(|| {
+        if out.is_null() {
+            return fail(TC_ERR_NULL, "tc_default_params: out must not be NULL");
+        }
+        // SAFETY: non-null and writable.
+        unsafe { *out = TcParams::of(&SafeParams::default()) };
+        Ok(())
+    })
+}
+
+/// The run-time parameters `culler` culls with ([`TcParams`]: the defaults until [`tc_set_params`]); for
+/// `TC_METHOD_LLOYD_EGBERT` only `columns_per_face` is used. `TC_ERR_INVALID` for the region cullers, which have none.
+///
+/// # Safety
+/// `culler` comes from a `tc_load_*` call; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tc_get_params(culler: *const TcCuller, out: *mut TcParams) -> i32 {
+    guard(|| {
+        if culler.is_null() || out.is_null() {
+            return fail(TC_ERR_NULL, "tc_get_params: culler and out must not be NULL");
+        }
+        // SAFETY: non-null, from tc_load_*.
+        let c = unsafe { &*culler };
+        takes_params("tc_get_params", c.culler.method())?;
+        // SAFETY: non-null and writable.
+        unsafe { *out = TcParams::of(&c.params) };
+        Ok(())
+    })
+}
+
+/// Prepares `culler` again with the run-time parameters `*params` (as long as a load takes, without reading the
+/// file again). Refused with `TC_ERR_INVALID`, the culler unchanged, when a value is out of its range
+/// (`columns_per_face` not a power of two from 2 to 65536, `patch` not from 1 to 64), for the region cullers (which
+/// have no parameters), and for `TC_METHOD_LLOYD_EGBERT` when a field other than `columns_per_face` differs from its
+/// default (that culler has no other parameter: refused rather than ignored). The counters of the last cull stay.
+///
+/// # Safety
+/// `culler` comes from a `tc_load_*` call and is not used by another thread meanwhile; `params` is readable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tc_set_params(culler: *mut TcCuller, params: *const TcParams) -> i32 {
+    guard(|| {
+        if culler.is_null() || params.is_null() {
+            return fail(TC_ERR_NULL, "tc_set_params: culler and params must not be NULL");
+        }
+        // SAFETY: non-null, from tc_load_*, not shared across threads (the contract).
+        let c = unsafe { &mut *culler };
+        // SAFETY: non-null and readable.
+        let given = unsafe { *params };
+        let method = c.culler.method();
+        takes_params("tc_set_params", method)?;
+        let p = given.params();
+        p.check().map_err(|e| {
+            let field = match e {
+                SafeParamsError::Columns(_) => "columns_per_face",
+                SafeParamsError::Patch(_) => "patch",
+            };
+            Failure(TC_ERR_INVALID, format!("tc_set_params: {field}: {e}"))
+        })?;
+        if method == CullMethod::LloydEgbert {
+            let d = TcParams::of(&SafeParams::default());
+            let other = [
+                ("patch", given.patch == d.patch),
+                ("occluder_budget", given.occluder_budget == d.occluder_budget),
+                ("work_budget", given.work_budget == d.work_budget),
+                ("coarse_columns", given.coarse_columns == d.coarse_columns),
+            ];
+            if let Some((field, _)) = other.iter().find(|(_, default)| !default) {
+                return fail(
+                    TC_ERR_INVALID,
+                    format!(
+                        "tc_set_params: {field}: the lloyd-egbert culler takes columns_per_face only; leave the other \
+                         fields at their defaults (tc_default_params)"
+                    ),
+                );
+            }
+        }
+        c.culler = AnyCuller::with_params(&c.hierarchy, method, p);
+        c.params = p;
+        Ok(())
+    })
+}
+
+/// Refuses the region cullers, which have no run-time parameters, naming the function `what`.
+fn takes_params(what: &str, method: CullMethod) -> Result<(), Failure> {
+    match method {
+        CullMethod::Safe | CullMethod::LloydEgbert => Ok(()),
+        CullMethod::Thesis | CullMethod::Stewart => fail(
+            TC_ERR_INVALID,
+            format!("{what}: the {method} culler has no run-time parameters (only safe and lloyd-egbert have)"),
+        ),
+    }
+}
+
+/// The safe culler's work in the last [`tc_cull`] on `culler` that culled ([`TcWork`]; zeros before the first, and
+/// for the other methods).
+///
+/// # Safety
+/// `culler` comes from a `tc_load_*` call; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tc_work(culler: *const TcCuller, out: *mut TcWork) -> i32 {
+    guard(|| {
+        if culler.is_null() || out.is_null() {
+            return fail(TC_ERR_NULL, "tc_work: culler and out must not be NULL");
+        }
+        // SAFETY: non-null, from tc_load_*.
+        let s = unsafe { &*culler }.list.stats;
+        // SAFETY: non-null and writable.
+        unsafe {
+            *out = TcWork {
+                work: s.work,
+                occluder_edges: s.occluder_edges,
+            }
+        };
         Ok(())
     })
 }

@@ -509,3 +509,184 @@ fn a_path_that_is_not_utf8_loads_on_unix() {
         assert!(last_error().contains("terrain-"), "{}", last_error());
     }
 }
+
+/// Parameters set through `tc_set_params` cull as the Rust culler prepared with the same ones, `tc_work` reports its
+/// work, and values out of range, fields a method does not take and the region cullers are refused with the culler
+/// unchanged.
+#[test]
+fn parameters_set_from_c_cull_as_the_rust_culler_with_them() {
+    let h = bundled_hierarchy();
+    let bytes = h.to_bytes().expect("to_bytes");
+    let ranges = |c: *mut TcCuller, e: &[f64; 5]| {
+        let mut buf = vec![TcRange::default(); h.nodes.len() * 64 + 64];
+        let mut n = 0usize;
+        // SAFETY: a culler from tc_load_buffer, 3 doubles, a buffer of `buf.len()` ranges.
+        let status = unsafe { tc_cull(c, e.as_ptr(), e[3], e[4], buf.as_mut_ptr(), buf.len(), &mut n) };
+        assert_eq!(status, TC_OK, "{}", last_error());
+        buf[..n].iter().map(|r| [r.start, r.end]).collect::<Vec<_>>()
+    };
+    let mut defaults = TcParams::default();
+    // SAFETY: valid pointers throughout; every culler is freed once.
+    unsafe {
+        assert_eq!(tc_default_params(&mut defaults), TC_OK);
+        assert_eq!(
+            defaults,
+            TcParams {
+                columns_per_face: 256,
+                patch: 16,
+                occluder_budget: u32::MAX,
+                work_budget: cull::DEFAULT_WORK_BUDGET as u32,
+                coarse_columns: 0,
+            }
+        );
+        assert_eq!(tc_default_params(std::ptr::null_mut()), TC_ERR_NULL);
+
+        let mut c: *mut TcCuller = std::ptr::null_mut();
+        assert_eq!(
+            tc_load_buffer(bytes.as_ptr(), bytes.len(), TC_METHOD_SAFE, &mut c),
+            TC_OK
+        );
+        let mut got = TcParams::default();
+        assert_eq!(tc_get_params(c, &mut got), TC_OK);
+        assert_eq!(got, defaults);
+        let set = TcParams {
+            columns_per_face: 64,
+            patch: 4,
+            occluder_budget: 300,
+            work_budget: 500,
+            coarse_columns: 8,
+        };
+        assert_eq!(tc_set_params(c, &set), TC_OK, "{}", last_error());
+        assert_eq!(tc_get_params(c, &mut got), TC_OK);
+        assert_eq!(got, set);
+        let rust = AnyCuller::with_params(
+            &h,
+            CullMethod::Safe,
+            cull::SafeParams {
+                columns_per_face: 64,
+                patch: 4,
+                occluder_budget: 300,
+                work_budget: 500,
+                coarse_columns: 8,
+            },
+        );
+        let mut budget_reached = false;
+        for e in eyes(&h) {
+            let expected = rust.cull(&camera(&e));
+            assert_eq!(ranges(c, &e), expected.ranges, "eye {e:?}");
+            let mut work = TcWork::default();
+            assert_eq!(tc_work(c, &mut work), TC_OK);
+            assert_eq!(
+                (work.work, work.occluder_edges),
+                (expected.stats.work, expected.stats.occluder_edges)
+            );
+            assert!(work.work <= 500 && work.occluder_edges <= 300, "{work:?}");
+            budget_reached |= work.work == 500;
+        }
+        assert!(
+            budget_reached,
+            "no eye spent the budget of 500 units: the test sets nothing"
+        );
+        assert_eq!(tc_work(std::ptr::null(), &mut TcWork::default()), TC_ERR_NULL);
+
+        // Out of range: refused, the parameters unchanged.
+        for (bad, field) in [
+            (
+                TcParams {
+                    columns_per_face: 100,
+                    ..set
+                },
+                "columns_per_face",
+            ),
+            (
+                TcParams {
+                    columns_per_face: 1,
+                    ..set
+                },
+                "columns_per_face",
+            ),
+            (
+                TcParams {
+                    columns_per_face: 1 << 17,
+                    ..set
+                },
+                "columns_per_face",
+            ),
+            (TcParams { patch: 0, ..set }, "patch"),
+            (TcParams { patch: 65, ..set }, "patch"),
+        ] {
+            assert_eq!(tc_set_params(c, &bad), TC_ERR_INVALID, "{bad:?}");
+            assert!(
+                last_error().starts_with(&format!("tc_set_params: {field}: ")),
+                "{}",
+                last_error()
+            );
+            assert_eq!(tc_get_params(c, &mut got), TC_OK);
+            assert_eq!(got, set);
+        }
+        // UINT32_MAX budgets are unlimited, and read back as such.
+        let unlimited = TcParams {
+            work_budget: u32::MAX,
+            occluder_budget: u32::MAX,
+            ..defaults
+        };
+        assert_eq!(tc_set_params(c, &unlimited), TC_OK);
+        assert_eq!(tc_get_params(c, &mut got), TC_OK);
+        assert_eq!(got, unlimited);
+        assert_eq!(tc_set_params(c, std::ptr::null()), TC_ERR_NULL);
+        assert_eq!(tc_set_params(std::ptr::null_mut(), &set), TC_ERR_NULL);
+        tc_free(c);
+
+        // Lloyd & Egbert's culler takes the columns alone.
+        assert_eq!(
+            tc_load_buffer(bytes.as_ptr(), bytes.len(), TC_METHOD_LLOYD_EGBERT, &mut c),
+            TC_OK
+        );
+        let columns = TcParams {
+            columns_per_face: 64,
+            ..defaults
+        };
+        assert_eq!(tc_set_params(c, &columns), TC_OK, "{}", last_error());
+        let rust = AnyCuller::with_params(
+            &h,
+            CullMethod::LloydEgbert,
+            cull::SafeParams {
+                columns_per_face: 64,
+                ..cull::SafeParams::default()
+            },
+        );
+        for e in eyes(&h) {
+            assert_eq!(ranges(c, &e), rust.cull(&camera(&e)).ranges, "eye {e:?}");
+        }
+        assert_eq!(tc_set_params(c, &set), TC_ERR_INVALID);
+        assert!(
+            last_error().starts_with("tc_set_params: patch: the lloyd-egbert culler takes columns_per_face only"),
+            "{}",
+            last_error()
+        );
+        assert_eq!(tc_get_params(c, &mut got), TC_OK);
+        assert_eq!(got, columns);
+        tc_free(c);
+
+        // The region cullers have none.
+        assert_eq!(
+            tc_load_buffer(bytes.as_ptr(), bytes.len(), TC_METHOD_THESIS, &mut c),
+            TC_OK
+        );
+        assert_eq!(tc_set_params(c, &defaults), TC_ERR_INVALID);
+        assert_eq!(
+            last_error(),
+            "tc_set_params: the thesis culler has no run-time parameters (only safe and lloyd-egbert have)"
+        );
+        assert_eq!(tc_get_params(c, &mut got), TC_ERR_INVALID);
+        let e = eyes(&h)[0];
+        ranges(c, &e);
+        let mut work = TcWork {
+            work: 7,
+            occluder_edges: 7,
+        };
+        assert_eq!(tc_work(c, &mut work), TC_OK);
+        assert_eq!(work, TcWork::default());
+        tc_free(c);
+    }
+}

@@ -55,5 +55,5 @@ pub use file::{FORMAT_VERSION, MAGIC, OLDEST_READABLE_VERSION};
 pub use hierarchy::{BuildInfo, Grouping, Hierarchy, Mesh, Node, StoredRegion};
 pub use lloyd_egbert::LloydEgbertCuller;
 pub use method::{AnyCuller, CullMethod};
-pub use safe::{DEFAULT_WORK_BUDGET, SafeCuller, SafeParams};
+pub use safe::{DEFAULT_WORK_BUDGET, MAX_COLUMNS_PER_FACE, MAX_PATCH, SafeCuller, SafeParams, SafeParamsError};
 pub use sector::{azimuth, for_each_sector_in, sector_direction, sector_of_azimuth};

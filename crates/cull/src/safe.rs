@@ -159,6 +159,52 @@ mod unlimited {
     }
 }
 
+/// The most horizon columns per face ([`SafeParams::columns_per_face`]) a front end accepts.
+pub const MAX_COLUMNS_PER_FACE: usize = 1 << 16;
+
+/// The largest patch ([`SafeParams::patch`]) a front end accepts.
+pub const MAX_PATCH: usize = 64;
+
+/// A [`SafeParams`] value outside what a front end should accept ([`SafeParams::check`]); the culler itself rounds and
+/// clamps such values instead.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SafeParamsError {
+    /// [`SafeParams::columns_per_face`] is not a power of two from 2 to [`MAX_COLUMNS_PER_FACE`].
+    Columns(usize),
+    /// [`SafeParams::patch`] is not from 1 to [`MAX_PATCH`].
+    Patch(usize),
+}
+
+impl std::fmt::Display for SafeParamsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SafeParamsError::Columns(n) => write!(
+                f,
+                "the columns per face must be a power of two from 2 to {MAX_COLUMNS_PER_FACE}, got {n}"
+            ),
+            SafeParamsError::Patch(n) => write!(f, "the patch must be from 1 to {MAX_PATCH} triangles, got {n}"),
+        }
+    }
+}
+
+impl std::error::Error for SafeParamsError {}
+
+impl SafeParams {
+    /// Whether every value is one a front end should accept as given: the columns per face a power of two from 2 to
+    /// [`MAX_COLUMNS_PER_FACE`], the patch from 1 to [`MAX_PATCH`] (the budgets and the coarse columns take any
+    /// value). [`SafeCuller::new`] rounds and clamps the others rather than refusing them.
+    pub fn check(&self) -> Result<(), SafeParamsError> {
+        let c = self.columns_per_face;
+        if !(c.is_power_of_two() && (2..=MAX_COLUMNS_PER_FACE).contains(&c)) {
+            return Err(SafeParamsError::Columns(c));
+        }
+        if !(1..=MAX_PATCH).contains(&self.patch) {
+            return Err(SafeParamsError::Patch(self.patch));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SafeParams {
     fn default() -> Self {
         SafeParams {
@@ -434,8 +480,11 @@ impl SafeCuller {
     /// does).
     pub fn new(h: &Hierarchy, params: SafeParams) -> SafeCuller {
         let params = SafeParams {
-            columns_per_face: params.columns_per_face.clamp(2, 1 << 16).next_power_of_two(),
-            patch: params.patch.clamp(1, 64),
+            columns_per_face: params
+                .columns_per_face
+                .clamp(2, MAX_COLUMNS_PER_FACE)
+                .next_power_of_two(),
+            patch: params.patch.clamp(1, MAX_PATCH),
             occluder_budget: params.occluder_budget,
             work_budget: params.work_budget,
             coarse_columns: params.coarse_columns,
@@ -1116,6 +1165,51 @@ fn outside_view(node: &TreeNode, eye: [f64; 3], yaw: f64, half_fov: f64) -> bool
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// The values a front end accepts: the default, powers of two from 2 to 65,536 columns, patches of 1 to 64
+    /// triangles, any budget; and the first value refused on either side of each range.
+    #[test]
+    fn parameters_are_checked_at_the_ends_of_their_ranges() {
+        let d = SafeParams::default();
+        assert_eq!(d.check(), Ok(()));
+        for columns in [2, 4, 256, 1 << 16] {
+            assert_eq!(
+                SafeParams {
+                    columns_per_face: columns,
+                    ..d
+                }
+                .check(),
+                Ok(())
+            );
+        }
+        for columns in [0, 1, 3, 96, (1 << 16) + 1, 1 << 17] {
+            assert_eq!(
+                SafeParams {
+                    columns_per_face: columns,
+                    ..d
+                }
+                .check(),
+                Err(SafeParamsError::Columns(columns))
+            );
+        }
+        for patch in [1, 64] {
+            assert_eq!(SafeParams { patch, ..d }.check(), Ok(()));
+        }
+        for patch in [0, 65] {
+            assert_eq!(SafeParams { patch, ..d }.check(), Err(SafeParamsError::Patch(patch)));
+        }
+        let any = SafeParams {
+            occluder_budget: 0,
+            work_budget: 0,
+            coarse_columns: usize::MAX,
+            ..d
+        };
+        assert_eq!(any.check(), Ok(()));
+        assert_eq!(
+            SafeParamsError::Columns(3).to_string(),
+            "the columns per face must be a power of two from 2 to 65536, got 3"
+        );
+    }
 
     /// Whether the first and the last quarter of the extent along `axis` of the vertices `tris` use are joined by a
     /// path of the triangles' edges whose vertices all lie at height `z` or above (from `from` to `to` when given).
