@@ -388,7 +388,8 @@ fn a_geotiff_mask_is_applied() {
 }
 
 /// A pipe is an input like a file (`tincull info <(gen)`): it gives its bytes once, so no look at its first bytes
-/// may take them from the reader (a mesh piped in used to lose its first 4,096 bytes to that look).
+/// may take them from the reader (a mesh piped in used to lose its first 4,096 bytes to that look), and what it holds
+/// is told by those bytes as for a file (a hierarchy or a PVS file piped into `info` used to be read as a mesh).
 #[cfg(unix)]
 #[test]
 fn inputs_are_read_from_pipes() {
@@ -421,6 +422,40 @@ fn inputs_are_read_from_pipes() {
         from_file["ranges"].as_array().is_some_and(|r| !r.is_empty()),
         "{from_file}"
     );
+    // `info` tells a piped hierarchy and a piped PVS file by their bytes, with their sizes; `build -o -` pipes into it.
+    let of_file = json(&["info", s(&tch), "--json"]);
+    for command in [
+        format!("info <(cat '{}') --json", s(&tch)),
+        format!("build '{}' -o - -q | \"$0\" info /dev/stdin --json", s(&obj)),
+    ] {
+        let of_pipe: serde_json::Value = serde_json::from_str(&piped(&command)).expect("one JSON object");
+        for key in ["file_bytes", "nodes", "triangles", "visibility_bytes"] {
+            assert_eq!(of_pipe[key], of_file[key], "{command}: {key}");
+        }
+    }
+    let pvs = dir.path().join("p.pvs");
+    ok(&["pvs", s(&tch), "--cell", "9000,9000,9500,9500", "-o", s(&pvs), "-q"]);
+    let (of_file, of_pipe) = (
+        json(&["info", s(&pvs), "--json"]),
+        serde_json::from_str::<serde_json::Value>(&piped(&format!("info <(cat '{}') --json", s(&pvs))))
+            .expect("one JSON object"),
+    );
+    assert!(of_file["cells"].as_array().is_some_and(|c| c.len() == 1), "{of_file}");
+    assert_eq!(of_pipe["cells"], of_file["cells"]);
+    // A piped hierarchy given where a mesh is read is named as one, as a file is.
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "\"$0\" build <(cat '{}') -o '{}'",
+            s(&tch),
+            s(&dir.path().join("x.tch"))
+        ))
+        .arg(env!("CARGO_BIN_EXE_tincull"))
+        .output()
+        .expect("bash runs");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("is a tincull hierarchy (.tch), not a mesh"), "{stderr}");
 }
 
 /// `cull` reports the safe culler's work units and occluder edges (JSON and text), so a user tuning `--work-budget`

@@ -143,9 +143,7 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
 /// `tincull info FILE.tch`: what a hierarchy holds (its mesh, its nodes, its visibility data, how it was built).
 fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
     let h = super::mesh_input::load_hierarchy(path)?;
-    let file_bytes = std::fs::metadata(path)
-        .with_context(|| path.display().to_string())?
-        .len();
+    let file_bytes = infile::size(path).with_context(|| path.display().to_string())?;
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in &h.mesh.positions {
         for k in 0..3 {

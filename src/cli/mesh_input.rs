@@ -307,10 +307,7 @@ fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path) -> Option<String> {
 /// The extents (x, y, z) of the `v` lines of an OBJ file, for [`y_up_hint`] once its import failed; None when the
 /// file cannot be read or has no vertex.
 fn read_extents(path: &std::path::Path) -> Option<[f64; 3]> {
-    // A pipe was read by the import already: what it held is gone.
-    if !sniffable(path) {
-        return None;
-    }
+    // A pipe's bytes are kept by `infile` from the import's read.
     let text = infile::read(path).ok()?;
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for line in text.split(|&b| b == b'\n') {
@@ -335,17 +332,10 @@ pub fn is_dem(path: &std::path::Path) -> bool {
     matches!(ext.as_str(), "npy" | "asc" | "hgt" | "png" | "tif" | "tiff")
 }
 
-/// Whether the first bytes of `path` may be looked at before its reader opens it: only for a regular file. A pipe
-/// gives its bytes once (a look would take them from the reader), so a pipe is read as its command's default kind
-/// (a mesh, or a hierarchy where only one is read); anything else is left to the reader, which names what it is.
-fn sniffable(path: &std::path::Path) -> bool {
-    std::fs::metadata(path).is_ok_and(|m| m.is_file())
-}
-
-/// Whether `path` is a tincull hierarchy: named `.tch`, or a regular file starting with the `.tch` magic number
-/// whatever its name (an unreadable file is left to the reader that opens it, which names the error).
+/// Whether `path` is a tincull hierarchy: named `.tch`, or starting with the `.tch` magic number whatever its name
+/// (a pipe too: `infile` keeps what it read for the reader; an unreadable file is left to the reader that opens it,
+/// which names the error).
 pub fn is_hierarchy(path: &std::path::Path) -> bool {
-    use std::io::Read;
     if path
         .extension()
         .and_then(|e| e.to_str())
@@ -353,12 +343,7 @@ pub fn is_hierarchy(path: &std::path::Path) -> bool {
     {
         return true;
     }
-    let mut head = [0u8; cull::MAGIC.len()];
-    sniffable(path)
-        && std::fs::File::open(path)
-            .and_then(|mut f| f.read_exact(&mut head))
-            .is_ok()
-        && head == cull::MAGIC
+    infile::peek(path, cull::MAGIC.len()).is_ok_and(|head| head == cull::MAGIC)
 }
 
 /// What a file holds, told by its first bytes: for the errors of a command given the wrong kind of file.
@@ -376,19 +361,12 @@ pub enum FileKind {
     Other,
 }
 
-/// What `path` holds by its first bytes ([`FileKind`]); [`FileKind::Other`] for what is not a regular file.
+/// What `path` holds by its first bytes ([`FileKind`]; a pipe's too, which `infile` keeps for its reader);
+/// [`FileKind::Other`] for what cannot be read.
 pub fn file_kind(path: &std::path::Path) -> FileKind {
-    use std::io::Read;
-    let mut head = Vec::with_capacity(4096);
-    if !sniffable(path) {
+    let Ok(head) = infile::peek(path, 4096) else {
         return FileKind::Other;
-    }
-    if std::fs::File::open(path)
-        .and_then(|f| f.take(4096).read_to_end(&mut head))
-        .is_err()
-    {
-        return FileKind::Other;
-    }
+    };
     if head.starts_with(&cull::MAGIC) {
         return FileKind::Hierarchy;
     }

@@ -7,16 +7,51 @@
 //! says what it is: read whole, `/dev/zero` would grow a buffer until the machine runs out of memory. The kind is
 //! taken from the opened file itself (`fstat`), not from the path, so a link or a rename between the check and the
 //! read changes nothing. The callers name the path in their own errors.
+//!
+//! A pipe or a terminal gives its bytes once, yet a command may look at an input's first bytes (to tell a hierarchy
+//! from a mesh) before its reader reads it, and look again to word an error. So the first [`read`] or [`peek`] of a
+//! pipe or a terminal reads it whole and keeps its bytes, and every later [`read`] or [`peek`] of the same path in
+//! this process is answered from them: the pipe reads as a file would. A regular file is read from disk each time.
+//! [`open`] streams a file; it refuses a path whose bytes are kept (its readers need a regular file they can seek).
 
 #![warn(missing_docs)]
 
 use std::fs::{File, FileType};
 use std::io::{self, Read};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
-/// Opens `path` for reading, refusing what is not a regular file, a pipe or a terminal (see the crate documentation).
+/// The bytes of the pipes and terminals read so far, by the path they were read by.
+static KEPT: Mutex<Vec<(PathBuf, Arc<[u8]>)>> = Mutex::new(Vec::new());
+
+/// The kept bytes of `path`, if it is a pipe or terminal read before.
+fn kept(path: &Path) -> Option<Arc<[u8]>> {
+    let kept = KEPT.lock().unwrap_or_else(|e| e.into_inner());
+    kept.iter().find(|(p, _)| p == path).map(|(_, b)| Arc::clone(b))
+}
+
+/// Reads the rest of `file`, opened from `path`; the bytes of a pipe or a terminal are kept for the next reads.
+fn whole(mut file: File, path: &Path) -> io::Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes)?;
+    if !file.metadata()?.is_file() {
+        KEPT.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((path.to_path_buf(), bytes.as_slice().into()));
+    }
+    Ok(bytes)
+}
+
+/// Opens `path` for reading, refusing what is not a regular file, a pipe or a terminal, and a pipe or terminal whose
+/// bytes were read already (see the crate documentation).
 pub fn open(path: &Path) -> io::Result<File> {
     use std::io::IsTerminal;
+    if kept(path).is_some() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "a pipe or terminal, read already (it gives its bytes once): this input is read from a regular file",
+        ));
+    }
     let file = File::open(path)?;
     match refused(&file.metadata()?.file_type()) {
         None => Ok(file),
@@ -28,21 +63,50 @@ pub fn open(path: &Path) -> io::Result<File> {
     }
 }
 
-/// Reads the whole of `path` ([`open`]'s rules).
+/// Reads the whole of `path` ([`open`]'s rules; a pipe or a terminal as when it was first read).
 pub fn read(path: &Path) -> io::Result<Vec<u8>> {
-    let mut file = open(path)?;
-    let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes)?;
-    Ok(bytes)
+    match kept(path) {
+        Some(bytes) => Ok(bytes.to_vec()),
+        None => whole(open(path)?, path),
+    }
 }
 
-/// Reads the whole of `path` as UTF-8 text ([`open`]'s rules; text that is not UTF-8 is an
-/// [`io::ErrorKind::InvalidData`] error).
+/// Reads the whole of `path` as UTF-8 text ([`read`]; text that is not UTF-8 is an [`io::ErrorKind::InvalidData`]
+/// error).
 pub fn read_to_string(path: &Path) -> io::Result<String> {
+    String::from_utf8(read(path)?)
+        .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "stream did not contain valid UTF-8"))
+}
+
+/// The first `n` bytes of `path` (all of them when it is shorter), leaving the whole to the next [`read`]: a regular
+/// file's first bytes on disk; a pipe or a terminal is read whole (and kept, see the crate documentation).
+pub fn peek(path: &Path, n: usize) -> io::Result<Vec<u8>> {
+    if let Some(bytes) = kept(path) {
+        return Ok(bytes[..n.min(bytes.len())].to_vec());
+    }
     let mut file = open(path)?;
-    let mut text = String::new();
-    file.read_to_string(&mut text)?;
-    Ok(text)
+    if file.metadata()?.is_file() {
+        let mut head = Vec::new();
+        (&mut file).take(n as u64).read_to_end(&mut head)?;
+        return Ok(head);
+    }
+    // One opening only: closing a named pipe's reading end before its writer is done would break the writer.
+    let bytes = whole(file, path)?;
+    Ok(bytes[..n.min(bytes.len())].to_vec())
+}
+
+/// The size in bytes of what [`read`] gives for `path`: a regular file's size on disk, a pipe's or a terminal's bytes
+/// (read whole now if they were not yet, and kept).
+pub fn size(path: &Path) -> io::Result<u64> {
+    if let Some(bytes) = kept(path) {
+        return Ok(bytes.len() as u64);
+    }
+    let file = open(path)?;
+    let meta = file.metadata()?;
+    if meta.is_file() {
+        return Ok(meta.len());
+    }
+    Ok(whole(file, path)?.len() as u64)
 }
 
 /// What a file of this type is, when it is not one to read whole; `None` for a regular file or a pipe.
@@ -124,28 +188,70 @@ mod tests {
         }
     }
 
+    /// A regular file is looked at without being kept: `peek` gives its first bytes, `read` and `size` what is on
+    /// disk at their own time, and `open` still streams it.
+    #[test]
+    fn a_regular_file_is_looked_at_and_read_from_disk() {
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let path = dir.path().join("a.obj");
+        std::fs::write(&path, "v 1 2 3\n").expect("write");
+        assert_eq!(peek(&path, 3).expect("peek"), b"v 1");
+        assert_eq!(peek(&path, 100).expect("peek"), b"v 1 2 3\n");
+        std::fs::write(&path, "v 4 5 6\nv 7 8 9\n").expect("write again");
+        assert_eq!(read(&path).expect("read"), b"v 4 5 6\nv 7 8 9\n");
+        assert_eq!(size(&path).expect("size"), 16);
+        assert!(open(&path).is_ok());
+        assert!(kept(&path).is_none());
+    }
+
+    /// A pipe looked at (to tell what it holds) is read whole once: every later look and read of its path gets the
+    /// same bytes, its size is theirs, and `open` (whose readers seek) refuses it rather than wait for a writer.
+    #[cfg(unix)]
+    #[test]
+    fn a_pipe_looked_at_reads_as_a_file_would() {
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let fifo = dir.path().join("fifo.tch");
+        let writer = fifo_writer(&fifo, b"TINCULL\xff and the rest");
+        assert_eq!(peek(&fifo, 7).expect("peek the fifo"), b"TINCULL");
+        writer.join().expect("writer");
+        assert_eq!(peek(&fifo, 100).expect("peek again"), b"TINCULL\xff and the rest");
+        assert_eq!(size(&fifo).expect("size"), 21);
+        assert_eq!(read(&fifo).expect("read"), b"TINCULL\xff and the rest");
+        assert_eq!(read(&fifo).expect("read again"), b"TINCULL\xff and the rest");
+        let e = open(&fifo).expect_err("a pipe read already cannot be streamed again");
+        assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("read already"), "{e}");
+        // Text that is not UTF-8 is refused as such.
+        let e = read_to_string(&fifo).expect_err("not UTF-8");
+        assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+    }
+
+    /// A named pipe at `path`, and a thread that writes `bytes` into it once a reader opens it.
+    #[cfg(unix)]
+    fn fifo_writer(path: &Path, bytes: &'static [u8]) -> std::thread::JoinHandle<()> {
+        use std::io::Write;
+        let status = std::process::Command::new("mkfifo")
+            .arg(path)
+            .status()
+            .expect("mkfifo runs");
+        assert!(status.success(), "mkfifo {}", path.display());
+        let path = path.to_path_buf();
+        std::thread::spawn(move || {
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&path)
+                .expect("open the fifo");
+            f.write_all(bytes).expect("write the fifo");
+        })
+    }
+
     /// A pipe is read to its end (`<(gen)` and `/dev/stdin` fed by a pipe are inputs users give).
     #[cfg(unix)]
     #[test]
     fn a_pipe_is_read_to_its_end() {
-        use std::io::Write;
         let dir = tempfile::tempdir().expect("temporary directory");
         let fifo = dir.path().join("fifo");
-        let status = std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .expect("mkfifo runs");
-        assert!(status.success(), "mkfifo {}", fifo.display());
-        let writer = {
-            let fifo = fifo.clone();
-            std::thread::spawn(move || {
-                let mut f = std::fs::OpenOptions::new()
-                    .write(true)
-                    .open(&fifo)
-                    .expect("open the fifo");
-                f.write_all(b"0 0 2\n").expect("write the fifo");
-            })
-        };
+        let writer = fifo_writer(&fifo, b"0 0 2\n");
         assert_eq!(read_to_string(&fifo).expect("read the fifo"), "0 0 2\n");
         writer.join().expect("writer");
     }

@@ -1050,3 +1050,45 @@ proptest::proptest! {
         }
     }
 }
+
+/// A DEM header is read at offsets: a named pipe is refused with an error saying so, not read as an empty file
+/// ("0 bytes is not an SRTM tile") nor waited on; read whole (`read_dem`), it is a grid like the file.
+#[cfg(unix)]
+#[test]
+fn a_named_pipe_is_read_whole_and_refused_by_the_readers_at_offsets() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fifo = dir.path().join("N43W123.hgt");
+    let status = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(status.success());
+    let samples = 1201 * 1201;
+    let bytes: Vec<u8> = (0..samples)
+        .flat_map(|i: usize| ((i % 977) as i16).to_be_bytes())
+        .collect();
+    let feed = |bytes: Vec<u8>| {
+        let fifo = fifo.clone();
+        // The reader may close its end before reading all: the writer's error is not the test's.
+        std::thread::spawn(move || {
+            if let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(&fifo) {
+                let _ = f.write_all(&bytes);
+            }
+        })
+    };
+    let writer = feed(bytes.clone());
+    let e = tin::dem::read_dem_header(&fifo, &opts()).expect_err("a header read at offsets");
+    let cause = std::error::Error::source(&e).map(|c| c.to_string()).unwrap_or_default();
+    assert_eq!(e.to_string(), fifo.display().to_string());
+    assert_eq!(
+        cause,
+        "a FIFO (named pipe): this DEM reader reads at offsets, from a regular file"
+    );
+    writer.join().expect("writer");
+    let writer = feed(bytes);
+    let grid = tin::read_dem(&fifo, &opts()).expect("read whole");
+    writer.join().expect("writer");
+    assert_eq!((grid.rows, grid.cols), (1201, 1201));
+    assert_eq!(grid.z[978], 1.0);
+}

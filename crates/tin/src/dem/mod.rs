@@ -457,9 +457,22 @@ fn scale(z: &mut [f64], opts: &DemOptions) {
     }
 }
 
-/// Opens a file, naming it in the error.
+/// Opens a file, naming it in the error. The readers that open a DEM (headers, windows, strips) read it at offsets,
+/// so a pipe is refused here with an error saying so, rather than read as an empty file or waited on (a named pipe
+/// read whole is read by [`infile::read`] instead, where a whole grid is wanted).
 fn open(path: &Path) -> Result<std::fs::File> {
-    infile::open(path).map_err(|e| TinError::io(path, e))
+    let file = infile::open(path).map_err(|e| TinError::io(path, e))?;
+    let kind = file.metadata().map_err(|e| TinError::io(path, e))?.file_type();
+    match infile::non_regular(&kind) {
+        None => Ok(file),
+        Some(what) => Err(TinError::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("{what}: this DEM reader reads at offsets, from a regular file"),
+            ),
+        )),
+    }
 }
 
 /// The length of an open file, naming it in the error.
