@@ -211,6 +211,29 @@ fn guard(body: impl FnOnce() -> Result<(), Failure>) -> i32 {
     }
 }
 
+/// The body of a function `what` that reads `culler` and writes one answer to `*out`: both checked non-null
+/// (`TC_ERR_NULL`), then `f`'s answer written, or its failure returned.
+///
+/// # Safety
+/// `culler` is NULL or comes from a `tc_load_*` call; `out` is NULL or writable.
+unsafe fn answer<T>(
+    what: &str,
+    culler: *const TcCuller,
+    out: *mut T,
+    f: impl FnOnce(&TcCuller) -> Result<T, Failure>,
+) -> i32 {
+    guard(|| {
+        if culler.is_null() || out.is_null() {
+            return fail(TC_ERR_NULL, format!("{what}: culler and out must not be NULL"));
+        }
+        // SAFETY: non-null, from tc_load_* (the caller's contract).
+        let value = f(unsafe { &*culler })?;
+        // SAFETY: non-null and writable (the caller's contract).
+        unsafe { *out = value };
+        Ok(())
+    })
+}
+
 /// The method of `m`; the error names `what` is being loaded (the function and file, or the memory buffer).
 fn method(m: u32, what: &str) -> Result<CullMethod, Failure> {
     match m {
@@ -407,26 +430,21 @@ pub unsafe extern "C" fn tc_cull(
 /// `culler` comes from a `tc_load_*` call; `out` is writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn tc_stats(culler: *const TcCuller, out: *mut TcStats) -> i32 {
-    guard(|| {
-        if culler.is_null() || out.is_null() {
-            return fail(TC_ERR_NULL, "tc_stats: culler and out must not be NULL");
-        }
-        // SAFETY: non-null, from tc_load_*.
-        let c = unsafe { &*culler };
-        let s = c.list.stats;
-        let stats = TcStats {
-            nodes_tested: s.nodes_tested,
-            nodes_skipped: s.nodes_skipped,
-            culled_by_occlusion: s.culled_by_occlusion,
-            culled_by_frustum: s.culled_by_frustum,
-            triangles_drawn: s.triangles_drawn,
-            triangles_culled: s.triangles_culled,
-            ranges: u32::try_from(c.list.ranges.len()).unwrap_or(u32::MAX),
-        };
-        // SAFETY: non-null and writable.
-        unsafe { *out = stats };
-        Ok(())
-    })
+    // SAFETY: the caller's contract, as `answer` needs it.
+    unsafe {
+        answer("tc_stats", culler, out, |c| {
+            let s = c.list.stats;
+            Ok(TcStats {
+                nodes_tested: s.nodes_tested,
+                nodes_skipped: s.nodes_skipped,
+                culled_by_occlusion: s.culled_by_occlusion,
+                culled_by_frustum: s.culled_by_frustum,
+                triangles_drawn: s.triangles_drawn,
+                triangles_culled: s.triangles_culled,
+                ranges: u32::try_from(c.list.ranges.len()).unwrap_or(u32::MAX),
+            })
+        })
+    }
 }
 
 /// What the hierarchy behind `culler` holds ([`TcInfo`]).
@@ -435,36 +453,31 @@ pub unsafe extern "C" fn tc_stats(culler: *const TcCuller, out: *mut TcStats) ->
 /// `culler` comes from a `tc_load_*` call; `out` is writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn tc_info(culler: *const TcCuller, out: *mut TcInfo) -> i32 {
-    guard(|| {
-        if culler.is_null() || out.is_null() {
-            return fail(TC_ERR_NULL, "tc_info: culler and out must not be NULL");
-        }
-        // SAFETY: non-null, from tc_load_*.
-        let c = unsafe { &*culler };
-        let h = &c.hierarchy;
-        let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
-        let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count();
-        let info = TcInfo {
-            triangles: count(h.num_triangles()),
-            vertices: count(h.mesh.positions.len()),
-            nodes: count(h.nodes.len()),
-            sectors: h.sectors,
-            always_visible_start: h.always_visible[0],
-            // Ranges are merged and come from leaves, patches below them, and the always-visible range: at most one
-            // per triangle, and one more than the leaves for the node-level methods.
-            max_ranges: count(h.num_triangles().max(leaves + 1)),
-            method: match c.culler.method() {
-                CullMethod::Safe => TC_METHOD_SAFE,
-                CullMethod::Thesis => TC_METHOD_THESIS,
-                CullMethod::Stewart => TC_METHOD_STEWART,
-                CullMethod::LloydEgbert => TC_METHOD_LLOYD_EGBERT,
-            },
-            origin: h.origin,
-        };
-        // SAFETY: non-null and writable.
-        unsafe { *out = info };
-        Ok(())
-    })
+    // SAFETY: the caller's contract, as `answer` needs it.
+    unsafe {
+        answer("tc_info", culler, out, |c| {
+            let h = &c.hierarchy;
+            let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+            let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count();
+            Ok(TcInfo {
+                triangles: count(h.num_triangles()),
+                vertices: count(h.mesh.positions.len()),
+                nodes: count(h.nodes.len()),
+                sectors: h.sectors,
+                always_visible_start: h.always_visible[0],
+                // Ranges are merged and come from leaves, patches below them, and the always-visible range: at most one
+                // per triangle, and one more than the leaves for the node-level methods.
+                max_ranges: count(h.num_triangles().max(leaves + 1)),
+                method: match c.culler.method() {
+                    CullMethod::Safe => TC_METHOD_SAFE,
+                    CullMethod::Thesis => TC_METHOD_THESIS,
+                    CullMethod::Stewart => TC_METHOD_STEWART,
+                    CullMethod::LloydEgbert => TC_METHOD_LLOYD_EGBERT,
+                },
+                origin: h.origin,
+            })
+        })
+    }
 }
 
 /// Writes the default [`TcParams`] (those of `tincull cull` without flags, and of a culler just loaded) to `*out`.
@@ -490,17 +503,13 @@ pub unsafe extern "C" fn tc_default_params(out: *mut TcParams) -> i32 {
 /// `culler` comes from a `tc_load_*` call; `out` is writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn tc_get_params(culler: *const TcCuller, out: *mut TcParams) -> i32 {
-    guard(|| {
-        if culler.is_null() || out.is_null() {
-            return fail(TC_ERR_NULL, "tc_get_params: culler and out must not be NULL");
-        }
-        // SAFETY: non-null, from tc_load_*.
-        let c = unsafe { &*culler };
-        takes_params("tc_get_params", c.culler.method())?;
-        // SAFETY: non-null and writable.
-        unsafe { *out = TcParams::of(&c.params) };
-        Ok(())
-    })
+    // SAFETY: the caller's contract, as `answer` needs it.
+    unsafe {
+        answer("tc_get_params", culler, out, |c| {
+            takes_params("tc_get_params", c.culler.method())?;
+            Ok(TcParams::of(&c.params))
+        })
+    }
 }
 
 /// Prepares `culler` again with the run-time parameters `*params` (as long as a load takes, without reading the
@@ -573,21 +582,15 @@ fn takes_params(what: &str, method: CullMethod) -> Result<(), Failure> {
 /// `culler` comes from a `tc_load_*` call; `out` is writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn tc_work(culler: *const TcCuller, out: *mut TcWork) -> i32 {
-    guard(|| {
-        if culler.is_null() || out.is_null() {
-            return fail(TC_ERR_NULL, "tc_work: culler and out must not be NULL");
-        }
-        // SAFETY: non-null, from tc_load_*.
-        let s = unsafe { &*culler }.list.stats;
-        // SAFETY: non-null and writable.
-        unsafe {
-            *out = TcWork {
-                work: s.work,
-                occluder_edges: s.occluder_edges,
-            }
-        };
-        Ok(())
-    })
+    // SAFETY: the caller's contract, as `answer` needs it.
+    unsafe {
+        answer("tc_work", culler, out, |c| {
+            Ok(TcWork {
+                work: c.list.stats.work,
+                occluder_edges: c.list.stats.occluder_edges,
+            })
+        })
+    }
 }
 
 /// The message of the last failed call on this thread (empty when none failed). The string belongs to the library
