@@ -185,6 +185,25 @@ impl Model {
             safe,
         })
     }
+
+    /// Switches the culling method, keeping the parameters.
+    fn set_method(&mut self, method: CullMethod) {
+        self.method = method;
+        self.prepare();
+    }
+
+    /// Takes the horizon cullers' parameters `safe`, keeping the method.
+    fn set_safe(&mut self, safe: cull::SafeParams) {
+        self.safe = safe;
+        self.prepare();
+    }
+
+    /// Prepares the culler of the hierarchy (if any) again, with the method and parameters as they are.
+    fn prepare(&mut self) {
+        if let Some(h) = &self.terrain.hierarchy {
+            self.culler = Some(AnyCuller::with_params(h, self.method, self.safe));
+        }
+    }
 }
 
 /// Opens the viewer window and runs until it is closed.
@@ -329,6 +348,9 @@ struct ViewerApp {
     culled_wire: bool,
     /// Plot the Lloyd & Egbert culler's horizon buffer in the side panel.
     show_horizon: bool,
+    /// The horizon cullers' parameters as the side panel's controls hold them (taken by the culler when a control
+    /// is let go).
+    safe_edit: cull::SafeParams,
     /// Paint a viewcell's PVS around the eye instead of the culler's verdicts.
     pvs_on: bool,
     /// Side of the viewcells (m): a grid over world coordinates, the eye's cell is shown.
@@ -403,6 +425,7 @@ impl ViewerApp {
             [c[0], c[1], ground + 20.0]
         });
         let eye_height = t.height_at(eye[0], eye[1]).map_or(20.0, |g| (eye[2] - g).max(0.5));
+        let safe_edit = model.safe;
         Ok(ViewerApp {
             map_view: MapView::fit(t.min, t.max, map_size[0] as f32 / map_size[1] as f32),
             orbit: Orbit::overview(t.min, t.max, 1.4, None, None),
@@ -427,6 +450,7 @@ impl ViewerApp {
             show_orphans: true,
             culled_wire: true,
             show_horizon: false,
+            safe_edit,
             pvs_on: startup.pvs_cell_size.is_some(),
             pvs_size: startup.pvs_cell_size.unwrap_or(100.0).max(1.0),
             pvs: None,
@@ -457,14 +481,6 @@ impl ViewerApp {
 
     fn terrain(&self) -> &Terrain {
         &self.model.terrain
-    }
-
-    /// Switches the culling method (the safe culler by default; the thesis' test for comparison).
-    fn set_method(&mut self, method: CullMethod) {
-        self.model.method = method;
-        if let Some(h) = &self.terrain().hierarchy {
-            self.model.culler = Some(AnyCuller::with_params(h, method, self.model.safe));
-        }
     }
 
     /// Runs the culler for the current viewpoint (timed) and returns the drawn mask's fingerprint.
@@ -877,7 +893,47 @@ fn moved_eye(
 
 #[cfg(test)]
 mod tests {
-    use super::moved_eye;
+    use super::{Model, moved_eye};
+    use cull::{AnyCuller, Camera, CullMethod, SafeParams};
+
+    /// Parameters set from the side panel prepare the culler again, as `AnyCuller::with_params` prepares it, and
+    /// stay when the method changes (and the method when they change).
+    #[test]
+    fn new_culler_parameters_and_methods_prepare_the_culler_again() {
+        let obj = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../meshes/jacksboro-2k.obj");
+        let (tin, _) = tin::read_obj(&obj, &Default::default()).expect("the bundled mesh");
+        let h = pipeline::build(&tin, &pipeline::BuildParams::default(), None)
+            .expect("build")
+            .hierarchy;
+        let mut model = Model::from_hierarchy(h.clone(), CullMethod::Safe, SafeParams::default()).expect("model");
+        let eyes: Vec<Camera> = h
+            .mesh
+            .positions
+            .iter()
+            .step_by(97)
+            .map(|p| Camera::all_around([p[0], p[1], p[2] + 2.0]))
+            .collect();
+        let ranges = |c: &AnyCuller| eyes.iter().map(|e| c.cull(e).ranges).collect::<Vec<_>>();
+        let tight = SafeParams {
+            columns_per_face: 16,
+            patch: 4,
+            work_budget: 300,
+            ..SafeParams::default()
+        };
+        let before = ranges(model.culler.as_ref().expect("a culler"));
+        model.set_safe(tight);
+        let after = ranges(model.culler.as_ref().expect("a culler"));
+        assert_eq!(after, ranges(&AnyCuller::with_params(&h, CullMethod::Safe, tight)));
+        assert_ne!(after, before, "the parameters changed nothing: the test tests nothing");
+        model.set_method(CullMethod::LloydEgbert);
+        assert_eq!(model.safe, tight);
+        assert_eq!(
+            ranges(model.culler.as_ref().expect("a culler")),
+            ranges(&AnyCuller::with_params(&h, CullMethod::LloydEgbert, tight))
+        );
+        model.set_safe(SafeParams::default());
+        assert_eq!(model.method, CullMethod::LloydEgbert);
+    }
 
     /// Ground at height 100 on x in [0, 10], none beyond.
     fn ground(x: f64, _: f64) -> Option<f64> {

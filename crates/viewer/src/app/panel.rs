@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use cull::AnyCuller;
+use cull::{AnyCuller, CullMethod};
 use eframe::egui;
 use glam::{Vec2, Vec3};
 use pipeline::export::{mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
@@ -189,7 +189,10 @@ impl ViewerApp {
                     }
                 });
             if chosen != current {
-                self.set_method(chosen);
+                self.model.set_method(chosen);
+            }
+            if matches!(current, CullMethod::Safe | CullMethod::LloydEgbert) {
+                self.culler_params_ui(ui, current);
             }
             ui.label(format!(
                 "nodes tested {}, culled {} (occlusion {}, frustum {}), skipped {}",
@@ -206,6 +209,19 @@ impl ViewerApp {
                 100.0 * f64::from(s.triangles_drawn) / n.max(1) as f64,
                 self.list.ranges.len()
             ));
+            if current == CullMethod::Safe {
+                let budget = self.model.safe.work_budget;
+                ui.label(format!(
+                    "work {} units of {}, {} occluder edges written",
+                    s.work,
+                    if budget == usize::MAX {
+                        "no limit".to_string()
+                    } else {
+                        budget.to_string()
+                    },
+                    s.occluder_edges
+                ));
+            }
             ui.label(format!("cull {:.1} µs", self.cull_us.0.unwrap_or(0.0)));
             if let Some(AnyCuller::LloydEgbert(le)) = &self.model.culler {
                 ui.checkbox(&mut self.show_horizon, "horizon buffer");
@@ -223,6 +239,36 @@ impl ViewerApp {
             self.ms_culled.0.unwrap_or(f64::NAN),
             self.ms_all.0.unwrap_or(f64::NAN)
         ));
+    }
+
+    /// The horizon cullers' run-time parameters, as `tincull cull`'s flags: the columns per face for both, the patch,
+    /// work budget and coarse columns for `safe`. The culler takes them when a control is let go (preparing it again
+    /// takes a moment on a large terrain, too long for every step of a drag).
+    fn culler_params_ui(&mut self, ui: &mut egui::Ui, method: CullMethod) {
+        let p = &mut self.safe_edit;
+        let mut let_go = false;
+        let mut watch = |r: egui::Response| let_go |= r.drag_stopped() || (r.changed() && !r.dragged());
+        egui::ComboBox::from_label("horizon columns per face")
+            .selected_text(p.columns_per_face.to_string())
+            .show_ui(ui, |ui| {
+                for n in (2..=12).map(|k| 1usize << k) {
+                    watch(ui.selectable_value(&mut p.columns_per_face, n, n.to_string()));
+                }
+            });
+        if method == CullMethod::Safe {
+            watch(ui.add(egui::Slider::new(&mut p.patch, 1..=cull::MAX_PATCH).text("patch (triangles)")));
+            watch(
+                ui.add(
+                    egui::Slider::new(&mut p.work_budget, 100..=2_000_000)
+                        .logarithmic(true)
+                        .text("work budget (units)"),
+                ),
+            );
+            watch(ui.add(egui::Slider::new(&mut p.coarse_columns, 0..=64).text("coarse columns (0: off)")));
+        }
+        if let_go && *p != self.model.safe && p.check().is_ok() {
+            self.model.set_safe(*p);
+        }
     }
 
     pub(super) fn truth_ui(&mut self, ui: &mut egui::Ui) {
