@@ -2,10 +2,11 @@
  * Culls a tincull hierarchy from C through the cull-capi library (crates/cull-capi).
  *
  *   cc examples/cull.c -I crates/cull-capi/include target/release/libtincull_cull.a -lpthread -ldl -lm -o cull
- *   ./cull FILE.tch safe|thesis|stewart|lloyd-egbert X,Y,Z[,YAW,FOV] ...
+ *   ./cull [--columns N] [--work-budget N] FILE.tch safe|thesis|stewart|lloyd-egbert X,Y,Z[,YAW,FOV] ...
  *
  * For every eye it prints one line, the ranges to draw as `start-end` pairs (half-open), the same ranges as
- * `tincull cull FILE.tch --method M --eye X,Y,Z --yaw YAW --fov FOV --json` (YAW 0 and FOV 360 when not given).
+ * `tincull cull FILE.tch --method M --eye X,Y,Z --yaw YAW --fov FOV --json` (YAW 0 and FOV 360 when not given), with
+ * `--columns` and `--work-budget` set through tc_set_params as `tincull cull` takes them.
  * The file is loaded twice, once by path and once from a memory buffer, and both cullers must agree.
  */
 #include <stdio.h>
@@ -40,37 +41,66 @@ static unsigned char *read_file(const char *path, size_t *len) {
 }
 
 int main(int argc, char **argv) {
-    if (argc < 4) {
-        fprintf(stderr, "usage: %s FILE.tch safe|thesis|stewart|lloyd-egbert X,Y,Z[,YAW,FOV] ...\n", argv[0]);
+    /* Leading options: the culler's run-time parameters, over the defaults. */
+    TcParams params;
+    if (tc_default_params(&params) != TC_OK) return fail("tc_default_params", TC_ERR_NULL);
+    int first = 1, set = 0;
+    while (first + 1 < argc && strncmp(argv[first], "--", 2) == 0) {
+        char *end = NULL;
+        unsigned long v = strtoul(argv[first + 1], &end, 10);
+        if (*argv[first + 1] == '\0' || *end != '\0' || v > UINT32_MAX) {
+            fprintf(stderr, "error: %s %s: expected a whole number\n", argv[first], argv[first + 1]);
+            return 2;
+        }
+        if (strcmp(argv[first], "--columns") == 0) params.columns_per_face = (uint32_t)v;
+        else if (strcmp(argv[first], "--work-budget") == 0) params.work_budget = (uint32_t)v;
+        else {
+            fprintf(stderr, "error: unknown option %s: expected --columns or --work-budget\n", argv[first]);
+            return 2;
+        }
+        set = 1;
+        first += 2;
+    }
+    if (argc - first < 3) {
+        fprintf(stderr,
+                "usage: %s [--columns N] [--work-budget N] FILE.tch safe|thesis|stewart|lloyd-egbert X,Y,Z[,YAW,FOV] ...\n",
+                argv[0]);
         return 2;
     }
+    const char *file = argv[first], *name = argv[first + 1];
     if ((tc_abi_version() >> 16) != (TC_ABI_VERSION >> 16)) {
         fprintf(stderr, "error: library ABI %u.%u, header %u.%u\n", tc_abi_version() >> 16,
                 tc_abi_version() & 0xffff, TC_ABI_VERSION >> 16, TC_ABI_VERSION & 0xffff);
         return 1;
     }
     uint32_t method;
-    if (strcmp(argv[2], "safe") == 0) method = TC_METHOD_SAFE;
-    else if (strcmp(argv[2], "thesis") == 0) method = TC_METHOD_THESIS;
-    else if (strcmp(argv[2], "stewart") == 0) method = TC_METHOD_STEWART;
-    else if (strcmp(argv[2], "lloyd-egbert") == 0) method = TC_METHOD_LLOYD_EGBERT;
+    if (strcmp(name, "safe") == 0) method = TC_METHOD_SAFE;
+    else if (strcmp(name, "thesis") == 0) method = TC_METHOD_THESIS;
+    else if (strcmp(name, "stewart") == 0) method = TC_METHOD_STEWART;
+    else if (strcmp(name, "lloyd-egbert") == 0) method = TC_METHOD_LLOYD_EGBERT;
     else {
-        fprintf(stderr, "error: unknown method %s: expected safe, thesis, stewart or lloyd-egbert\n", argv[2]);
+        fprintf(stderr, "error: unknown method %s: expected safe, thesis, stewart or lloyd-egbert\n", name);
         return 2;
     }
 
     TcCuller *by_path = NULL, *by_buffer = NULL;
-    int32_t st = tc_load_path(argv[1], method, &by_path);
+    int32_t st = tc_load_path(file, method, &by_path);
     if (st != TC_OK) return fail("tc_load_path", st);
     size_t len = 0;
-    unsigned char *bytes = read_file(argv[1], &len);
+    unsigned char *bytes = read_file(file, &len);
     if (!bytes) {
-        fprintf(stderr, "error: cannot read %s\n", argv[1]);
+        fprintf(stderr, "error: cannot read %s\n", file);
         return 1;
     }
     st = tc_load_buffer(bytes, len, method, &by_buffer);
     free(bytes);
     if (st != TC_OK) return fail("tc_load_buffer", st);
+    if (set) {
+        st = tc_set_params(by_path, &params);
+        if (st != TC_OK) return fail("tc_set_params", st);
+        st = tc_set_params(by_buffer, &params);
+        if (st != TC_OK) return fail("tc_set_params (buffer)", st);
+    }
 
     TcInfo info;
     st = tc_info(by_path, &info);
@@ -86,7 +116,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "error: out of memory\n");
         return 1;
     }
-    for (int a = 3; a < argc; a++) {
+    for (int a = first + 2; a < argc; a++) {
         double v[5] = {0, 0, 0, 0, 360};
         int n = sscanf(argv[a], "%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]);
         if (n != 3 && n != 5) {
@@ -116,10 +146,13 @@ int main(int argc, char **argv) {
         TcStats stats;
         st = tc_stats(by_path, &stats);
         if (st != TC_OK) return fail("tc_stats", st);
+        TcWork work;
+        st = tc_work(by_path, &work);
+        if (st != TC_OK) return fail("tc_work", st);
         for (size_t i = 0; i < count; i++) printf("%s%u-%u", i ? " " : "", ranges[i].start, ranges[i].end);
         printf("\n");
-        fprintf(stderr, "eye %s: %u of %u triangles drawn in %u ranges, %u nodes tested\n", argv[a],
-                stats.triangles_drawn, info.triangles, stats.ranges, stats.nodes_tested);
+        fprintf(stderr, "eye %s: %u of %u triangles drawn in %u ranges, %u nodes tested, %u work units\n", argv[a],
+                stats.triangles_drawn, info.triangles, stats.ranges, stats.nodes_tested, work.work);
     }
 
     /* Errors come back as codes with a message, never as a crash. */

@@ -176,6 +176,72 @@ fn c_example_prints_the_rust_ranges() {
         }
         assert!(culled_somewhere, "{method}: the eyes should cull something");
     }
+    // With the run-time parameters set from C (`--columns`, `--work-budget`): the ranges of the Rust culler given
+    // the same ones, which differ from the defaults' somewhere; refused for a method without parameters.
+    let args: Vec<String> = eyes
+        .iter()
+        .map(|e| format!("{},{},{},{},{}", e[0], e[1], e[2], e[3], e[4]))
+        .collect();
+    for (method, options) in [
+        (CullMethod::Safe, ["--columns", "16", "--work-budget", "300"]),
+        (CullMethod::LloydEgbert, ["--columns", "16", "--columns", "32"]),
+    ] {
+        let run = Command::new(&exe)
+            .args(options)
+            .arg(&tch)
+            .arg(method.name())
+            .args(&args)
+            .output()
+            .expect("the example runs");
+        assert!(
+            run.status.success(),
+            "the C example with {options:?} failed:\n{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let params = cull::SafeParams {
+            columns_per_face: if method == CullMethod::Safe { 16 } else { 32 },
+            work_budget: if method == CullMethod::Safe {
+                300
+            } else {
+                cull::DEFAULT_WORK_BUDGET
+            },
+            ..cull::SafeParams::default()
+        };
+        let (with, without) = (AnyCuller::with_params(&h, method, params), AnyCuller::new(&h, method));
+        let stdout = String::from_utf8(run.stdout).expect("utf-8");
+        let mut differs = false;
+        for (e, line) in eyes.iter().zip(stdout.lines()) {
+            let ranges = |c: &AnyCuller| {
+                let r: Vec<String> = c
+                    .cull(&camera(e))
+                    .ranges
+                    .iter()
+                    .map(|[s, t]| format!("{s}-{t}"))
+                    .collect();
+                r.join(" ")
+            };
+            assert_eq!(line, ranges(&with), "{method} {options:?} from {e:?}");
+            differs |= line != ranges(&without);
+        }
+        assert_eq!(stdout.lines().count(), eyes.len());
+        assert!(
+            differs,
+            "{method} {options:?}: the same ranges as the defaults: the test tests nothing"
+        );
+    }
+    let run = Command::new(&exe)
+        .args(["--work-budget", "300"])
+        .arg(&tch)
+        .arg("thesis")
+        .args(&args)
+        .output()
+        .expect("the example runs");
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("tc_set_params: the thesis culler has no run-time parameters"),
+        "{stderr}"
+    );
 }
 
 /// The example refuses a method name it does not know (a typo must not silently cull with `safe`).
