@@ -543,6 +543,33 @@ fn coarse_nodes_are_drawn_whole_safely() {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// `SafeParams::check` accepts exactly the parameters the safe culler uses as they are given: what it accepts,
+    /// `SafeCuller::new` keeps; what it refuses, the culler rounds or clamps to something else (so a front end that
+    /// checks never has a value changed behind its back, and refuses none the culler would take).
+    #[test]
+    fn checked_parameters_are_the_ones_the_culler_uses(
+        columns in prop_oneof![0usize..70_000, (0u32..20).prop_map(|k| 1usize << k)],
+        patch in 0usize..80,
+        budgets in (any::<usize>(), any::<usize>()),
+        coarse in any::<usize>(),
+    ) {
+        let tin = grid_tin(4, 100.0, DVec3::ZERO, |x, y| 0.01 * x * y);
+        let (h, _) = hierarchy_of(&tin, 4, 0);
+        let given = SafeParams {
+            columns_per_face: columns,
+            patch,
+            occluder_budget: budgets.0,
+            work_budget: budgets.1,
+            coarse_columns: coarse,
+        };
+        let used = SafeCuller::new(&h, given).params();
+        prop_assert_eq!(given.check().is_ok(), used == given, "given {:?}, used {:?}", given, used);
+    }
+}
+
+proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
     /// Random TINs (random points, rough random heights) and random eyes inside and outside the footprint.
