@@ -146,98 +146,88 @@ fn c_example_prints_the_rust_ranges() {
     std::fs::write(&tch, h.to_bytes().expect("to_bytes")).expect("write the .tch");
     let exe = compile_example(dir.path());
     let eyes = eyes(&h);
-    // Every method that applies to this (crystal-grouped) hierarchy; `stewart` needs a quadtree.
-    for method in CullMethod::ALL.into_iter().filter(|m| m.check(&h).is_ok()) {
-        let args: Vec<String> = eyes
-            .iter()
-            .map(|e| format!("{},{},{},{},{}", e[0], e[1], e[2], e[3], e[4]))
-            .collect();
-        let run = Command::new(&exe)
-            .arg(&tch)
-            .arg(method.name())
-            .args(&args)
-            .output()
-            .expect("the example runs");
-        assert!(
-            run.status.success(),
-            "the C example failed:\n{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let stdout = String::from_utf8(run.stdout).expect("utf-8");
-        let lines: Vec<&str> = stdout.lines().collect();
-        assert_eq!(lines.len(), eyes.len());
-        let culler = AnyCuller::new(&h, method);
-        let mut culled_somewhere = false;
-        for (e, line) in eyes.iter().zip(&lines) {
-            let list = culler.cull(&camera(e));
-            let expected: Vec<String> = list.ranges.iter().map(|[s, t]| format!("{s}-{t}")).collect();
-            assert_eq!(*line, expected.join(" "), "{method} from {e:?}");
-            culled_somewhere |= list.stats.triangles_culled > 0;
-        }
-        assert!(culled_somewhere, "{method}: the eyes should cull something");
-    }
-    // With the run-time parameters set from C (`--columns`, `--work-budget`): the ranges of the Rust culler given
-    // the same ones, which differ from the defaults' somewhere; refused for a method without parameters.
     let args: Vec<String> = eyes
         .iter()
         .map(|e| format!("{},{},{},{},{}", e[0], e[1], e[2], e[3], e[4]))
         .collect();
-    for (method, options) in [
-        (CullMethod::Safe, ["--columns", "16", "--work-budget", "300"]),
-        (CullMethod::LloydEgbert, ["--columns", "16", "--columns", "32"]),
-    ] {
-        let run = Command::new(&exe)
+    // The example run with `options`, the method and every eye.
+    let run = |options: &[&str], method: &str| {
+        Command::new(&exe)
             .args(options)
             .arg(&tch)
-            .arg(method.name())
+            .arg(method)
             .args(&args)
             .output()
-            .expect("the example runs");
-        assert!(
-            run.status.success(),
-            "the C example with {options:?} failed:\n{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let params = cull::SafeParams {
-            columns_per_face: if method == CullMethod::Safe { 16 } else { 32 },
-            work_budget: if method == CullMethod::Safe {
-                300
-            } else {
-                cull::DEFAULT_WORK_BUDGET
-            },
-            ..cull::SafeParams::default()
-        };
-        let (with, without) = (AnyCuller::with_params(&h, method, params), AnyCuller::new(&h, method));
-        let stdout = String::from_utf8(run.stdout).expect("utf-8");
-        let mut differs = false;
-        for (e, line) in eyes.iter().zip(stdout.lines()) {
-            let ranges = |c: &AnyCuller| {
-                let r: Vec<String> = c
+            .expect("the example runs")
+    };
+    // Its output lines for `culler`: the ranges from every eye, as `start-end` pairs.
+    let printed = |culler: &AnyCuller| -> Vec<String> {
+        eyes.iter()
+            .map(|e| {
+                let r: Vec<String> = culler
                     .cull(&camera(e))
                     .ranges
                     .iter()
                     .map(|[s, t]| format!("{s}-{t}"))
                     .collect();
                 r.join(" ")
-            };
-            assert_eq!(line, ranges(&with), "{method} {options:?} from {e:?}");
-            differs |= line != ranges(&without);
-        }
-        assert_eq!(stdout.lines().count(), eyes.len());
+            })
+            .collect()
+    };
+    // Every method that applies to this (crystal-grouped) hierarchy; `stewart` needs a quadtree. With the run-time
+    // parameters set from C (`--columns`, `--work-budget`), the ranges of the Rust culler given the same ones, which
+    // differ from the defaults' somewhere.
+    let tight = |columns_per_face, work_budget| cull::SafeParams {
+        columns_per_face,
+        work_budget,
+        ..cull::SafeParams::default()
+    };
+    let cases: Vec<(CullMethod, &[&str], Option<cull::SafeParams>)> = CullMethod::ALL
+        .into_iter()
+        .filter(|m| m.check(&h).is_ok())
+        .map(|m| (m, &[][..], None))
+        .chain([
+            (
+                CullMethod::Safe,
+                &["--columns", "16", "--work-budget", "300"][..],
+                Some(tight(16, 300)),
+            ),
+            (
+                CullMethod::LloydEgbert,
+                &["--columns", "16", "--columns", "32"][..],
+                Some(tight(32, cull::DEFAULT_WORK_BUDGET)),
+            ),
+        ])
+        .collect();
+    for (method, options, params) in cases {
+        let out = run(options, method.name());
         assert!(
-            differs,
-            "{method} {options:?}: the same ranges as the defaults: the test tests nothing"
+            out.status.success(),
+            "the C example with {options:?} failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
         );
+        let stdout = String::from_utf8(out.stdout).expect("utf-8");
+        let lines: Vec<&str> = stdout.lines().collect();
+        let defaults = AnyCuller::new(&h, method);
+        let expected = printed(&params.map_or_else(|| defaults.clone(), |p| AnyCuller::with_params(&h, method, p)));
+        assert_eq!(lines, expected, "{method} {options:?}");
+        if params.is_some() {
+            assert_ne!(
+                expected,
+                printed(&defaults),
+                "{method} {options:?}: the defaults' ranges: the test tests nothing"
+            );
+        } else {
+            let culled_somewhere = eyes
+                .iter()
+                .any(|e| defaults.cull(&camera(e)).stats.triangles_culled > 0);
+            assert!(culled_somewhere, "{method}: the eyes should cull something");
+        }
     }
-    let run = Command::new(&exe)
-        .args(["--work-budget", "300"])
-        .arg(&tch)
-        .arg("thesis")
-        .args(&args)
-        .output()
-        .expect("the example runs");
-    assert!(!run.status.success());
-    let stderr = String::from_utf8_lossy(&run.stderr);
+    // Refused for a method without parameters.
+    let out = run(&["--work-budget", "300"], "thesis");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains("tc_set_params: the thesis culler has no run-time parameters"),
         "{stderr}"
