@@ -151,6 +151,13 @@ impl HorizonField {
         (h != NO_HORIZON).then_some(HorizonPoint::Vertex(h))
     }
 
+    /// The per-sector summaries, vertex-major (`[v * sectors + i]`, `slope` NaN where [`HorizonField::sector_summary`]
+    /// is `None`), taken out of the field; the rest of it is freed at once (a large terrain's next stages need that
+    /// memory).
+    pub fn into_summaries(self) -> Vec<SectorHorizon> {
+        self.summaries
+    }
+
     /// The summary of `vertex` in `sector`: `None` when some subsector of the sector has no horizon (the vertex
     /// is then never occluded from that sector), or the indices are out of range.
     pub fn sector_summary(&self, vertex: u32, sector: u32) -> Option<SectorHorizon> {

@@ -46,6 +46,12 @@ const NO_SUMMARY: SectorHorizon = SectorHorizon {
     distance: f64::INFINITY,
 };
 
+/// The region of the vertex at `p` in the sector of centre direction `direction`, from its summary `h` there, in
+/// plane coordinates relative to `origin` ([`Region::of_vertex`]).
+fn vertex_region(direction: DVec2, origin: DVec2, p: DVec3, h: &SectorHorizon) -> Region {
+    Region::of_vertex(direction.dot(p.truncate() - origin), p.z, h.slope, h.distance)
+}
+
 /// The centre directions of all sectors.
 fn directions(sectors: u32) -> Vec<DVec2> {
     (0..sectors)
@@ -91,15 +97,7 @@ impl RegionTable {
                 let (v, sector) = (i / s, i % s);
                 let p = positions[v];
                 match horizon(v as u32, sector as u32) {
-                    Some(h) => (
-                        Some(Region::of_vertex(
-                            dirs[sector].dot(p.truncate() - origin),
-                            p.z,
-                            h.slope,
-                            h.distance,
-                        )),
-                        h,
-                    ),
+                    Some(h) => (Some(vertex_region(dirs[sector], origin, p, &h)), h),
                     None => (None, NO_SUMMARY),
                 }
             })
@@ -119,6 +117,35 @@ impl RegionTable {
         RegionTable::of_vertices(positions, field.origin(), field.config().sectors(), |v, s| {
             field.sector_summary(v, s)
         })
+    }
+
+    /// [`RegionTable::from_field`], taking the field: its summaries become the table's (no copy), and the rest of
+    /// the field is freed before the regions are allocated, which keeps a large terrain's peak memory lower by the
+    /// size of both.
+    pub fn from_field_owned(positions: &[DVec3], field: HorizonField) -> RegionTable {
+        let (origin, sectors) = (field.origin(), field.config().sectors());
+        let mut horizons = field.into_summaries();
+        let s = sectors as usize;
+        let dirs = directions(sectors);
+        let regions = horizons
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, h)| {
+                // As `sector_summary` reads the field: a NaN slope is an empty region.
+                if h.slope.is_nan() {
+                    *h = NO_SUMMARY;
+                    return None;
+                }
+                Some(vertex_region(dirs[i % s], origin, positions[i / s], h))
+            })
+            .collect();
+        RegionTable {
+            sectors,
+            origin,
+            directions: dirs,
+            regions,
+            horizons,
+        }
     }
 
     /// The regions of element sets: row `e` is the intersection of the rows of `members(e)` of `self`.

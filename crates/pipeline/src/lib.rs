@@ -213,8 +213,7 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
         p("regions", 0, 1);
     }
     let start = Instant::now();
-    let vertex_regions = RegionTable::from_field(tin.positions(), &field);
-    drop(field);
+    let vertex_regions = RegionTable::from_field_owned(tin.positions(), field);
     let regions_seconds = start.elapsed().as_secs_f64();
     if let Some(p) = &progress {
         p("regions", 1, 1);
