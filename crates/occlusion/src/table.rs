@@ -40,6 +40,12 @@ pub struct RegionTable {
     horizons: Vec<SectorHorizon>,
 }
 
+/// No horizon in a sector (as [`HorizonField`] marks it: a NaN slope).
+const NO_HORIZON: SectorHorizon = SectorHorizon {
+    slope: f64::NAN,
+    distance: f64::NAN,
+};
+
 /// The summary stored for an empty vertex region: no camera is ever beyond its left bound.
 const NO_SUMMARY: SectorHorizon = SectorHorizon {
     slope: 0.0,
@@ -80,35 +86,20 @@ impl RegionTable {
     }
 
     /// The regions of every vertex of a mesh, in plane coordinates relative to `origin`: in each sector, the wedge of
-    /// [`Region::of_vertex`] built from the vertex's sector horizon, or empty where `horizon(v, sector)` is `None`.
-    /// The table keeps the sector horizons too, for [`RegionTable::vertex_hidden_from`].
+    /// [`Region::of_vertex`] built from the vertex's sector horizon, or empty where `horizon(v, sector)` is `None`
+    /// (or has a NaN slope). The table keeps the sector horizons too, for [`RegionTable::vertex_hidden_from`].
     pub fn of_vertices(
         positions: &[DVec3],
         origin: DVec2,
         sectors: u32,
         horizon: impl Fn(u32, u32) -> Option<SectorHorizon> + Sync,
     ) -> RegionTable {
-        let dirs = directions(sectors);
         let s = sectors as usize;
-        // An indexed parallel iterator unzips straight into the two columns, without intermediate vectors.
-        let (regions, horizons) = (0..positions.len() * s)
+        let summaries = (0..positions.len() * s)
             .into_par_iter()
-            .map(|i| {
-                let (v, sector) = (i / s, i % s);
-                let p = positions[v];
-                match horizon(v as u32, sector as u32) {
-                    Some(h) => (Some(vertex_region(dirs[sector], origin, p, &h)), h),
-                    None => (None, NO_SUMMARY),
-                }
-            })
-            .unzip();
-        RegionTable {
-            sectors,
-            origin,
-            directions: dirs,
-            regions,
-            horizons,
-        }
+            .map(|i| horizon((i / s) as u32, (i % s) as u32).unwrap_or(NO_HORIZON))
+            .collect();
+        RegionTable::of_summaries(positions, origin, sectors, summaries)
     }
 
     /// The regions of every vertex from a horizon field (see [`RegionTable::of_vertices`]), relative to the field's
@@ -124,14 +115,19 @@ impl RegionTable {
     /// size of both.
     pub fn from_field_owned(positions: &[DVec3], field: HorizonField) -> RegionTable {
         let (origin, sectors) = (field.origin(), field.config().sectors());
-        let mut horizons = field.into_summaries();
+        RegionTable::of_summaries(positions, origin, sectors, field.into_summaries())
+    }
+
+    /// The vertex table of the summaries `horizons` (vertex-major, as [`HorizonField`] lays them out; a NaN slope is
+    /// no horizon, as [`HorizonField::sector_summary`] reads it), which it keeps, those entries replaced by
+    /// [`NO_SUMMARY`].
+    fn of_summaries(positions: &[DVec3], origin: DVec2, sectors: u32, mut horizons: Vec<SectorHorizon>) -> RegionTable {
         let s = sectors as usize;
         let dirs = directions(sectors);
         let regions = horizons
             .par_iter_mut()
             .enumerate()
             .map(|(i, h)| {
-                // As `sector_summary` reads the field: a NaN slope is an empty region.
                 if h.slope.is_nan() {
                     *h = NO_SUMMARY;
                     return None;
