@@ -112,10 +112,22 @@ impl RegionTable {
 
     /// [`RegionTable::from_field`], taking the field: its summaries become the table's (no copy), and the rest of
     /// the field is freed before the regions are allocated, which keeps a large terrain's peak memory lower by the
-    /// size of both.
+    /// size of both. `positions` may be the first vertices of the field's (a tile's own, before its halo): the table
+    /// holds those.
+    ///
+    /// # Panics
+    /// If `positions` has more vertices than the field.
     pub fn from_field_owned(positions: &[DVec3], field: HorizonField) -> RegionTable {
+        assert!(
+            positions.len() <= field.num_vertices(),
+            "{} positions for a horizon field of {} vertices",
+            positions.len(),
+            field.num_vertices()
+        );
         let (origin, sectors) = (field.origin(), field.config().sectors());
-        RegionTable::of_summaries(positions, origin, sectors, field.into_summaries())
+        let mut summaries = field.into_summaries();
+        summaries.truncate(positions.len() * sectors as usize);
+        RegionTable::of_summaries(positions, origin, sectors, summaries)
     }
 
     /// The vertex table of the summaries `horizons` (vertex-major, as [`HorizonField`] lays them out; a NaN slope is

@@ -288,10 +288,7 @@ pub fn build_tile(
     let horizon_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
     let n = tin.num_vertices();
-    let regions = RegionTable::of_vertices(&ext.positions()[..n], field.origin(), params.sectors, |v, s| {
-        field.sector_summary(v, s)
-    });
-    drop(field);
+    let regions = RegionTable::from_field_owned(&ext.positions()[..n], field);
     drop(ext);
     let regions_seconds = start.elapsed().as_secs_f64();
     let build = pipeline::build_from_regions(tin, regions, params, [horizon_seconds, regions_seconds], progress)
