@@ -16,6 +16,11 @@
 //! The crates whose types its functions take and return are re-exported, so that a library user needs only this one
 //! dependency: `pipeline::tin` (the terrain, its readers) and `pipeline::cull` (the hierarchy, cameras, cullers).
 //!
+//! Errors: [`build`], [`build_from_regions`] and [`BuildParams::validate`] return a [`BuildError`], whose variant
+//! says which stage refused (the horizon sweep, crystal grouping, the quadtree, or regions that do not fit the
+//! terrain) and holds that stage's own error; the file-format helpers ([`export`], [`gltf`]) return `anyhow` errors
+//! whose messages name the path or the element at fault.
+//!
 //! From a mesh to a `.tch` file and a cull, as `tincull build` and `tincull cull` do it (the file's bytes are
 //! [`cull::Hierarchy::to_bytes`]; [`cull::Hierarchy::load`] reads them back):
 //!
@@ -46,9 +51,14 @@
 //! ```
 #![warn(missing_docs)]
 
+mod error;
 pub mod export;
 pub mod gltf;
 pub mod palette;
+
+pub use error::BuildError;
+/// The errors of the stages, which [`BuildError`] holds.
+pub use {crystal::CrystalError, horizon::HorizonError, quadtree::QuadtreeError};
 
 pub use cull;
 pub use tin;
@@ -56,7 +66,6 @@ pub use tin;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::Result;
 use crystal::Crystal;
 pub use crystal::CrystalParams;
 use cull::{BuildInfo, Hierarchy, Mesh, Node, StoredRegion};
@@ -119,7 +128,7 @@ impl Default for BuildParams {
 impl BuildParams {
     /// Checks the values (the sectors and subsectors, the undersampling radius, the grouping's parameters), as
     /// [`build`] does before any work: a tile plan checks them before its jobs run.
-    pub fn validate(&self) -> Result<()> {
+    pub fn validate(&self) -> Result<(), BuildError> {
         SectorConfig::new(self.sectors, self.subsectors)?;
         horizon::check_undersampling_radius(self.undersampling)?;
         match &self.grouping {
@@ -196,7 +205,7 @@ pub struct Build {
 pub type BuildProgress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
 
 /// Runs the whole pipeline on `tin`.
-pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -> Result<Build> {
+pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -> Result<Build, BuildError> {
     params.validate()?;
     let config = SectorConfig::new(params.sectors, params.subsectors)?;
     let report_progress = progress.clone();
@@ -235,17 +244,16 @@ pub fn build_from_regions(
     params: &BuildParams,
     seconds: [f64; 2],
     progress: Option<BuildProgress>,
-) -> Result<Build> {
+) -> Result<Build, BuildError> {
     let [horizon_seconds, regions_seconds] = seconds;
     params.validate()?;
     if vertex_regions.len() != tin.num_vertices() || vertex_regions.sectors() != params.sectors {
-        anyhow::bail!(
-            "{} vertex region rows of {} sectors do not match a terrain of {} vertices built with {} sectors",
-            vertex_regions.len(),
-            vertex_regions.sectors(),
-            tin.num_vertices(),
-            params.sectors
-        );
+        return Err(BuildError::RegionsMismatch {
+            rows: vertex_regions.len(),
+            sectors: vertex_regions.sectors(),
+            vertices: tin.num_vertices(),
+            expected_sectors: params.sectors,
+        });
     }
     if let Some(p) = &progress {
         p("grouping", 0, 1);

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use pipeline::export::{from_json, mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
-use pipeline::{BuildParams, build};
+use pipeline::{BuildError, BuildParams, Grouping, QuadtreeParams, build, build_from_regions};
 use tin::{SynthOptions, synth_tin};
 
 fn built() -> pipeline::Build {
@@ -155,6 +155,63 @@ fn validate_refuses_what_build_refuses() {
         assert!(build(&tin, &params, None).is_err(), "build of radius {radius}");
     }
     assert!(BuildParams::default().validate().is_ok());
+}
+
+/// The error of a build that must fail.
+fn refused(result: Result<pipeline::Build, BuildError>, why: &str) -> BuildError {
+    match result {
+        Ok(_) => panic!("built, though {why}"),
+        Err(e) => e,
+    }
+}
+
+/// Each way a build fails is its own variant of [`BuildError`], which a library user can match on.
+#[test]
+fn build_errors_say_which_stage_refused() {
+    let tin = synth_tin(&SynthOptions::new(50, 1)).expect("a small synthetic terrain");
+    let sectors = BuildParams {
+        sectors: 3,
+        ..BuildParams::default()
+    };
+    let e = refused(build(&tin, &sectors, None), "3 sectors");
+    assert!(
+        matches!(
+            e,
+            BuildError::Horizon(pipeline::HorizonError::TooFewSectors { sectors: 3 })
+        ),
+        "{e:?}"
+    );
+    let mut crystal = BuildParams::default();
+    crystal.crystal.max_expanse = -1.0;
+    let e = refused(build(&tin, &crystal, None), "a negative expanse");
+    assert!(matches!(e, BuildError::Crystal(_)), "{e:?}");
+    assert!(e.to_string().contains("max_expanse"), "{e}");
+    let quadtree = BuildParams {
+        grouping: Grouping::Quadtree(QuadtreeParams {
+            depth: Some(99),
+            ..QuadtreeParams::default()
+        }),
+        ..BuildParams::default()
+    };
+    let e = refused(build(&tin, &quadtree, None), "depth 99");
+    assert!(matches!(e, BuildError::Quadtree(_)), "{e:?}");
+
+    // Regions of another terrain (or of another number of sectors) do not fit.
+    let built = build(&tin, &BuildParams::default(), None).expect("build");
+    let other = synth_tin(&SynthOptions::new(60, 2)).expect("another terrain");
+    let e = refused(
+        build_from_regions(&other, built.vertex_regions, &BuildParams::default(), [0.0; 2], None),
+        "50 rows for 60 vertices",
+    );
+    match e {
+        BuildError::RegionsMismatch {
+            rows,
+            sectors,
+            vertices,
+            expected_sectors,
+        } => assert_eq!((rows, sectors, vertices, expected_sectors), (50, 16, 60, 16)),
+        e => panic!("{e:?}"),
+    }
 }
 
 #[test]
