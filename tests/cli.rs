@@ -1038,7 +1038,7 @@ fn parameters_come_from_toml_and_the_command_line_wins() {
             "--config",
             s(&toml),
         ],
-        "p.toml",
+        "p.toml: invalid parameters: unknown key `sector`",
     );
 }
 

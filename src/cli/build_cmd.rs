@@ -19,7 +19,6 @@ use pipeline::{BuildParams, BuildReport, Grouping, QuadtreeParams, build};
 
 /// Parameters that may also come from a TOML file (`--config`); the command line wins.
 #[derive(Debug, Default, Clone, Args, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct ParamArgs {
     /// Number of sectors [default: 16].
     #[arg(long)]
@@ -30,6 +29,18 @@ pub struct ParamArgs {
     /// Crystal seeds of the first pass [default: one per 200 triangles].
     #[arg(long)]
     pub seeds: Option<usize>,
+    /// Seed of the random generator [default: 1].
+    #[arg(long)]
+    pub rng_seed: Option<u64>,
+    /// The parameters that `sweep` takes as they are (it sweeps the four above).
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub fixed: FixedParamArgs,
+}
+
+/// The build parameters that `tincull sweep` does not sweep: one definition for every command that builds.
+#[derive(Debug, Default, Clone, Args, Deserialize)]
+pub struct FixedParamArgs {
     /// Orphan passes after the first [default: 10].
     #[arg(long)]
     pub orphan_passes: Option<u32>,
@@ -39,9 +50,6 @@ pub struct ParamArgs {
     /// A merge whose bounding circle covers more than this fraction of the terrain's area is not made [default: 0.25].
     #[arg(long)]
     pub max_expanse: Option<f64>,
-    /// Seed of the random generator [default: 1].
-    #[arg(long)]
-    pub rng_seed: Option<u64>,
     /// Radius (m) of the horizon undersampling fix [default: off].
     #[arg(long, value_name = "RADIUS")]
     pub undersampling: Option<f64>,
@@ -63,12 +71,39 @@ pub struct ParamArgs {
     pub max_bytes: Option<u64>,
 }
 
+/// The keys of a `--config` file: the long options of [`ParamArgs`] with underscores, and `cell` (the older name of
+/// `cell_size`). Checked by hand, because serde cannot refuse unknown keys of a struct with a flattened part.
+const CONFIG_KEYS: [&str; 13] = [
+    "sectors",
+    "subsectors",
+    "seeds",
+    "rng_seed",
+    "orphan_passes",
+    "min_group",
+    "max_expanse",
+    "undersampling",
+    "grouping",
+    "depth",
+    "cell_size",
+    "cell",
+    "max_bytes",
+];
+
 impl ParamArgs {
     /// The parameters of a `--config` TOML file (keys as the long options of these parameters, with underscores;
     /// any other key is refused).
     pub fn read(path: &Path) -> Result<ParamArgs> {
         let text = infile::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-        toml::from_str(&text).with_context(|| format!("{}: invalid parameters", path.display()))
+        let invalid = || format!("{}: invalid parameters", path.display());
+        let table: toml::Table = toml::from_str(&text).with_context(invalid)?;
+        if let Some(key) = table.keys().find(|k| !CONFIG_KEYS.contains(&k.as_str())) {
+            anyhow::bail!(
+                "{}: unknown key `{key}`; the keys are {}",
+                invalid(),
+                CONFIG_KEYS.join(", ")
+            );
+        }
+        toml::from_str(&text).with_context(invalid)
     }
 
     /// Command-line values over those of `file` over the defaults.
@@ -81,16 +116,22 @@ impl ParamArgs {
         let mut p = d.clone();
         p.sectors = self.sectors.or(from_file.sectors).unwrap_or(d.sectors);
         p.subsectors = self.subsectors.or(from_file.subsectors).unwrap_or(d.subsectors);
-        p.undersampling = self.undersampling.or(from_file.undersampling);
+        p.undersampling = self.fixed.undersampling.or(from_file.fixed.undersampling);
         p.crystal.seeds = self.seeds.or(from_file.seeds);
         p.crystal.orphan_passes = self
+            .fixed
             .orphan_passes
-            .or(from_file.orphan_passes)
+            .or(from_file.fixed.orphan_passes)
             .unwrap_or(d.crystal.orphan_passes);
-        p.crystal.min_group = self.min_group.or(from_file.min_group).unwrap_or(d.crystal.min_group);
+        p.crystal.min_group = self
+            .fixed
+            .min_group
+            .or(from_file.fixed.min_group)
+            .unwrap_or(d.crystal.min_group);
         p.crystal.max_expanse = self
+            .fixed
             .max_expanse
-            .or(from_file.max_expanse)
+            .or(from_file.fixed.max_expanse)
             .unwrap_or(d.crystal.max_expanse);
         p.crystal.rng_seed = self.rng_seed.or(from_file.rng_seed).unwrap_or(d.crystal.rng_seed);
         if let Some(r) = p.undersampling
@@ -103,10 +144,10 @@ impl ParamArgs {
         }
         // The depth and the cell size are one choice (the finest level): either on the command line replaces both of
         // the file's.
-        let (depth, cell) = if self.depth.is_some() || self.cell_size.is_some() {
-            (self.depth, self.cell_size)
+        let (depth, cell) = if self.fixed.depth.is_some() || self.fixed.cell_size.is_some() {
+            (self.fixed.depth, self.fixed.cell_size)
         } else {
-            (from_file.depth, from_file.cell_size)
+            (from_file.fixed.depth, from_file.fixed.cell_size)
         };
         anyhow::ensure!(
             depth.is_none() || cell.is_none(),
@@ -116,9 +157,9 @@ impl ParamArgs {
         let quadtree = QuadtreeParams {
             depth,
             cell,
-            max_bytes: self.max_bytes.or(from_file.max_bytes),
+            max_bytes: self.fixed.max_bytes.or(from_file.fixed.max_bytes),
         };
-        match self.grouping.as_deref().or(from_file.grouping.as_deref()) {
+        match self.fixed.grouping.as_deref().or(from_file.fixed.grouping.as_deref()) {
             None | Some("crystal") => {
                 if quadtree != QuadtreeParams::default() {
                     anyhow::bail!("--depth, --cell-size and --max-bytes need --grouping quadtree");
@@ -130,14 +171,18 @@ impl ParamArgs {
                     ("--seeds", self.seeds.is_some(), from_file.seeds.is_some()),
                     (
                         "--orphan-passes",
-                        self.orphan_passes.is_some(),
-                        from_file.orphan_passes.is_some(),
+                        self.fixed.orphan_passes.is_some(),
+                        from_file.fixed.orphan_passes.is_some(),
                     ),
-                    ("--min-group", self.min_group.is_some(), from_file.min_group.is_some()),
+                    (
+                        "--min-group",
+                        self.fixed.min_group.is_some(),
+                        from_file.fixed.min_group.is_some(),
+                    ),
                     (
                         "--max-expanse",
-                        self.max_expanse.is_some(),
-                        from_file.max_expanse.is_some(),
+                        self.fixed.max_expanse.is_some(),
+                        from_file.fixed.max_expanse.is_some(),
                     ),
                     ("--rng-seed", self.rng_seed.is_some(), from_file.rng_seed.is_some()),
                 ];
@@ -163,7 +208,7 @@ impl ParamArgs {
             }
             Some(other) => {
                 let given = match file {
-                    Some(path) if self.grouping.is_none() => format!("`grouping` (in {})", path.display()),
+                    Some(path) if self.fixed.grouping.is_none() => format!("`grouping` (in {})", path.display()),
                     _ => "--grouping".to_string(),
                 };
                 anyhow::bail!("{given}: unknown grouping {other:?}; expected crystal or quadtree")
@@ -393,4 +438,47 @@ pub fn peak_memory_bytes() -> Option<u64> {
         .parse()
         .ok()?;
     Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every key of [`CONFIG_KEYS`] is read into its field (the hand-written list and the structs agree), and a key
+    /// outside it is refused with the list.
+    #[test]
+    fn every_config_key_is_read_and_no_other() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("p.toml");
+        let text = "sectors = 8\nsubsectors = 2\nseeds = 50\nrng_seed = 3\norphan_passes = 4\nmin_group = 20\n\
+                    max_expanse = 0.5\nundersampling = 100.0\ngrouping = \"quadtree\"\ndepth = 3\nmax_bytes = 1000\n";
+        std::fs::write(&path, text).expect("write");
+        let p = ParamArgs::read(&path).expect("every key but the cell size");
+        let f = &p.fixed;
+        assert_eq!(
+            (p.sectors, p.subsectors, p.seeds, p.rng_seed),
+            (Some(8), Some(2), Some(50), Some(3))
+        );
+        assert_eq!(
+            (f.orphan_passes, f.min_group, f.max_expanse),
+            (Some(4), Some(20), Some(0.5))
+        );
+        assert_eq!(
+            (f.undersampling, f.grouping.as_deref()),
+            (Some(100.0), Some("quadtree"))
+        );
+        assert_eq!((f.depth, f.cell_size, f.max_bytes), (Some(3), None, Some(1000)));
+        for key in ["cell_size", "cell"] {
+            std::fs::write(&path, format!("{key} = 250.0\n")).expect("write");
+            assert_eq!(ParamArgs::read(&path).expect(key).fixed.cell_size, Some(250.0), "{key}");
+        }
+        assert_eq!(
+            text.lines().count() + 2,
+            CONFIG_KEYS.len(),
+            "a key of the list is not tested here"
+        );
+        std::fs::write(&path, "sectors = 8\ncolumns = 64\n").expect("write");
+        let e = format!("{:#}", ParamArgs::read(&path).expect_err("not a build parameter"));
+        assert!(e.contains("unknown key `columns`") && e.contains("max_bytes"), "{e}");
+    }
 }

@@ -13,7 +13,7 @@ use clap::Args;
 use serde_json::json;
 use truth::ViewpointClass;
 
-use super::build_cmd::ParamArgs;
+use super::build_cmd::{FixedParamArgs, ParamArgs};
 use super::files::write_one;
 use super::mesh_input::MeshArgs;
 use super::{Output, OutputArgs};
@@ -52,32 +52,10 @@ pub struct SweepArgs {
     /// Horizontal field of view in degrees (360 = all around).
     #[arg(long, default_value_t = 360.0)]
     pub fov: f64,
-    /// Orphan passes after the first [default: 10].
-    #[arg(long)]
-    pub orphan_passes: Option<u32>,
-    /// Smallest group kept [default: 30].
-    #[arg(long)]
-    pub min_group: Option<usize>,
-    /// Expanse limit of hierarchy nodes as a fraction of the terrain's area [default: 0.25].
-    #[arg(long)]
-    pub max_expanse: Option<f64>,
-    /// Radius (m) of the horizon undersampling fix [default: off].
-    #[arg(long, value_name = "RADIUS")]
-    pub undersampling: Option<f64>,
-    /// Grouping of every build: `crystal` or `quadtree` (Stewart's baseline; its region test is reported as
-    /// `stewart`) [default: crystal]. The grouping is part of the CSV's `setup`: a file of one grouping is not resumed
-    /// with the other (write each to its own file).
-    #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
-    pub grouping: Option<String>,
-    /// Quadtree: finest depth [default: cells of about 128 triangles].
-    #[arg(long, value_name = "D", conflicts_with = "cell_size")]
-    pub depth: Option<u32>,
-    /// Quadtree: finest cell side in metres, instead of --depth.
-    #[arg(long, value_name = "M")]
-    pub cell_size: Option<f64>,
-    /// Quadtree: byte budget of the visibility data (memory levels).
-    #[arg(long, value_name = "N")]
-    pub max_bytes: Option<u64>,
+    /// The build parameters that are not swept, as `build` takes them (a quadtree's region test is reported as
+    /// `stewart`).
+    #[command(flatten)]
+    pub fixed: FixedParamArgs,
     /// Read the build parameters that are not swept from this TOML file, as `build --config` does (the command line
     /// wins); the swept ones (`sectors`, `subsectors`, `seeds`, `rng_seed`) are refused there: give them as lists.
     #[arg(long, value_name = "FILE")]
@@ -86,7 +64,7 @@ pub struct SweepArgs {
     #[arg(long)]
     pub no_per_triangle: bool,
     /// The CSV file of results; combinations already in it are skipped (it must have been written with the same mesh,
-    /// build options and evaluation options, else it is refused; `--viewpoints` is part of each line's key, as the
+    /// build options, the grouping among them, and evaluation options, else it is refused; `--viewpoints` is part of each line's key, as the
     /// swept values are, so a run with another count adds its own lines beside the others).
     #[arg(short, long)]
     pub out: PathBuf,
@@ -121,14 +99,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         }
     }
     let base = ParamArgs {
-        orphan_passes: args.orphan_passes,
-        min_group: args.min_group,
-        max_expanse: args.max_expanse,
-        undersampling: args.undersampling,
-        grouping: args.grouping.clone(),
-        depth: args.depth,
-        cell_size: args.cell_size,
-        max_bytes: args.max_bytes,
+        fixed: args.fixed.clone(),
         ..ParamArgs::default()
     }
     .resolve(args.config.as_deref())?;

@@ -103,11 +103,11 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             let c = &mut params.crystal;
             params.subsectors = p.subsectors.unwrap_or(b.subsectors);
             c.seeds = p.seeds.or(Some(b.seeds as usize).filter(|&s| s > 0));
-            c.orphan_passes = p.orphan_passes.unwrap_or(b.orphan_passes);
-            c.min_group = p.min_group.unwrap_or(b.min_group as usize);
-            c.max_expanse = p.max_expanse.unwrap_or(b.max_expanse);
+            c.orphan_passes = p.fixed.orphan_passes.unwrap_or(b.orphan_passes);
+            c.min_group = p.fixed.min_group.unwrap_or(b.min_group as usize);
+            c.max_expanse = p.fixed.max_expanse.unwrap_or(b.max_expanse);
             c.rng_seed = p.rng_seed.unwrap_or(b.rng_seed);
-            params.undersampling = p.undersampling.or(b.undersampling);
+            params.undersampling = p.fixed.undersampling.or(b.undersampling);
         }
         Source::Hierarchy(h)
     } else {
