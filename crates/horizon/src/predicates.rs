@@ -104,7 +104,12 @@ fn exact_sign_of_products(pairs: &[(f64, f64)]) -> Ordering {
 pub use tin::predicates::orientation as orient2d;
 
 /// A point's position across a line direction `e`: the value `cross(e, x) = e.x·x.y − e.y·x.x`, in f64, with the
-/// magnitude needed to bound its rounding error.
+/// magnitude needed to bound its rounding error (0 when the value is exact).
+///
+/// Across an axis (`e` one of `(±1, 0)`, `(0, ±1)`, as the sector boundaries at multiples of 90° are,
+/// [`crate::sector`]) the value is exact: one product is `±x.y` or `±x.x`, the other `±0`, and subtracting a zero is
+/// exact. Its magnitude is then 0, so comparisons of two such keys need no exact fallback, and ties (every vertex
+/// of one grid row, for a TIN from a DEM) are decided at once.
 ///
 /// `cross(e, q − p) ≥ 0` (q on or left of the line through p with direction e) exactly when
 /// `key(q) ≥ key(p)` in exact arithmetic; [`LineKey::cmp_exact`] decides that comparison exactly.
@@ -120,9 +125,10 @@ impl LineKey {
     pub fn new(e: DVec2, x: DVec2) -> LineKey {
         let u = e.x * x.y;
         let v = e.y * x.x;
+        let axis = (e.x == 0.0 || e.y == 0.0) && e.x.abs() + e.y.abs() == 1.0;
         LineKey {
             value: u - v,
-            magnitude: u.abs() + v.abs(),
+            magnitude: if axis { 0.0 } else { u.abs() + v.abs() },
         }
     }
 
@@ -138,7 +144,8 @@ impl LineKey {
         2.0 * KEY_ERR_BOUND * max_magnitude
     }
 
-    /// The magnitude `|e.x·x.y| + |e.y·x.x|` that bounds the rounding error of the value.
+    /// The magnitude `|e.x·x.y| + |e.y·x.x|` that bounds the rounding error of the value; 0 when the value is exact
+    /// (across an axis).
     #[inline]
     pub fn magnitude(&self) -> f64 {
         self.magnitude
@@ -154,6 +161,9 @@ impl LineKey {
             Ordering::Greater
         } else if d < -bound {
             Ordering::Less
+        } else if bound == 0.0 {
+            // Both values exact (magnitudes 0), and equal.
+            Ordering::Equal
         } else {
             side_exact(e, q, p)
         }
@@ -241,6 +251,30 @@ mod tests {
             let (e, q, p) = (DVec2::new(ex, ey), DVec2::new(qx, qy), DVec2::new(px, py));
             let (exi, eyi) = (to_int(ex), to_int(ey));
             let expect = (exi * (to_int(qy) - to_int(py)) - eyi * (to_int(qx) - to_int(px))).cmp(&0);
+            prop_assert_eq!(side(e, p, q), expect);
+            prop_assert_eq!(side_exact(e, q, p), expect);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// Across the axes the keys are exact (magnitude 0) and decide every comparison, ties included, as integer
+        /// arithmetic does.
+        #[test]
+        fn axis_keys_are_exact(axis in 0usize..4, qx in lattice(), qy in lattice(), px in lattice(), py in lattice(),
+                               tie in any::<bool>()) {
+            let (ex, ey) = [(1i128, 0i128), (0, 1), (-1, 0), (0, -1)][axis];
+            let e = DVec2::new(ex as f64, ey as f64);
+            // Half the cases on the line through p (a grid row or column).
+            let q = match (tie, ey == 0) {
+                (true, true) => DVec2::new(qx, py),
+                (true, false) => DVec2::new(px, qy),
+                (false, _) => DVec2::new(qx, qy),
+            };
+            let p = DVec2::new(px, py);
+            prop_assert_eq!(LineKey::new(e, q).magnitude(), 0.0);
+            let expect = (ex * (to_int(q.y) - to_int(py)) - ey * (to_int(q.x) - to_int(px))).cmp(&0);
             prop_assert_eq!(side(e, p, q), expect);
             prop_assert_eq!(side_exact(e, q, p), expect);
         }
