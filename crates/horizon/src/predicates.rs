@@ -179,6 +179,19 @@ pub fn side(e: DVec2, p: DVec2, q: DVec2) -> Ordering {
 
 #[cold]
 fn side_exact(e: DVec2, q: DVec2, p: DVec2) -> Ordering {
+    // Across a diagonal (`|e.x| = |e.y|`, the sector boundaries at odd multiples of 45°), `cross(e, q − p) =
+    // |e.x| (sgn(e.x) (q.y − p.y) − sgn(e.y) (q.x − p.x))`. When both differences are exact in f64 (their `two_sum`
+    // errors are 0: nearby points, by Sterbenz's lemma, such as the vertices of one diagonal of a square grid), its
+    // sign is one comparison of f64 values, which is exact.
+    if e.x.abs() == e.y.abs() && e.x != 0.0 {
+        let (dx, err_x) = two_sum(q.x, -p.x);
+        let (dy, err_y) = two_sum(q.y, -p.y);
+        if err_x == 0.0 && err_y == 0.0 {
+            let a = if e.x > 0.0 { dy } else { -dy };
+            let b = if e.y > 0.0 { dx } else { -dx };
+            return a.partial_cmp(&b).unwrap_or(Ordering::Equal);
+        }
+    }
     exact_sign_of_products(&[(e.x, q.y), (-e.y, q.x), (-e.x, p.y), (e.y, p.x)])
 }
 
@@ -275,6 +288,27 @@ mod tests {
             let p = DVec2::new(px, py);
             prop_assert_eq!(LineKey::new(e, q).magnitude(), 0.0);
             let expect = (ex * (to_int(q.y) - to_int(py)) - ey * (to_int(q.x) - to_int(px))).cmp(&0);
+            prop_assert_eq!(side(e, p, q), expect);
+            prop_assert_eq!(side_exact(e, q, p), expect);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+        /// Across the diagonals (`(±h, ±h)`, `h` = f64 `1/√2`) the exact sign is `sgn(e.x) dy − sgn(e.y) dx`, ties
+        /// (q on the diagonal through p, as on a square grid) included, whether or not the differences are exact.
+        #[test]
+        fn diagonal_sides_are_exact(diagonal in 0usize..4, qx in lattice(), qy in lattice(), px in lattice(),
+                                    py in lattice(), step in -1000i32..1000, tie in any::<bool>()) {
+            let h = std::f64::consts::FRAC_1_SQRT_2;
+            let (sx, sy) = [(1i128, 1i128), (-1, 1), (-1, -1), (1, -1)][diagonal];
+            let e = DVec2::new(sx as f64 * h, sy as f64 * h);
+            let p = DVec2::new(px, py);
+            // Half the cases on the diagonal through p: q − p = step · (sx, sy) on the 2^-12 lattice.
+            let d = step as f64 / 64.0;
+            let q = if tie { DVec2::new(px + sx as f64 * d, py + sy as f64 * d) } else { DVec2::new(qx, qy) };
+            let expect = (sx * (to_int(q.y) - to_int(py)) - sy * (to_int(q.x) - to_int(px))).cmp(&0);
             prop_assert_eq!(side(e, p, q), expect);
             prop_assert_eq!(side_exact(e, q, p), expect);
         }
