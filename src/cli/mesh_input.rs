@@ -286,7 +286,7 @@ pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: 
 
 /// Warns when a mesh looks modelled with y up ([`y_up_hint`]).
 pub fn warn_if_y_up(tin: &Tin, path: &std::path::Path, out: Output) {
-    if let Some(hint) = y_up_hint(tin::mesh_stats(tin).bbox.size().to_array(), path) {
+    if let Some(hint) = y_up_hint(tin.bbox().size().to_array(), path) {
         out.warn(hint);
     }
 }

@@ -16,6 +16,14 @@
 //! the TIN, to stay light) and return a draw list all the same; the `tincull` commands refuse such eyes with
 //! `truth::ground_heights`. A renderer keeps its camera above the ground, as it must to draw anything.
 //!
+//! The terrain must be a height field: one surface over the plane, triangles that do not overlap in x,y and meet
+//! without cracks. The safe cullers' theorem is about sight lines passing below such a surface (an edge of a mesh that
+//! folds over itself need not block what lies behind it). Every `.tch` that `tincull build` or `tiles merge` writes
+//! holds one (`build` triangulates the terrain itself and checks a mesh's own triangles under `--keep-faces`; a merge
+//! joins tiles that cover the grid side by side, which its tests check with `tin::validate`); [`Hierarchy::load`]
+//! checks a file's structure ([`Hierarchy::check_invariants`]), not this, which takes a spatial index: for a file from
+//! elsewhere, `tincull info FILE.tch` reports it (its `height field` line), as `tin::validate` does in code.
+//!
 //! In a renderer (the `pipeline` crate's documentation has a whole build and cull that runs):
 //!
 //! ```no_run

@@ -117,6 +117,9 @@ fn merged_terrain_reproduces_every_sample_within_the_bound() {
         let area: f64 = (0..tin.num_triangles()).map(|t| tin.triangle_area_xy(t)).sum();
         let expected = (grid.cols - 1) as f64 * grid.dx * (grid.rows - 1) as f64 * grid.dy;
         assert!((area - expected).abs() <= 1e-9 * expected, "area {area} != {expected}");
+        // A height field (no overlap, no crack, no duplicate x,y), which the safe culler's theorem is about.
+        let report = tin::validate(&tin);
+        assert!(report.is_height_field(), "error bound {e}: {:?}", report.warnings);
     }
 }
 
@@ -501,6 +504,8 @@ fn voids_across_tile_sides_still_join() {
     let h = build_all(&plan, &path);
     let tin = tin_of(&h);
     assert!(max_sample_error(&grid, &tin) <= 0.5 + 1e-9);
+    let report = tin::validate(&tin);
+    assert!(report.is_height_field(), "{:?}", report.warnings);
 }
 
 #[test]
