@@ -29,8 +29,6 @@
 //!   0.5 m at UTM northings); coordinates relative to [`Tin::origin`] are flagged when their f32 spacing exceeds 1% of
 //!   the shortest x,y edge.
 
-use std::collections::HashMap;
-
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -507,7 +505,8 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
     let mut near_degenerate_triangles = 0;
     let mut slivers = Vec::new();
     let mut min_edge_xy = f64::INFINITY;
-    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(triangles.len() * 2);
+    // Every directed edge as (smaller end, larger end, whether it runs from the larger to the smaller), sorted below.
+    let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(triangles.len() * 3);
     for (t, tri) in triangles.iter().enumerate() {
         if tri.iter().any(|&v| v as usize >= n) {
             bad_index_triangles += 1;
@@ -518,13 +517,7 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
         }
         for i in 0..3 {
             let (a, b) = (tri[i], tri[(i + 1) % 3]);
-            // Per undirected edge: uses in direction min->max and max->min.
-            let e = edges.entry((a.min(b), a.max(b))).or_default();
-            if a < b {
-                e.0 += 1;
-            } else {
-                e.1 += 1;
-            }
+            edges.push((a.min(b), a.max(b), a > b));
         }
         let c = tri.map(|v| positions[v as usize].truncate());
         if !c.iter().all(|p| p.is_finite()) {
@@ -553,7 +546,13 @@ pub fn validate_parts(positions: &[DVec3], triangles: &[[u32; 3]]) -> Validation
             slivers.push(t as u32);
         }
     }
-    let non_manifold_edges = edges.values().filter(|&&(f, b)| f > 1 || b > 1).count();
+    // An undirected edge is non-manifold when it is used twice in the same direction (or more than twice, which
+    // needs that): equal neighbours in the sorted list.
+    edges.par_sort_unstable();
+    let non_manifold_edges = edges
+        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .filter(|uses| uses.windows(2).any(|w| w[0] == w[1]))
+        .count();
     let unreferenced_vertices = referenced.iter().filter(|&&r| !r).count();
     let duplicate_xy_vertices = {
         let mut keys: Vec<(u64, u64)> = positions
