@@ -34,6 +34,8 @@
 //! not depend on scheduling. Triangles are tested in parallel (rayon); the result is collected in triangle order,
 //! so it does not depend on the number of threads.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
 use rayon::prelude::*;
 use tin::Tin;
@@ -58,7 +60,7 @@ const BLOCKER_CACHE: usize = 4;
 #[derive(Clone, Debug)]
 pub struct GroundTruth<'a> {
     tin: &'a Tin,
-    locator: Locator,
+    locator: Cow<'a, Locator>,
 }
 
 /// Visible triangles of `tin` from `eye`, one flag per triangle in the TIN's order (a lower bound of `V`).
@@ -73,7 +75,20 @@ impl<'a> GroundTruth<'a> {
     pub fn new(tin: &'a Tin) -> GroundTruth<'a> {
         GroundTruth {
             tin,
-            locator: Locator::new(tin),
+            locator: Cow::Owned(Locator::new(tin)),
+        }
+    }
+
+    /// Prepares ground truth for `tin` with a locator built before ([`Locator::new`], e.g. kept for height queries);
+    /// one that does not [match](Locator::matches) `tin` is not used: a new one is built.
+    pub fn with_locator(tin: &'a Tin, locator: &'a Locator) -> GroundTruth<'a> {
+        if locator.matches(tin) {
+            GroundTruth {
+                tin,
+                locator: Cow::Borrowed(locator),
+            }
+        } else {
+            GroundTruth::new(tin)
         }
     }
 
@@ -281,6 +296,27 @@ mod tests {
             DVec3::new(0.0, 10.0, 0.0),
         ];
         Tin::from_parts(p, vec![[0, 1, 2], [0, 2, 3]]).expect("square")
+    }
+
+    /// A locator built before serves the TIN it was built from; one built from another TIN is not used (its triangle
+    /// numbers mean other triangles): ground truth then builds its own and sees what a fresh one sees.
+    #[test]
+    fn a_given_locator_is_used_only_for_its_own_tin() {
+        let tin = flat();
+        let own = Locator::new(&tin);
+        let gt = GroundTruth::with_locator(&tin, &own);
+        assert!(std::ptr::eq(gt.locator(), &own));
+        let eye = DVec3::new(3.0, 4.0, 2.0);
+        assert_eq!(gt.visible_triangles(eye), GroundTruth::new(&tin).visible_triangles(eye));
+        let other = Tin::from_parts(
+            vec![DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0)],
+            vec![[0, 1, 2]],
+        )
+        .expect("one triangle");
+        let foreign = Locator::new(&other);
+        let gt = GroundTruth::with_locator(&tin, &foreign);
+        assert!(!std::ptr::eq(gt.locator(), &foreign) && gt.locator().matches(&tin));
+        assert_eq!(gt.visible_triangles(eye), vec![true, true]);
     }
 
     #[test]

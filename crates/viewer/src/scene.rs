@@ -169,30 +169,6 @@ impl Terrain {
         ]
     }
 
-    /// The terrain height (world z) under world `(x, y)`, or `None` outside the mesh (linear search; for clicks).
-    pub fn height_at(&self, x: f64, y: f64) -> Option<f64> {
-        let (px, py) = (x - self.origin[0], y - self.origin[1]);
-        let p = |v: u32| {
-            let q = self.positions[v as usize];
-            [f64::from(q[0]), f64::from(q[1]), f64::from(q[2])]
-        };
-        for t in &self.triangles {
-            let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
-            let det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
-            if det == 0.0 {
-                continue;
-            }
-            let l1 = ((px - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (py - a[1])) / det;
-            let l2 = ((b[0] - a[0]) * (py - a[1]) - (px - a[0]) * (b[1] - a[1])) / det;
-            let l0 = 1.0 - l1 - l2;
-            let eps = -1e-9;
-            if l0 >= eps && l1 >= eps && l2 >= eps {
-                return Some(l0 * a[2] + l1 * b[2] + l2 * c[2] + self.origin[2]);
-            }
-        }
-        None
-    }
-
     /// Per-triangle colours for `mode`. `level` picks the level of [`ColourMode::Level`] (default: the top);
     /// `drawn` is the culler's mask for [`ColourMode::Visibility`] (required there). Modes that need a hierarchy
     /// fail on a plain mesh, naming the mode.

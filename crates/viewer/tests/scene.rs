@@ -102,8 +102,6 @@ fn positions_are_relative_to_the_hierarchy_origin() {
     assert_eq!(t.max, [100.0, 100.0, 0.0]);
     assert_eq!(t.to_local(world(12.5, 50.0, 2.0)), [12.5, 50.0, 2.0]);
     assert_eq!(t.to_world([12.5, 50.0, 2.0]), world(12.5, 50.0, 2.0));
-    assert_eq!(t.height_at(ORIGIN[0] + 33.0, ORIGIN[1] + 71.0), Some(ORIGIN[2]));
-    assert_eq!(t.height_at(ORIGIN[0] - 1.0, ORIGIN[1]), None);
 }
 
 #[test]

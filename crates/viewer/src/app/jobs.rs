@@ -51,11 +51,12 @@ impl ViewerApp {
         }
         let (tx, rx) = channel();
         let tin = Arc::clone(&self.model.tin);
+        let locator = Arc::clone(&self.model.locator);
         let camera = self.camera();
         let ctx = ctx.clone();
         std::thread::spawn(move || {
             let eye = DVec3::from_array(camera.position);
-            let mut visible = truth::visible_triangles(&tin, eye);
+            let mut visible = truth::GroundTruth::with_locator(&tin, &locator).visible_triangles(eye);
             // A view narrower than 360° sees only its wedge: what lies outside it is culled by the view, not hidden
             // wrongly (as `eval --fov` scores it).
             if camera.hfov > 0.0 && camera.hfov < std::f64::consts::TAU {

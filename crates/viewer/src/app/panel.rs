@@ -48,7 +48,7 @@ impl ViewerApp {
                     .text("height above ground m"),
             )
             .changed()
-            && let Some(z) = self.terrain().height_at(self.eye[0], self.eye[1])
+            && let Some(z) = self.model.ground(self.eye[0], self.eye[1])
         {
             self.eye[2] = z + self.eye_height;
             eye_changed = true;
