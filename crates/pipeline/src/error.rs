@@ -31,3 +31,45 @@ pub enum BuildError {
         expected_sectors: u32,
     },
 }
+
+/// Why an export to the hierarchy's other forms (grouped OBJ, JSON, glTF) or a read back from them failed: the error
+/// of the functions of [`crate::export`] and [`crate::gltf`]. Messages name the path or the element at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    /// The hierarchy has no vertex or no triangle (glTF has nothing to hold).
+    #[error("the hierarchy has no triangles to export")]
+    NoTriangles,
+    /// A `.glb` holds at most 4 GiB (its length is a `u32`).
+    #[error("the mesh is too large for a .glb (over 4 GiB)")]
+    TooLargeForGlb,
+    /// An output path that the export cannot use (it would overwrite its own companion file, or has no file name).
+    #[error("{}: {reason}", path.display())]
+    Path {
+        /// The path given.
+        path: std::path::PathBuf,
+        /// Why it cannot be used.
+        reason: &'static str,
+    },
+    /// JSON that could not be encoded or decoded (`context` says what and where; the decoder's message says why).
+    #[error("{context}: {cause}")]
+    Json {
+        /// What was encoded or decoded: a sentence, or the element's path in the document (`nodes[3].extras.tincull`).
+        context: String,
+        /// The encoder's or decoder's error.
+        cause: serde_json::Error,
+    },
+    /// A glTF document that is not one [`crate::gltf::to_gltf`] writes: the message names the element.
+    #[error("{0}")]
+    Malformed(String),
+    /// What was read back is not a valid hierarchy ([`cull::Hierarchy::check_invariants`]).
+    #[error(transparent)]
+    Invalid(#[from] cull::HierarchyError),
+}
+
+impl ExportError {
+    /// [`ExportError::Json`] with `context` (for `map_err`).
+    pub(crate) fn json(context: impl Into<String>) -> impl FnOnce(serde_json::Error) -> ExportError {
+        let context = context.into();
+        move |cause| ExportError::Json { context, cause }
+    }
+}

@@ -8,25 +8,30 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, ensure};
 use cull::Hierarchy;
+
+use crate::ExportError;
 
 use crate::palette::{ORPHAN_COLOUR, group_colour};
 
 /// The `.mtl` written beside a grouped OBJ (`obj` with the extension `mtl`) and the name the OBJ refers to it by.
 /// Refused when it would be the OBJ itself (`--obj same.mtl`), so that the export never overwrites its own materials.
-pub fn mtl_path(obj: &Path) -> Result<(PathBuf, String)> {
+pub fn mtl_path(obj: &Path) -> Result<(PathBuf, String), ExportError> {
+    let refuse = |reason| ExportError::Path {
+        path: obj.to_path_buf(),
+        reason,
+    };
     let mtl = obj.with_extension("mtl");
-    ensure!(
-        mtl != obj,
-        "{}: the grouped OBJ's materials go to the same path with the extension .mtl, which is this file; give \
-         the OBJ another extension (e.g. .obj)",
-        obj.display()
-    );
+    if mtl == obj {
+        return Err(refuse(
+            "the grouped OBJ's materials go to the same path with the extension .mtl, which is this file; give the \
+             OBJ another extension (e.g. .obj)",
+        ));
+    }
     let name = mtl
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
-        .with_context(|| format!("{}: the OBJ path has no file name", obj.display()))?;
+        .ok_or_else(|| refuse("the OBJ path has no file name"))?;
     Ok((mtl, name))
 }
 
@@ -76,13 +81,14 @@ pub fn write_grouped_obj_to(h: &Hierarchy, mtl_name: &str, w: &mut dyn Write) ->
 }
 
 /// The hierarchy's JSON form: the same content as the `.tch` file, for people and notebooks.
-pub fn to_json(h: &Hierarchy) -> Result<String> {
-    Ok(serde_json::to_string(h)?)
+pub fn to_json(h: &Hierarchy) -> Result<String, ExportError> {
+    serde_json::to_string(h).map_err(ExportError::json("cannot encode the hierarchy as JSON"))
 }
 
 /// Parses the JSON form, checking every structural invariant of the hierarchy.
-pub fn from_json(text: &str) -> Result<Hierarchy> {
-    let h: Hierarchy = serde_json::from_str(text).context("cannot decode the hierarchy's JSON form")?;
+pub fn from_json(text: &str) -> Result<Hierarchy, ExportError> {
+    let h: Hierarchy =
+        serde_json::from_str(text).map_err(ExportError::json("cannot decode the hierarchy's JSON form"))?;
     h.check_invariants()?;
     Ok(h)
 }

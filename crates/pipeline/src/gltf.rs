@@ -29,11 +29,15 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail, ensure};
 use cull::{Hierarchy, Mesh, Node};
+use serde::Deserialize;
 use serde_json::{Value, json};
 
+use crate::ExportError;
 use crate::palette::{ORPHAN_COLOUR, group_colour};
+
+/// The result of this module's functions.
+type Result<T> = std::result::Result<T, ExportError>;
 
 /// Version of the `extras.tincull` layout.
 pub const EXTRAS_VERSION: u32 = 1;
@@ -48,7 +52,7 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
     let nv = h.mesh.positions.len();
     let nt = h.mesh.triangles.len();
     if nv == 0 || nt == 0 {
-        bail!("the hierarchy has no triangles to export");
+        return Err(ExportError::NoTriangles);
     }
     let o = h.origin;
     let positions: Vec<[f32; 3]> = h
@@ -143,7 +147,8 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
         "children": root_children,
     }));
     for (i, n) in h.nodes.iter().enumerate() {
-        let mut extras = serde_json::to_value(n).context("cannot encode a hierarchy node")?;
+        let mut extras =
+            serde_json::to_value(n).map_err(ExportError::json(format!("cannot encode hierarchy node {i}")))?;
         extras["index"] = json!(i);
         let mut node = json!({ "extras": { "tincull": extras } });
         if n.children.is_empty() {
@@ -204,7 +209,7 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
 /// The binary glTF (`.glb`) bytes of `h`.
 pub fn to_glb(h: &Hierarchy) -> Result<Vec<u8>> {
     let (doc, mut bin) = to_gltf(h, None)?;
-    let mut json = serde_json::to_vec(&doc)?;
+    let mut json = serde_json::to_vec(&doc).map_err(ExportError::json("cannot encode the glTF document"))?;
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
@@ -212,7 +217,7 @@ pub fn to_glb(h: &Hierarchy) -> Result<Vec<u8>> {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
-    let total = u32::try_from(total).context("the mesh is too large for a .glb (over 4 GiB)")?;
+    let total = u32::try_from(total).map_err(|_| ExportError::TooLargeForGlb)?;
     let mut out = Vec::with_capacity(total as usize);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -235,7 +240,7 @@ pub fn gltf_files(h: &Hierarchy, path: &Path) -> Result<Vec<(PathBuf, Vec<u8>)>>
     }
     let (bin_path, uri) = bin_path(path)?;
     let (doc, bin) = to_gltf(h, Some(&uri))?;
-    let text = serde_json::to_string_pretty(&doc)?;
+    let text = serde_json::to_string_pretty(&doc).map_err(ExportError::json("cannot encode the glTF document"))?;
     Ok(vec![(path.to_path_buf(), text.into_bytes()), (bin_path, bin)])
 }
 
@@ -246,16 +251,18 @@ pub fn is_glb(path: &Path) -> bool {
 
 /// The `.bin` beside a `.gltf` file and the `uri` that names it; refused when `path` itself ends in `.bin`.
 pub fn bin_path(path: &Path) -> Result<(PathBuf, String)> {
-    ensure!(
-        !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("bin")),
-        "{}: a .gltf output cannot end in .bin, which is its buffer's name",
-        path.display()
-    );
+    let refuse = |reason| ExportError::Path {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("bin")) {
+        return Err(refuse("a .gltf output cannot end in .bin, which is its buffer's name"));
+    }
     let bin = path.with_extension("bin");
     let uri = bin
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
-        .with_context(|| format!("{}: the glTF path has no file name", path.display()))?;
+        .ok_or_else(|| refuse("the glTF path has no file name"))?;
     Ok((bin, uri))
 }
 
@@ -265,48 +272,60 @@ pub fn bin_path(path: &Path) -> Result<(PathBuf, String)> {
 pub fn hierarchy_from_gltf_json(doc: &Value, bin: &[u8]) -> Result<Hierarchy> {
     let scene = &doc["scenes"][0]["extras"]["tincull"];
     if scene["version"].as_u64() != Some(u64::from(EXTRAS_VERSION)) {
-        bail!("scenes[0].extras.tincull.version is not {EXTRAS_VERSION}: not a tincull glTF");
+        return Err(ExportError::Malformed(format!(
+            "scenes[0].extras.tincull.version is not {EXTRAS_VERSION}: not a tincull glTF"
+        )));
     }
-    let field = |v: &Value, name: &str| -> Result<Value> {
-        v.get(name)
-            .cloned()
-            .with_context(|| format!("scenes[0].extras.tincull.{name} is missing"))
-    };
-    let sectors: u32 = serde_json::from_value(field(scene, "sectors")?).context("extras.tincull.sectors")?;
-    let origin: [f64; 3] = serde_json::from_value(field(scene, "origin")?).context("extras.tincull.origin")?;
-    let roots: Vec<u32> = serde_json::from_value(field(scene, "roots")?).context("extras.tincull.roots")?;
-    let always_visible: [u32; 2] =
-        serde_json::from_value(field(scene, "always_visible")?).context("extras.tincull.always_visible")?;
-    let nv = field(scene, "vertices")?.as_u64().context("extras.tincull.vertices")? as usize;
-    let nt = field(scene, "triangles")?
-        .as_u64()
-        .context("extras.tincull.triangles")? as usize;
-    let build = serde_json::from_value(field(scene, "build")?).context("extras.tincull.build")?;
+    // A field of the scene's extras, decoded; an error naming it when it is missing or malformed.
+    fn field<T: serde::de::DeserializeOwned>(scene: &Value, name: &str) -> Result<T> {
+        let element = format!("scenes[0].extras.tincull.{name}");
+        let Some(v) = scene.get(name) else {
+            return Err(ExportError::Malformed(format!("{element} is missing")));
+        };
+        T::deserialize(v).map_err(ExportError::json(element))
+    }
+    let sectors: u32 = field(scene, "sectors")?;
+    let origin: [f64; 3] = field(scene, "origin")?;
+    let roots: Vec<u32> = field(scene, "roots")?;
+    let always_visible: [u32; 2] = field(scene, "always_visible")?;
+    let nv: usize = field(scene, "vertices")?;
+    let nt: usize = field(scene, "triangles")?;
+    let build = field(scene, "build")?;
     let mut nodes: Vec<(usize, Node)> = Vec::new();
-    for (k, n) in doc["nodes"].as_array().context("no nodes")?.iter().enumerate() {
+    let Some(gltf_nodes) = doc["nodes"].as_array() else {
+        return Err(ExportError::Malformed("the document has no nodes array".into()));
+    };
+    for (k, n) in gltf_nodes.iter().enumerate() {
         if let Some(e) = n.get("extras").and_then(|e| e.get("tincull")) {
-            let index = e["index"]
-                .as_u64()
-                .with_context(|| format!("nodes[{k}].extras.tincull.index"))?;
-            let node: Node = serde_json::from_value(e.clone()).with_context(|| format!("nodes[{k}].extras.tincull"))?;
-            nodes.push((index as usize, node));
+            let index = usize::deserialize(&e["index"])
+                .map_err(ExportError::json(format!("nodes[{k}].extras.tincull.index")))?;
+            let node = Node::deserialize(e).map_err(ExportError::json(format!("nodes[{k}].extras.tincull")))?;
+            nodes.push((index, node));
         }
     }
     nodes.sort_by_key(|(i, _)| *i);
     if nodes.iter().enumerate().any(|(k, (i, _))| k != *i) {
-        bail!(
+        return Err(ExportError::Malformed(format!(
             "the hierarchy nodes' extras.tincull.index values are not 0..{}",
             nodes.len()
-        );
+        )));
     }
-    let (pos_len, idx_len) = (12 * nv, 12 * nt);
-    if bin.len() < 2 * pos_len + idx_len {
-        bail!(
-            "the buffer holds {} bytes, fewer than {} vertices and {} triangles need",
-            bin.len(),
-            nv,
-            nt
-        );
+    let too_large = || {
+        ExportError::Malformed(format!(
+            "{nv} vertices and {nt} triangles are more than a buffer can hold"
+        ))
+    };
+    let pos_len = nv.checked_mul(12).ok_or_else(too_large)?;
+    let idx_len = nt.checked_mul(12).ok_or_else(too_large)?;
+    let need = pos_len
+        .checked_mul(2)
+        .and_then(|p| p.checked_add(idx_len))
+        .ok_or_else(too_large)?;
+    if bin.len() < need {
+        return Err(ExportError::Malformed(format!(
+            "the buffer holds {} bytes, fewer than {nv} vertices and {nt} triangles need",
+            bin.len()
+        )));
     }
     let f = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
     let u = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);

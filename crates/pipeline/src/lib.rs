@@ -18,7 +18,7 @@
 //!
 //! Errors: [`build`], [`build_from_regions`] and [`BuildParams::validate`] return a [`BuildError`], whose variant
 //! says which stage refused (the horizon sweep, crystal grouping, the quadtree, or regions that do not fit the
-//! terrain) and holds that stage's own error; the file-format helpers ([`export`], [`gltf`]) return `anyhow` errors
+//! terrain) and holds that stage's own error; the file-format helpers ([`export`], [`gltf`]) return an [`ExportError`],
 //! whose messages name the path or the element at fault.
 //!
 //! From a mesh to a `.tch` file and a cull, as `tincull build` and `tincull cull` do it (the file's bytes are
@@ -29,7 +29,7 @@
 //! use pipeline::{BuildParams, build};
 //! use tin::ObjImportOptions;
 //!
-//! # fn main() -> anyhow::Result<()> {
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! # let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../meshes/jacksboro-2k.obj");
 //! let (tin, _report) = tin::read_obj(mesh, &ObjImportOptions::default())?;
 //! let built = build(&tin, &BuildParams::default(), None)?; // 16 sectors × 4 subsectors, crystal groups
@@ -56,7 +56,7 @@ pub mod export;
 pub mod gltf;
 pub mod palette;
 
-pub use error::BuildError;
+pub use error::{BuildError, ExportError};
 /// The errors of the stages, which [`BuildError`] holds.
 pub use {crystal::CrystalError, horizon::HorizonError, quadtree::QuadtreeError};
 

@@ -229,3 +229,83 @@ fn a_quadtree_export_has_no_empty_orphans() {
     let obj = String::from_utf8(obj).expect("utf-8");
     assert!(!obj.contains("g orphans"), "no empty orphans group");
 }
+
+/// A document that is not what `to_gltf` wrote is refused with an `ExportError` that names the element at fault,
+/// never a panic: wrong types, a missing element, node indices with a gap, counts too large for any buffer, a buffer
+/// too short, a hierarchy whose ranges do not fit its mesh.
+#[test]
+fn a_damaged_gltf_document_names_the_element_at_fault() {
+    use pipeline::ExportError;
+    use serde_json::json;
+    let h = bundled("jacksboro-2k.obj");
+    let (doc, bin) = to_gltf(&h, None).expect("glTF");
+    let back = hierarchy_from_gltf_json(&doc, &bin).expect("the document reads back");
+    assert_eq!((&back.nodes, &back.mesh.triangles), (&h.nodes, &h.mesh.triangles));
+    let scene = "/scenes/0/extras/tincull";
+    let first_node = (0..)
+        .find(|&k| doc["nodes"][k].get("extras").is_some())
+        .expect("a hierarchy node");
+    let damaged = |pointer: &str, value: serde_json::Value| {
+        let mut d = doc.clone();
+        *d.pointer_mut(pointer).expect("the element exists") = value;
+        hierarchy_from_gltf_json(&d, &bin).expect_err("a damaged document")
+    };
+    let cases = [
+        (
+            damaged(&format!("{scene}/sectors"), json!("sixteen")),
+            "scenes[0].extras.tincull.sectors",
+        ),
+        (
+            damaged(&format!("{scene}/vertices"), json!(-1)),
+            "scenes[0].extras.tincull.vertices",
+        ),
+        (
+            damaged(&format!("{scene}/origin"), json!([1.0, 2.0])),
+            "scenes[0].extras.tincull.origin",
+        ),
+        (
+            damaged(&format!("/nodes/{first_node}/extras/tincull/index"), json!(1.5)),
+            &format!("nodes[{first_node}].extras.tincull.index"),
+        ),
+        (
+            damaged(&format!("/nodes/{first_node}/extras/tincull/radius"), json!("wide")),
+            &format!("nodes[{first_node}].extras.tincull"),
+        ),
+    ];
+    for (e, element) in &cases {
+        assert!(matches!(e, ExportError::Json { .. }), "{e:?}");
+        assert!(e.to_string().starts_with(&format!("{element}: ")), "{e}");
+    }
+    let mut d = doc.clone();
+    d["scenes"][0]["extras"]["tincull"]
+        .as_object_mut()
+        .expect("the scene's extras")
+        .remove("roots");
+    let e = hierarchy_from_gltf_json(&d, &bin).expect_err("no roots");
+    assert!(
+        matches!(e, ExportError::Malformed(_)) && e.to_string().contains("tincull.roots is missing"),
+        "{e}"
+    );
+    let e = damaged(&format!("/nodes/{first_node}/extras/tincull/index"), json!(100_000));
+    assert!(e.to_string().contains("index values are not 0.."), "{e}");
+    for (vertices, triangles) in [(u64::MAX, 1), (1, u64::MAX), (u64::MAX / 13, u64::MAX / 13)] {
+        let mut d = doc.clone();
+        d["scenes"][0]["extras"]["tincull"]["vertices"] = json!(vertices);
+        d["scenes"][0]["extras"]["tincull"]["triangles"] = json!(triangles);
+        let e = hierarchy_from_gltf_json(&d, &bin).expect_err("counts beyond any buffer");
+        assert!(matches!(e, ExportError::Malformed(_)), "{e:?}");
+    }
+    let e = hierarchy_from_gltf_json(&doc, &bin[..bin.len() - 1]).expect_err("a short buffer");
+    assert!(e.to_string().contains("fewer than"), "{e}");
+    let e = damaged(&format!("{scene}/always_visible"), json!([0, u32::MAX]));
+    assert!(matches!(e, ExportError::Invalid(_)), "{e:?}");
+    let e = to_glb(&Hierarchy {
+        mesh: cull::Mesh {
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        },
+        ..h
+    })
+    .expect_err("nothing to export");
+    assert!(matches!(e, ExportError::NoTriangles), "{e:?}");
+}
