@@ -912,15 +912,21 @@ mod tests {
     use super::{Model, moved_eye};
     use cull::{AnyCuller, Camera, CullMethod, SafeParams};
 
-    /// Parameters set from the side panel prepare the culler again, as `AnyCuller::with_params` prepares it, and
-    /// stay when the method changes (and the method when they change).
-    #[test]
-    fn new_culler_parameters_and_methods_prepare_the_culler_again() {
+    /// The bundled 2,000-vertex terrain and its default build.
+    fn bundled() -> (tin::Tin, cull::Hierarchy) {
         let obj = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../meshes/jacksboro-2k.obj");
         let (tin, _) = tin::read_obj(&obj, &Default::default()).expect("the bundled mesh");
         let h = pipeline::build(&tin, &pipeline::BuildParams::default(), None)
             .expect("build")
             .hierarchy;
+        (tin, h)
+    }
+
+    /// Parameters set from the side panel prepare the culler again, as `AnyCuller::with_params` prepares it, and
+    /// stay when the method changes (and the method when they change).
+    #[test]
+    fn new_culler_parameters_and_methods_prepare_the_culler_again() {
+        let (_, h) = bundled();
         let mut model = Model::from_hierarchy(h.clone(), CullMethod::Safe, SafeParams::default()).expect("model");
         let eyes: Vec<Camera> = h
             .mesh
@@ -956,11 +962,7 @@ mod tests {
     /// a hierarchy alike; none outside the footprint.
     #[test]
     fn the_ground_under_the_eye_is_the_terrain_s() {
-        let obj = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../meshes/jacksboro-2k.obj");
-        let (tin, _) = tin::read_obj(&obj, &Default::default()).expect("the bundled mesh");
-        let h = pipeline::build(&tin, &pipeline::BuildParams::default(), None)
-            .expect("build")
-            .hierarchy;
+        let (tin, h) = bundled();
         let (lo, hi) = (tin.bbox().min, tin.bbox().max);
         let points: Vec<glam::DVec2> = (0..=40)
             .flat_map(|i| (0..=40).map(move |j| (i, j)))
