@@ -184,9 +184,9 @@ impl Model {
         let (culler, locator) = std::thread::scope(|s| {
             let locator = s.spawn(|| Locator::new(&tin));
             let culler = AnyCuller::with_params(&h, method, safe);
-            (culler, locator.join())
+            // A panic there (none is known) goes on here, as if the locator had been built on this thread.
+            (culler, locator.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
         });
-        let locator = locator.map_err(|_| ViewerError::Invalid("the point locator's thread panicked".into()))?;
         Ok(Model {
             tin: Arc::new(tin),
             locator: Arc::new(locator),
