@@ -309,3 +309,80 @@ fn a_damaged_gltf_document_names_the_element_at_fault() {
     .expect_err("nothing to export");
     assert!(matches!(e, ExportError::NoTriangles), "{e:?}");
 }
+
+/// Every scalar of a JSON document, as a JSON pointer (`/nodes/3/extras/tincull/radius`).
+fn scalar_pointers(v: &serde_json::Value, at: String, out: &mut Vec<String>) {
+    match v {
+        serde_json::Value::Array(items) => {
+            for (i, item) in items.iter().enumerate() {
+                scalar_pointers(item, format!("{at}/{i}"), out);
+            }
+        }
+        serde_json::Value::Object(fields) => {
+            for (k, item) in fields {
+                scalar_pointers(item, format!("{at}/{}", k.replace('~', "~0").replace('/', "~1")), out);
+            }
+        }
+        _ => out.push(at),
+    }
+}
+
+/// The glTF document and buffer of jacksboro-2k's default build, and every scalar's pointer in the document's
+/// `extras` (what `hierarchy_from_gltf_json` reads), made once for all the cases below.
+fn damageable() -> &'static (Hierarchy, serde_json::Value, Vec<u8>, Vec<String>) {
+    static DOC: std::sync::OnceLock<(Hierarchy, serde_json::Value, Vec<u8>, Vec<String>)> = std::sync::OnceLock::new();
+    DOC.get_or_init(|| {
+        let h = bundled("jacksboro-2k.obj");
+        let (doc, bin) = to_gltf(&h, None).expect("glTF");
+        let mut pointers = Vec::new();
+        scalar_pointers(&doc, String::new(), &mut pointers);
+        pointers.retain(|p| p.contains("/extras/"));
+        (h, doc, bin, pointers)
+    })
+}
+
+mod damaged {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// A tincull glTF with one value of its culling data replaced (by another number, a huge or negative one, a
+        /// string, null, an array, an object) and its buffer maybe cut short is read back as a valid hierarchy or
+        /// refused with an error, never a panic; what is read back passes every invariant check and culls.
+        #[test]
+        fn a_gltf_with_any_value_replaced_is_read_or_refused(
+            scene_field in any::<bool>(),
+            which in 0usize..1_000_000,
+            value in prop_oneof![
+                any::<i64>().prop_map(serde_json::Value::from),
+                any::<u64>().prop_map(serde_json::Value::from),
+                proptest::num::f64::NORMAL.prop_map(serde_json::Value::from),
+                (0u32..100_000).prop_map(serde_json::Value::from),
+                Just(serde_json::Value::Null),
+                "[a-z]{0,4}".prop_map(serde_json::Value::from),
+                Just(serde_json::json!([1, 2])),
+                Just(serde_json::json!({"x": 1})),
+            ],
+            cut in prop_oneof![Just(0usize), 0usize..64],
+        ) {
+            let (h, doc, bin, pointers) = damageable();
+            // Half the cases damage the scene's own fields (counts, origin, roots, ranges, build), the others any value.
+            let scene: Vec<&String> = pointers.iter().filter(|p| p.starts_with("/scenes/")).collect();
+            let pointer = if scene_field { scene[which % scene.len()] } else { &pointers[which % pointers.len()] };
+            let mut d = doc.clone();
+            *d.pointer_mut(pointer).expect("the pointer") = value;
+            if let Ok(back) = hierarchy_from_gltf_json(&d, &bin[..bin.len() - cut]) {
+                back.check_invariants().expect("what is read back is a valid hierarchy");
+                let eye = [back.origin[0], back.origin[1], back.origin[2] + 1000.0];
+                for method in CullMethod::ALL {
+                    if method.check(&back).is_ok() {
+                        let _ = AnyCuller::new(&back, method).cull(&Camera::all_around(eye));
+                    }
+                }
+                prop_assert_eq!(back.mesh.triangles.len(), h.mesh.triangles.len());
+            }
+        }
+    }
+}
