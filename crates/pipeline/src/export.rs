@@ -11,7 +11,6 @@ use std::path::{Path, PathBuf};
 use cull::Hierarchy;
 
 use crate::ExportError;
-
 use crate::palette::{ORPHAN_COLOUR, group_colour};
 
 /// The `.mtl` written beside a grouped OBJ (`obj` with the extension `mtl`) and the name the OBJ refers to it by.
