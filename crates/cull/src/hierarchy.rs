@@ -136,11 +136,12 @@ pub struct Mesh {
 pub struct BuildInfo {
     /// Subsectors per sector used for the horizons.
     pub subsectors: u32,
-    /// Crystal seeds of the first pass (this and the next four fields are the crystal grouping's: 0 for a quadtree).
+    /// Crystal seeds of the first pass (this and the next four fields are the crystal grouping's: 0 for a quadtree;
+    /// counts beyond `u32::MAX` are recorded as `u32::MAX`, and a merged tiled build holds the tiles' sum).
     pub seeds: u32,
     /// Orphan passes allowed.
     pub orphan_passes: u32,
-    /// Minimum group size.
+    /// Minimum group size (`u32::MAX` for any larger one).
     pub min_group: u32,
     /// Expanse limit as a fraction of the terrain area.
     pub max_expanse: f64,

@@ -414,15 +414,20 @@ pub fn export_hierarchy(tin: &Tin, crystal: &Crystal, params: &BuildParams) -> H
         },
         build: BuildInfo {
             subsectors: params.subsectors,
-            seeds: params.crystal.first_seeds(tin.num_triangles()) as u32,
+            seeds: saturated(params.crystal.first_seeds(tin.num_triangles())),
             orphan_passes: params.crystal.orphan_passes,
-            min_group: params.crystal.min_group as u32,
+            min_group: saturated(params.crystal.min_group),
             max_expanse: params.crystal.max_expanse,
             rng_seed: params.crystal.rng_seed,
             undersampling: params.undersampling,
             grouping: cull::Grouping::Crystal,
         },
     }
+}
+
+/// `n` as a `u32` count of [`BuildInfo`], `u32::MAX` when larger.
+fn saturated(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
 }
 
 /// The exported hierarchy of a quadtree (Stewart's baseline): one root, nodes with f32 circles and regions, the

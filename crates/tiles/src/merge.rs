@@ -176,7 +176,7 @@ pub fn merge_with(
         let moved = |tri: &[u32; 3]| tri.map(|v| remap[v as usize]);
         triangles.extend(t.mesh.triangles[..a as usize].iter().map(moved));
         orphans.extend(t.mesh.triangles[a as usize..b as usize].iter().map(moved));
-        seeds += t.build.seeds;
+        seeds = t.build.seeds.saturating_add(seeds);
         build.get_or_insert_with(|| t.build.clone());
         kept.push(TileNodes {
             tile: i,

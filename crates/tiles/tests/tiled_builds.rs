@@ -1,6 +1,6 @@
 //! Tiled builds against their oracles: the merged terrain reproduces every sample within the error bound (no crack
 //! between tiles), halo and far field lie on or below it, the safe culler culls nothing visible on it (exact
-//! checker), and builds are deterministic.
+//! checker), and builds are deterministic; a plan with any value replaced is refused or run, never a panic.
 
 use std::path::{Path, PathBuf};
 
@@ -539,10 +539,9 @@ fn canonical(tin_positions: &[[f64; 3]], t: [u32; 3]) -> [[u64; 3]; 3] {
     k
 }
 
-#[test]
-fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let tin = tin::synth_tin(&SynthOptions::new(3000, 9)).expect("synth");
+/// Plans `tin` in `dir` in tiles of `1 / per_side` of its width (crystal grouping), writes the plan and its parts
+/// (each with a halo and a far field), and returns the plan, its path and the parts.
+fn plan_mesh(dir: &Path, tin: &Tin, per_side: f64) -> (Plan, PathBuf, Vec<tiles::part::MeshPart>) {
     let mut params = BuildParams {
         sectors: 8,
         subsectors: 2,
@@ -551,7 +550,7 @@ fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
     params.crystal.min_group = 4;
     let side = tin.bbox().size().x;
     let options = PlanOptions {
-        tile: (side / 3.5) as usize,
+        tile: (side / per_side) as usize,
         halo: (side / 20.0) as usize,
         far_block: (side / 30.0) as usize,
         far_ratio: 2,
@@ -559,17 +558,24 @@ fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
         params,
     };
     let (plan, parts) =
-        tiles::make_mesh_plan(&tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
-    assert_eq!(plan.tiles.len(), 16);
-    std::fs::create_dir_all(dir.path().join("plan.tiles")).expect("dir");
+        tiles::make_mesh_plan(tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
+    std::fs::create_dir_all(dir.join("plan.tiles")).expect("dir");
     for (t, part) in plan.tiles.iter().zip(&parts) {
-        let path = dir.path().join(t.part.as_ref().expect("part"));
+        let path = dir.join(t.part.as_ref().expect("part"));
         std::fs::write(path, part.to_bytes().expect("bytes")).expect("write part");
         assert!(!part.halo.is_empty() && !part.far.is_empty());
     }
-    let path = dir.path().join("plan.json");
+    let path = dir.join("plan.json");
     std::fs::write(&path, plan.to_json().expect("json")).expect("plan");
-    let plan = Plan::load(&path).expect("load");
+    (Plan::load(&path).expect("load"), path, parts)
+}
+
+#[test]
+fn a_mesh_cut_into_tiles_merges_back_into_the_same_mesh() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tin = tin::synth_tin(&SynthOptions::new(3000, 9)).expect("synth");
+    let (plan, path, parts) = plan_mesh(dir.path(), &tin, 3.5);
+    assert_eq!(plan.tiles.len(), 16);
     let h = build_all(&plan, &path);
     assert_eq!(h.mesh.positions.len(), tin.num_vertices());
     let original: Vec<[f64; 3]> = tin.positions().iter().map(|p| p.to_array()).collect();
@@ -661,4 +667,113 @@ proptest! {
         let tin = tin_of(&h);
         prop_assert!(max_sample_error(&grid, &tin) <= e + 1e-9);
     }
+}
+
+/// How many scalars (numbers, strings, booleans, nulls) `v` holds.
+fn scalars(v: &serde_json::Value) -> usize {
+    match v {
+        serde_json::Value::Array(items) => items.iter().map(scalars).sum(),
+        serde_json::Value::Object(fields) => fields.values().map(scalars).sum(),
+        _ => 1,
+    }
+}
+
+/// Replaces the `n`-th scalar (in document order, counting from 0) of `v` by `with`; returns its JSON pointer, or
+/// `None` (and `n` less the scalars passed) when `v` holds fewer.
+fn replace_scalar(v: &mut serde_json::Value, n: &mut usize, with: &serde_json::Value) -> Option<String> {
+    use serde_json::Value;
+    let children: Vec<(String, &mut Value)> = match v {
+        Value::Array(items) => items.iter_mut().enumerate().map(|(i, x)| (i.to_string(), x)).collect(),
+        Value::Object(fields) => fields.iter_mut().map(|(k, x)| (k.clone(), x)).collect(),
+        _ if *n == 0 => {
+            *v = with.clone();
+            return Some(String::new());
+        }
+        _ => {
+            *n -= 1;
+            return None;
+        }
+    };
+    children
+        .into_iter()
+        .find_map(|(key, child)| replace_scalar(child, n, with).map(|at| format!("/{key}{at}")))
+}
+
+/// A plan of a small DEM or mesh, planned and written once: the plan's JSON and the directory of its files.
+fn damageable_plan(mesh: bool) -> &'static (serde_json::Value, tempfile::TempDir) {
+    static PLANS: [std::sync::OnceLock<(serde_json::Value, tempfile::TempDir)>; 2] =
+        [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+    PLANS[usize::from(mesh)].get_or_init(|| {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let plan = if mesh {
+            plan_mesh(
+                dir.path(),
+                &tin::synth_tin(&SynthOptions::new(400, 3)).expect("synth"),
+                1.9,
+            )
+            .0
+        } else {
+            plan_grid(dir.path(), &synth(33 * 33, 5), 16, 4, 0.5).0
+        };
+        assert_eq!(plan.tiles.len(), 4);
+        let doc = serde_json::from_str(&plan.to_json().expect("json")).expect("the plan's JSON");
+        (doc, dir)
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// A plan (of a DEM or of a mesh) with any one value replaced, as a hand edit or a damaged copy may leave it, is
+    /// refused when loaded, or its tiles are built and merged or refused with an error; never a panic. (Its JSON is
+    /// not checksummed: the files it names are, and a window of the DEM by its digest.)
+    #[test]
+    fn a_plan_with_any_value_replaced_is_run_or_refused(
+        mesh in any::<bool>(),
+        which in 0usize..1_000_000,
+        value in prop_oneof![
+            any::<i64>().prop_map(serde_json::Value::from),
+            any::<u64>().prop_map(serde_json::Value::from),
+            proptest::num::f64::NORMAL.prop_map(serde_json::Value::from),
+            (0u32..100).prop_map(serde_json::Value::from),
+            (0u32..100_000).prop_map(serde_json::Value::from),
+            Just(serde_json::Value::Null),
+            "[a-z./]{0,6}".prop_map(serde_json::Value::from),
+            Just(serde_json::json!([1, 2])),
+        ],
+    ) {
+        let (doc, dir) = damageable_plan(mesh);
+        let mut damaged = doc.clone();
+        let at = replace_scalar(&mut damaged, &mut (which % scalars(doc)), &value).expect("a scalar");
+        // Each case its own plan file beside the shared tile files.
+        let path = dir.path().join(format!("plan-{which}.json"));
+        std::fs::write(&path, serde_json::to_string(&damaged).expect("JSON")).expect("write the plan");
+        let result = Plan::load(&path).and_then(|plan| {
+            let built = (0..plan.tiles.len())
+                .map(|i| tiles::build_tile(&plan, &path, i, None).map(|b| b.0))
+                .collect::<Result<Vec<_>, _>>()?;
+            tiles::merge(&plan, &built)
+        });
+        std::fs::remove_file(&path).expect("remove the plan");
+        if let Ok(h) = result {
+            prop_assert!(h.check_invariants().is_ok(), "{at} = {value}: the merge is not a valid hierarchy");
+        }
+    }
+}
+
+/// Regression (found by `a_plan_with_any_value_replaced_is_run_or_refused`): the merge summed the tiles' seed counts
+/// in a `u32` and overflowed (a panic in a debug build) when a plan asked for more seeds than that holds; a build
+/// records such counts as `u32::MAX`, and the merge's sum saturates there too.
+#[test]
+fn seed_counts_beyond_u32_saturate_in_the_merge() {
+    let (doc, dir) = damageable_plan(false);
+    let mut many = doc.clone();
+    *many.pointer_mut("/options/params/crystal/seeds").expect("the seeds") = serde_json::json!(1u64 << 40);
+    let path = dir.path().join("plan-many-seeds.json");
+    std::fs::write(&path, serde_json::to_string(&many).expect("JSON")).expect("write the plan");
+    let plan = Plan::load(&path).expect("a valid plan");
+    let tiles = build_tiles(&plan, &path);
+    std::fs::remove_file(&path).expect("remove the plan");
+    assert!(tiles.iter().all(|t| t.build.seeds == u32::MAX));
+    assert_eq!(tiles::merge(&plan, &tiles).expect("merge").build.seeds, u32::MAX);
 }
