@@ -1,6 +1,6 @@
 //! The pipeline on a small synthetic terrain: the build's figures agree with its hierarchy, the JSON form round
-//! trips, the grouped OBJ has one group per leaf with its own material, parameters are checked as `build` checks them,
-//! and the crates of the API are reachable through this one.
+//! trips, the grouped OBJ has one group per leaf with its own material, parameters are checked as `build` checks them
+//! (any parameters build or are refused, never a panic), and the crates of the API are reachable through this one.
 
 use std::path::Path;
 
@@ -223,4 +223,81 @@ fn a_user_of_pipeline_alone_reaches_tin_and_cull() {
     let eye = [0.0, 0.0, tin.bbox().max.z + 10.0];
     let camera = pipeline::cull::Camera::all_around(eye);
     assert!(culler.cull(&camera).stats.triangles_drawn > 0);
+}
+
+mod any_parameters {
+    use super::*;
+    use pipeline::CrystalParams;
+    use proptest::prelude::*;
+
+    fn float() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            Just(f64::NAN),
+            Just(f64::INFINITY),
+            Just(f64::NEG_INFINITY),
+            Just(0.0),
+            Just(-0.0),
+            Just(f64::MIN_POSITIVE),
+            Just(f64::MAX),
+            -10.0f64..10.0,
+            0.0f64..1e6,
+            proptest::num::f64::ANY,
+        ]
+    }
+
+    fn params() -> impl Strategy<Value = BuildParams> {
+        let count = prop_oneof![0usize..100, Just(usize::MAX), Just(1usize << 40), any::<usize>()];
+        let crystal = (
+            prop::option::of(count.clone()),
+            prop_oneof![0u32..20, Just(u32::MAX), any::<u32>()],
+            count,
+            float(),
+            any::<u64>(),
+        )
+            .prop_map(
+                |(seeds, orphan_passes, min_group, max_expanse, rng_seed)| CrystalParams {
+                    seeds,
+                    orphan_passes,
+                    min_group,
+                    max_expanse,
+                    rng_seed,
+                },
+            );
+        let quadtree = (
+            prop::option::of(prop_oneof![0u32..12, any::<u32>()]),
+            prop::option::of(float()),
+            prop::option::of(prop_oneof![0u64..100_000, any::<u64>()]),
+        )
+            .prop_map(|(depth, cell, max_bytes)| QuadtreeParams { depth, cell, max_bytes });
+        (
+            prop_oneof![8 => 4u32..40, 1 => 0u32..4, 1 => Just(1024), 1 => any::<u32>()],
+            prop_oneof![8 => 1u32..8, 1 => Just(0), 1 => any::<u32>()],
+            prop_oneof![3 => Just(None), 1 => float().prop_map(Some)],
+            crystal,
+            prop::option::of(quadtree),
+        )
+            .prop_map(|(sectors, subsectors, undersampling, crystal, quadtree)| BuildParams {
+                sectors,
+                subsectors,
+                undersampling,
+                crystal,
+                grouping: quadtree.map_or(Grouping::Crystal, Grouping::Quadtree),
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// Any parameters (NaN, infinities, zero, counts near the integers' ends, either grouping) build a valid
+        /// hierarchy or are refused with an error, never a panic; parameters that `validate` refuses never build.
+        #[test]
+        fn any_parameters_build_or_are_refused(params in params()) {
+            let tin = synth_tin(&SynthOptions::new(120, 3)).expect("synthetic terrain");
+            let checked = params.validate();
+            if let Ok(b) = build(&tin, &params, None) {
+                prop_assert!(checked.is_ok(), "built with parameters that validate refuses: {params:?}");
+                prop_assert!(b.hierarchy.check_invariants().is_ok());
+            }
+        }
+    }
 }
