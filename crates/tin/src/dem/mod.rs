@@ -333,7 +333,16 @@ fn extension(path: &Path) -> Result<String> {
 }
 
 /// Refuses a window (or a whole grid) whose corner samples have coordinates no stage can handle, naming the file
-/// and the corner's 1-based row and column in the whole grid.
+/// and the corner's 1-based row and column in the whole grid; and one whose spacing is too fine for the magnitude of
+/// its coordinates, where neighbouring samples could get the same coordinate in f64.
+///
+/// *The spacing bound.* A sample's x is computed as `fl(x₀ + fl(c · dx))` (`x₀` the grid's origin), within
+/// `ε (|c · dx| + |x₀ + c · dx|)` of the exact `x₀ + c · dx` (`ε = 2⁻⁵²`, two roundings of at most `ε/2` each, the
+/// second of a sum at most `|x₀| + |c · dx|` in magnitude). With `|c · dx| ≤ |x₀| + |x|` (`x` the exact coordinate, at
+/// most the larger of the window's corners' in magnitude, up to the same rounding), the error is below
+/// `2 ε (|x₀| + M)` where `M` bounds the corners' magnitudes; neighbouring samples, `dx` apart exactly, keep distinct and
+/// ordered coordinates when `dx` exceeds twice that, `4 ε (|x₀| + M)`. The check asks for `8 ε (|x₀| + |x_a| + |x_b|)`
+/// (`x_a`, `x_b` the corners), twice as much: below a nanometre for coordinates of 10⁶ m.
 fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &Path) -> Result<()> {
     for (r, c) in [(rows[0], cols[0]), (rows[1], cols[1])] {
         let p = shape.at(r, c);
@@ -349,6 +358,24 @@ fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &P
                     ),
                 ));
             }
+        }
+    }
+    let (a, b) = (shape.at(rows[0], cols[0]), shape.at(rows[1], cols[1]));
+    for (axis, step, at) in [
+        ("x", shape.dx, [shape.origin.x, a.x, b.x]),
+        ("y", shape.dy, [shape.origin.y, a.y, b.y]),
+    ] {
+        // All finite: the corners were checked above, the spacing and the origin by the shape's own check.
+        let magnitude: f64 = at.iter().map(|v| v.abs()).sum();
+        if step <= 8.0 * f64::EPSILON * magnitude {
+            return Err(TinError::format(
+                path,
+                format!(
+                    "the {axis} spacing {step:e} m is too fine for coordinates near {:e} m: neighbouring samples could \
+                     get the same {axis} in f64 (the spacing must exceed 2^-49 times the summed magnitudes of the origin's and the corners' coordinates)",
+                    at.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+                ),
+            ));
         }
     }
     Ok(())
