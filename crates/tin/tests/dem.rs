@@ -1,4 +1,5 @@
-//! DEM readers: small fixtures written by the tests, malformed files, and the real data sets when present.
+//! DEM readers: small fixtures written by the tests, malformed files (and any one value of a sidecar or an `.asc`
+//! header replaced: read into a grid that simplifies, or refused), and the real data sets when present.
 
 mod common;
 
@@ -1167,4 +1168,55 @@ fn a_spacing_too_fine_for_the_coordinates_is_named() {
     let g = read_dem(&path, &opts()).expect("a centimetre grid in UTM");
     let xs: Vec<f64> = (0..3).map(|c| g.sample(0, c).expect("a sample").x).collect();
     assert!(xs[0] < xs[1] && xs[1] < xs[2], "{xs:?}");
+}
+
+mod damaged_asc {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// An `.asc` (in metres, or in degrees with its `.prj`) with any one header value replaced (or a second spacing
+        /// key added) is read into a grid that simplifies into a TIN, or refused with an error naming it; never a panic.
+        #[test]
+        fn an_asc_with_any_header_value_replaced_is_read_or_refused(
+            which in 0usize..7,
+            value in prop_oneof![
+                "-?[0-9]{1,25}",
+                "-?[0-9]{0,5}\\.[0-9]{0,5}(e-?[0-9]{1,3})?",
+                Just("nan".to_string()), Just("inf".to_string()), Just("-inf".to_string()), Just(String::new()),
+                Just("1e-300".to_string()), Just("1e300".to_string()), Just("0".to_string()), Just("-0".to_string()),
+                "[a-z]{1,4}",
+            ],
+            geographic in any::<bool>(),
+        ) {
+            let dir = tempfile::tempdir().expect("tempdir");
+            let path = dir.path().join("g.asc");
+            let mut header = vec![
+                ("ncols", "4".to_string()), ("nrows", "3".to_string()), ("xllcorner", "-123.5".to_string()),
+                ("yllcorner", "43.25".to_string()), ("cellsize", "0.01".to_string()), ("NODATA_value", "-9999".to_string()),
+                ("dx", "0.01".to_string()),
+            ];
+            if !geographic {
+                header[2].1 = "500000".into();
+                header[3].1 = "4800000".into();
+                header[4].1 = "30".into();
+                header[6].1 = "30".into();
+            }
+            header[which].1 = value.clone();
+            // `dx` with `cellsize`: one of them only, unless that is the damage.
+            if which != 6 { header.pop(); }
+            let mut text: String = header.iter().map(|(k, v)| format!("{k} {v}\n")).collect();
+            text += "1 2 3 4\n5 -9999 7 8\n9 10.5 11 12\n";
+            std::fs::write(&path, text).expect("write");
+            if geographic {
+                std::fs::write(dir.path().join("g.prj"), WGS84_PRJ).expect("prj");
+            }
+            if let Ok(g) = read_dem(&path, &opts()) {
+                let simplified = tin::simplify(&g, &tin::SimplifyOptions::vertices(8), None);
+                prop_assert!(simplified.is_ok(), "{} = {value}: {:?}", header[which].0, simplified.err());
+            }
+        }
+    }
 }
