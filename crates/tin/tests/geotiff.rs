@@ -1,6 +1,7 @@
 //! GeoTIFF reader: the three real files of `../shared/dem` against their `.npy` / `.hgt` twins and the README's
 //! georeferencing (these fail, never skip, when the directory is missing), and GeoTIFFs written by the tests with the
-//! `tiff` encoder (sample types, compression, predictors, transformation, bands, and the errors).
+//! `tiff` encoder (sample types, compression, predictors, transformation, bands, and the errors; and any bytes of a small
+//! one damaged: read into a grid that simplifies, or refused, never a panic).
 #![cfg(feature = "geotiff")]
 
 use std::io::Cursor;
@@ -815,4 +816,71 @@ fn a_georeference_without_geokeys_is_kept_as_metres() {
     let bytes = write_tif!(colortype::Gray32Float, 4, 3, &data, &transform);
     let (g, _) = parse(&bytes).expect("reads");
     assert_eq!((g.dx, g.dy, g.origin), (10.0, 20.0, DVec2::new(305.0, 890.0)));
+}
+
+mod damaged_bytes {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Six small GeoTIFFs, made once.
+    fn originals() -> &'static Vec<Vec<u8>> {
+        static O: std::sync::OnceLock<Vec<Vec<u8>>> = std::sync::OnceLock::new();
+        O.get_or_init(|| {
+            let data: Vec<f32> = (0..48).map(|i| (i as f32) * 1.5 - 3.0).collect();
+            let ints: Vec<i16> = (0..48).map(|i| i as i16 * 7 - 20).collect();
+            let mut out = Vec::new();
+            for (c, p) in [
+                (Compression::Uncompressed, Predictor::None),
+                (Compression::Lzw, Predictor::Horizontal),
+                (Compression::Deflate(Default::default()), Predictor::Horizontal),
+            ] {
+                let spec = Spec {
+                    compression: c,
+                    predictor: Predictor::None,
+                    nodata: Some("-3"),
+                    ..Spec::default()
+                };
+                out.push(write_tif!(colortype::Gray32Float, 8, 6, &data[..], &spec));
+                let spec = Spec {
+                    compression: c,
+                    predictor: p,
+                    nodata: Some("-3"),
+                    ..Spec::default()
+                };
+                out.push(write_tif!(colortype::GrayI16, 8, 6, &ints[..], &spec));
+            }
+            out
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        /// A small GeoTIFF (float32 and int16; uncompressed, LZW, Deflate; with and without a predictor) with bytes
+        /// replaced and maybe cut short is read into a grid that simplifies into a TIN, or refused with an error; never a
+        /// panic (in this crate or in `tiff`).
+        #[test]
+        fn a_geotiff_with_bytes_damaged_is_read_or_refused(
+            which in 0usize..6,
+            damages in prop::collection::vec((any::<usize>(), any::<u8>()), 1..4),
+            cut in prop_oneof![3 => Just(None), 1 => any::<usize>().prop_map(Some)],
+        ) {
+            let mut bytes = originals()[which].clone();
+            for (at, b) in damages {
+                let n = bytes.len();
+                bytes[at % n] = b;
+            }
+            if let Some(c) = cut {
+                let n = bytes.len();
+                bytes.truncate(c % n);
+            }
+            let dir = tempfile::tempdir().expect("tempdir");
+            let path = dir.path().join("damaged.tif");
+            std::fs::write(&path, &bytes).expect("write");
+            if let Ok(g) = read_dem(&path, &DemOptions::default()) {
+                let simplified = tin::simplify(&g, &tin::SimplifyOptions::vertices(8), None);
+                prop_assert!(simplified.is_ok(), "{:?}", simplified.err());
+            }
+        }
+    }
 }
