@@ -818,6 +818,44 @@ fn a_georeference_without_geokeys_is_kept_as_metres() {
     assert_eq!((g.dx, g.dy, g.origin), (10.0, 20.0, DVec2::new(305.0, 890.0)));
 }
 
+/// Regression: `read_geotiff_info` (what `tincull tin` and `build` call for a `.tif`, for its CRS and units) returned
+/// the grid without the checks `read_dem` makes, so coordinates out of range, or a spacing too fine for them, reached
+/// the simplification, which failed on a degenerate triangle naming neither the file nor the cause.
+#[test]
+fn read_geotiff_info_checks_the_grid_as_read_dem_does() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let data: Vec<f32> = (0..12).map(|i| i as f32).collect();
+    let cases = [
+        (
+            Some([1e-12, 1e-12, 0.0]),
+            "the x spacing 1e-12 m is too fine for coordinates near 5e5 m",
+        ),
+        (
+            Some([1e35, 10.0, 0.0]),
+            "row 1, column 1: x = 5e34 is outside the coordinates every stage accepts",
+        ),
+    ];
+    for (scale, expected) in cases {
+        let spec = Spec {
+            scale,
+            ..Spec::default()
+        };
+        let path = dir.path().join("bad.tif");
+        std::fs::write(&path, write_tif!(colortype::Gray32Float, 4, 3, &data[..], &spec)).expect("write");
+        for e in [
+            tin::dem::geotiff::read_geotiff_info(&path, &DemOptions::default())
+                .map(|(g, _)| g)
+                .expect_err("refused"),
+            read_dem(&path, &DemOptions::default()).expect_err("refused"),
+        ] {
+            assert!(
+                matches!(&e, TinError::Format { path: p, message } if p == &path && message.contains(expected)),
+                "{e}"
+            );
+        }
+    }
+}
+
 mod damaged_bytes {
     use super::*;
     use proptest::prelude::*;

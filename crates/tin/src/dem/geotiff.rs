@@ -152,19 +152,29 @@ fn one() -> f64 {
     1.0
 }
 
-/// Reads a GeoTIFF DEM (see the module documentation).
+/// Reads a GeoTIFF DEM (see the module documentation), checked as [`read_geotiff_info`] checks it.
 pub fn read_geotiff(path: &Path, opts: &DemOptions) -> Result<Grid> {
     read_geotiff_info(path, opts).map(|(g, _)| g)
 }
 
-/// Reads a GeoTIFF DEM and what its tags say ([`GeoTiffInfo`]).
+/// Reads a GeoTIFF DEM and what its tags say ([`GeoTiffInfo`]); the grid's coordinates, spacing and heights are
+/// checked as [`crate::read_dem`] checks them.
 pub fn read_geotiff_info(path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTiffInfo)> {
+    let (grid, info) = read_geotiff_unchecked(path, opts)?;
+    super::check_range(&grid, path, opts.z_scale)?;
+    Ok((grid, info))
+}
+
+/// [`read_geotiff_info`] without the checks of the grid's coordinates, spacing and heights ([`crate::read_dem`] makes
+/// them).
+pub(crate) fn read_geotiff_unchecked(path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTiffInfo)> {
     opts.check()?;
     let bytes = read_bytes(path)?;
     parse_geotiff(&bytes, path, opts)
 }
 
-/// Parses the bytes of a GeoTIFF; `path` names it in errors.
+/// Parses the bytes of a GeoTIFF; `path` names it in errors. The grid's coordinates, spacing and heights are not
+/// checked ([`read_geotiff_info`] and [`crate::read_dem`] check them).
 pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Grid, GeoTiffInfo)> {
     opts.check()?;
     let err = |m: String| TinError::format(path, m);

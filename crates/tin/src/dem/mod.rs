@@ -404,7 +404,7 @@ fn check_heights(z: &[f64], row0: usize, cols: [usize; 2], path: &Path, z_scale:
 
 /// Refuses a grid with a sample whose coordinates no stage can handle ([`crate::COORDINATE_LIMIT`]), naming the
 /// file and the 1-based row and column (row 1 is the northern edge).
-fn check_range(g: &Grid, path: &Path, z_scale: f64) -> Result<()> {
+pub(crate) fn check_range(g: &Grid, path: &Path, z_scale: f64) -> Result<()> {
     let (rows, cols) = ([0, g.rows.saturating_sub(1)], [0, g.cols.saturating_sub(1)]);
     check_corners(&GridShape::of(g), rows, cols, path)?;
     check_heights(&g.z, 0, cols, path, z_scale)
@@ -424,7 +424,7 @@ fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
             "PNG height maps need the `png` feature of the tin crate, which this build lacks",
         )),
         #[cfg(feature = "geotiff")]
-        "tif" | "tiff" => geotiff::read_geotiff(path, opts),
+        "tif" | "tiff" => geotiff::read_geotiff_unchecked(path, opts).map(|(grid, _)| grid),
         #[cfg(not(feature = "geotiff"))]
         "tif" | "tiff" => Err(TinError::format(
             path,
