@@ -1,6 +1,7 @@
 //! The pipeline on a small synthetic terrain: the build's figures agree with its hierarchy, the JSON form round
 //! trips, the grouped OBJ has one group per leaf with its own material, parameters are checked as `build` checks them
-//! (any parameters build or are refused, never a panic), and the crates of the API are reachable through this one.
+//! (any parameters build or are refused, never a panic), an OBJ with numbers replaced is refused or builds, and the
+//! crates of the API are reachable through this one.
 
 use std::path::Path;
 
@@ -297,6 +298,72 @@ mod any_parameters {
             if let Ok(b) = build(&tin, &params, None) {
                 prop_assert!(checked.is_ok(), "built with parameters that validate refuses: {params:?}");
                 prop_assert!(b.hierarchy.check_invariants().is_ok());
+            }
+        }
+    }
+}
+
+mod damaged_obj {
+    use super::*;
+    use cull::{AnyCuller, Camera, CullMethod};
+    use proptest::prelude::*;
+
+    /// The lines of a small synthetic terrain's OBJ, made once.
+    fn original() -> &'static Vec<String> {
+        static O: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+        O.get_or_init(|| {
+            let tin = synth_tin(&SynthOptions::new(60, 2)).expect("synthetic terrain");
+            let mut bytes = Vec::new();
+            tin::write_obj_to(&tin, &mut bytes).expect("obj");
+            String::from_utf8(bytes)
+                .expect("utf-8")
+                .lines()
+                .map(str::to_string)
+                .collect()
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// An OBJ with up to three numbers or vertex references replaced (by extremes, NaN, references out of range,
+        /// another vertex's index) is refused naming the line, or read into a terrain that builds and culls with every
+        /// method; never a panic.
+        #[test]
+        fn an_obj_with_any_number_replaced_builds_or_is_refused(
+            edits in prop::collection::vec((any::<usize>(), any::<usize>(), prop_oneof![
+                Just("1e30".to_string()), Just("-1e30".to_string()), Just("1e-30".to_string()), Just("0".to_string()),
+                Just("1e300".to_string()), Just("nan".to_string()), Just("-0".to_string()), Just("1".to_string()),
+                Just("2".to_string()), Just("60".to_string()), Just("61".to_string()), Just("-1".to_string()),
+                Just("4294967296".to_string()), Just("1/2/3".to_string()), Just("3e-310".to_string()),
+                (-1000.0f64..1000.0).prop_map(|x| x.to_string()),
+                (0u32..70).prop_map(|x| x.to_string()),
+            ]), 1..4),
+        ) {
+            let mut lines = original().clone();
+            for (line, token, value) in edits {
+                let n = lines.len();
+                let l = &mut lines[line % n];
+                let mut tokens: Vec<String> = l.split_whitespace().map(str::to_string).collect();
+                if tokens.len() > 1 {
+                    let k = 1 + token % (tokens.len() - 1);
+                    tokens[k] = value;
+                    *l = tokens.join(" ");
+                }
+            }
+            let text = lines.join("\n");
+            if let Ok((t, _)) = tin::parse_obj(text.as_bytes(), "damaged.obj", &tin::ObjImportOptions::default()) {
+                let b = build(&t, &BuildParams { sectors: 8, subsectors: 1, ..BuildParams::default() }, None);
+                prop_assert!(b.is_ok(), "read, but the build fails: {:?}", b.err());
+                if let Ok(b) = b {
+                    let h = &b.hierarchy;
+                    let c = h.mesh.positions[0];
+                    for method in CullMethod::ALL {
+                        if method.check(h).is_ok() {
+                            let _ = AnyCuller::new(h, method).cull(&Camera::all_around([c[0], c[1], c[2] + 2.0]));
+                        }
+                    }
+                }
             }
         }
     }
