@@ -64,13 +64,14 @@ pub fn far_from_bytes(bytes: &[u8], grid: [usize; 2], name: &Path) -> Result<Vec
     if let Some((i, p)) = points
         .iter()
         .enumerate()
-        .find(|(_, p)| p.row as usize >= grid[0] || p.col as usize >= grid[1] || !p.z.is_finite())
+        .find(|(_, p)| p.row as usize >= grid[0] || p.col as usize >= grid[1] || !tin::coordinate_in_range(p.z))
     {
         return Err(TilesError::TileFile {
             path: name.to_path_buf(),
             what: "far field",
             reason: format!(
-                "far-field point {} (row {}, column {}, 1-based; height {}) is not a sample of the {} x {} grid",
+                "far-field point {} (row {}, column {}, 1-based; height {}) is not a sample of the {} x {} grid, or its \
+                 height is not finite, or not 0 and outside 2^-100 ..= 2^100 in magnitude",
                 i + 1,
                 u64::from(p.row) + 1,
                 u64::from(p.col) + 1,

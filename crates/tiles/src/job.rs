@@ -223,6 +223,28 @@ fn mesh_input(plan: &Plan, plan_path: &Path, spec: &TileSpec, part: &Path) -> Re
     let bytes = crate::framed::read(&path)?;
     let part = MeshPart::from_bytes(&bytes, &path)?;
     plan.check_tile_file(spec, &path, &bytes)?;
+    // Every point joins the sweep's: coordinates every stage accepts.
+    for (what, points) in [
+        ("vertex", &part.positions),
+        ("halo point", &part.halo),
+        ("far-field point", &part.far),
+    ] {
+        if let Some((i, p)) = points
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.iter().all(|&c| tin::coordinate_in_range(c)))
+        {
+            return Err(TilesError::TileFile {
+                path,
+                what: "part",
+                reason: format!(
+                    "{what} {} at {p:?} has a coordinate that is not finite, or not 0 and outside 2^-100 ..= 2^100 in \
+                     magnitude",
+                    i + 1
+                ),
+            });
+        }
+    }
     let tin = Tin::from_parts(
         part.positions.iter().map(|p| DVec3::from_array(*p)).collect(),
         part.triangles,
@@ -265,10 +287,20 @@ pub fn build_tile(
     let mut points: Vec<DVec3> = tin.positions().to_vec();
     points.extend_from_slice(&input.beyond);
     let far_points = input.beyond.len() - input.halo_points;
-    let (ext, _) = tin::triangulate(&points, DedupePolicy::Reject)?;
+    let (ext, _) = tin::triangulate(&points, DedupePolicy::Reject).map_err(|e| {
+        TilesError::Parameter(format!(
+            "tile {index} of {}: the horizon sweep's points (the tile's {} vertices, then {} halo and {} far-field \
+             points, numbered from 0 in that order) do not triangulate: {e}",
+            plan_path.display(),
+            tin.num_vertices(),
+            input.halo_points,
+            far_points
+        ))
+    })?;
     if ext.num_vertices() != points.len() {
         return Err(TilesError::Parameter(format!(
-            "{} of the sweep's points coincide",
+            "tile {index} of {}: {} of the horizon sweep's points coincide",
+            plan_path.display(),
             points.len() - ext.num_vertices()
         )));
     }

@@ -1,6 +1,7 @@
 //! Tiled builds against their oracles: the merged terrain reproduces every sample within the error bound (no crack
 //! between tiles), halo and far field lie on or below it, the safe culler culls nothing visible on it (exact
-//! checker), and builds are deterministic; a plan with any value replaced is refused or run, never a panic.
+//! checker), and builds are deterministic; a plan or a part file with any value replaced is refused (naming it) or run,
+//! never a panic.
 
 use std::path::{Path, PathBuf};
 
@@ -776,4 +777,91 @@ fn seed_counts_beyond_u32_saturate_in_the_merge() {
     std::fs::remove_file(&path).expect("remove the plan");
     assert!(tiles.iter().all(|t| t.build.seeds == u32::MAX));
     assert_eq!(tiles::merge(&plan, &tiles).expect("merge").build.seeds, u32::MAX);
+}
+
+mod damaged_part {
+    use super::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// A mesh tile's part file (framed and checksummed anew, as a faulty planner would write it) with one value
+        /// replaced (a coordinate of a vertex, a halo or far-field point, or a triangle's vertex) is built and merged
+        /// into a valid hierarchy, or refused with an error naming the part file or the tile; never a panic.
+        #[test]
+        fn a_part_with_any_value_replaced_is_built_or_refused(
+            tile in 0usize..4,
+            field in 0usize..4,
+            index in any::<usize>(),
+            coordinate in 0usize..3,
+            value in prop_oneof![
+                Just(f64::NAN), Just(f64::INFINITY), Just(1e30), Just(-1e30), Just(0.0), Just(1e-300),
+                -1000.0f64..1000.0, proptest::num::f64::ANY,
+            ],
+            vertex in prop_oneof![0u32..200, Just(u32::MAX), any::<u32>()],
+        ) {
+            let (doc, dir) = damageable_plan(true);
+            let mut plan_doc = doc.clone();
+            let part_path = dir.path().join(plan_doc["tiles"][tile]["part"].as_str().expect("a part"));
+            let mut part = tiles::part::MeshPart::from_bytes(&std::fs::read(&part_path).expect("read"), &part_path).expect("part");
+            match field {
+                0 => { let n = part.positions.len(); part.positions[index % n][coordinate] = value; }
+                1 => { let n = part.triangles.len(); part.triangles[index % n][coordinate] = vertex; }
+                2 => { let n = part.halo.len(); part.halo[index % n][coordinate] = value; }
+                _ => { let n = part.far.len(); part.far[index % n][coordinate] = value; }
+            }
+            let name = format!("plan.tiles/damaged-{tile}-{field}-{index}-{coordinate}.bin");
+            std::fs::write(dir.path().join(&name), part.to_bytes().expect("bytes")).expect("write");
+            plan_doc["tiles"][tile]["part"] = serde_json::json!(name);
+            let path = dir.path().join(format!("plan-part-{tile}-{field}-{index}-{coordinate}.json"));
+            std::fs::write(&path, serde_json::to_string(&plan_doc).expect("JSON")).expect("write the plan");
+            let result = Plan::load(&path).and_then(|plan| {
+                let built = (0..plan.tiles.len())
+                    .map(|i| tiles::build_tile(&plan, &path, i, None).map(|b| b.0))
+                    .collect::<Result<Vec<_>, _>>()?;
+                tiles::merge(&plan, &built)
+            });
+            std::fs::remove_file(&path).expect("remove the plan");
+            std::fs::remove_file(dir.path().join(&name)).expect("remove the part");
+            match result {
+                Ok(h) => prop_assert!(h.check_invariants().is_ok()),
+                Err(e) => {
+                    let m = e.to_string();
+                    prop_assert!(m.contains(&name) || m.contains("tile ") || m.contains("tiles "), "the error names neither file nor tile: {m}");
+                }
+            }
+        }
+    }
+}
+
+/// Regression (found by `a_part_with_any_value_replaced_is_built_or_refused`): a part's halo or far-field point, or
+/// vertex, with a coordinate out of range (1e-300, NaN) reached the horizon sweep's triangulation, whose error named
+/// a point of the sweep by its index, not the part file; it is refused as the part's now.
+#[test]
+fn a_part_with_a_point_out_of_range_is_named() {
+    let (doc, dir) = damageable_plan(true);
+    let source = dir.path().join(doc["tiles"][1]["part"].as_str().expect("a part"));
+    let original = tiles::part::MeshPart::from_bytes(&std::fs::read(&source).expect("read"), &source).expect("part");
+    for (field, expected) in [(0, "vertex 3 at"), (1, "halo point 3 at"), (2, "far-field point 3 at")] {
+        let mut part = original.clone();
+        let points = match field {
+            0 => &mut part.positions,
+            1 => &mut part.halo,
+            _ => &mut part.far,
+        };
+        points[2][0] = 1e-300;
+        let name = format!("plan.tiles/out-of-range-{field}.bin");
+        std::fs::write(dir.path().join(&name), part.to_bytes().expect("bytes")).expect("write");
+        let mut plan = doc.clone();
+        plan["tiles"][1]["part"] = serde_json::json!(name);
+        let path = dir.path().join(format!("plan-out-of-range-{field}.json"));
+        std::fs::write(&path, serde_json::to_string(&plan).expect("JSON")).expect("write the plan");
+        let e = tiles::build_tile(&Plan::load(&path).expect("a plan"), &path, 1, None)
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            e.contains(&name) && e.contains(expected) && e.contains("not finite, or not 0 and outside"),
+            "{e}"
+        );
+    }
 }
