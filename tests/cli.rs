@@ -1559,7 +1559,8 @@ fn messages_and_help_read_well() {
 }
 
 /// `info FILE.tch` checks the hierarchy's mesh as a height field, as `info MESH` does: a `.tch` whose mesh is not one
-/// (written by another tool: its structure loads) is reported, with the violations in `--json`.
+/// (written by another tool: its structure loads) is reported, with the violations in `--json`; `eval`, `failmap` and
+/// `pvs --check` refuse it naming the file.
 #[test]
 fn info_checks_a_hierarchys_mesh_as_a_height_field() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -1579,6 +1580,32 @@ fn info_checks_a_hierarchys_mesh_as_a_height_field() {
     assert!(text.contains("height field  NO"), "{text}");
     let v = json(&["info", s(&bad), "--json", "-q"]);
     assert_eq!(v["height_field"], false);
+    // The commands that need the exact checker refuse it naming the file (they named neither file nor cause).
+    let needle = format!("{}: the hierarchy's mesh is not a valid terrain mesh", bad.display());
+    fails_with(
+        &[
+            "eval",
+            s(&bad),
+            "--viewpoints",
+            "1",
+            "--classes",
+            "ground",
+            "--no-safe-regions",
+        ],
+        &needle,
+    );
+    fails_with(
+        &[
+            "failmap",
+            s(&bad),
+            "--cell-size",
+            "500",
+            "-o",
+            s(&dir.path().join("map.png")),
+        ],
+        &needle,
+    );
+    fails_with(&["pvs", s(&bad), "--check", "1"], &needle);
 }
 
 #[test]

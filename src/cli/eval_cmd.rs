@@ -9,7 +9,7 @@ use truth::ViewpointClass;
 use super::culling_args::{Eyes, SafeArgs};
 use super::files::Outputs;
 use super::{Output, OutputArgs};
-use eval::evaluate::{EvalOptions, Evaluation, MAX_VIEWPOINTS, evaluate, hierarchy_tin};
+use eval::evaluate::{EvalOptions, Evaluation, MAX_VIEWPOINTS, evaluate};
 
 /// Arguments of `tincull eval`.
 #[derive(Debug, Args)]
@@ -151,7 +151,7 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
         }
         eyes.check_within_reach(&h)?;
     }
-    let tin = hierarchy_tin(&h)?;
+    let tin = super::mesh_input::hierarchy_tin_of(&h, &args.hierarchy)?;
     if let Some(w) = tin::validate::small_terrain_warning(tin.positions()) {
         out.warn(format!("{}: {w}", args.hierarchy.display()));
     }

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, ensure};
 use clap::Args;
-use eval::evaluate::hierarchy_tin;
 use eval::failmap;
 
 use super::files::Outputs;
@@ -72,7 +71,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     args.method
         .check(&h)
         .with_context(|| format!("{}: --method {}", args.hierarchy.display(), args.method))?;
-    let tin = hierarchy_tin(&h)?;
+    let tin = super::mesh_input::hierarchy_tin_of(&h, &args.hierarchy)?;
     ensure!(
         tin.num_triangles() > 0,
         "{}: the mesh has no triangles",

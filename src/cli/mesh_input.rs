@@ -415,6 +415,14 @@ fn tch_name(path: &std::path::Path) -> String {
     format!("{name}.tch")
 }
 
+/// The mesh of the hierarchy read from `path` as a [`tin::Tin`] (for the exact checker and the ground under an eye);
+/// a mesh that is not a valid one (a file written by hand or damaged, its checksum made to match) is an error naming
+/// the file.
+pub fn hierarchy_tin_of(h: &cull::Hierarchy, path: &std::path::Path) -> Result<tin::Tin> {
+    eval::evaluate::hierarchy_tin(h)
+        .with_context(|| format!("{}: the hierarchy's mesh is not a valid terrain mesh", path.display()))
+}
+
 /// Reads the hierarchy that a command takes as its input (`cull`, `eval`, `export`, `pvs`, `failmap`, `info`,
 /// `render`, `view`): [`cull::Hierarchy::load`], and for a file that is not one, an error saying what it is (a mesh,
 /// a DEM grid, a PVS file) and how to build a hierarchy of a terrain.

@@ -15,7 +15,6 @@ use serde_json::{Value, json};
 
 use super::files::Outputs;
 use super::{Output, OutputArgs};
-use eval::evaluate::hierarchy_tin;
 
 /// Arguments of `tincull pvs`.
 #[derive(Debug, Args)]
@@ -353,7 +352,7 @@ fn check(
         cell_size.is_finite() && cell_size > 0.0,
         "--cell-size must be positive, got {cell_size}"
     );
-    let tin = hierarchy_tin(h)?;
+    let tin = super::mesh_input::hierarchy_tin_of(h, &args.hierarchy)?;
     let truth = truth::GroundTruth::new(&tin);
     let safe = SafeCuller::new(h, safe_params);
     let patch = safe_params.patch as u32;
