@@ -534,6 +534,19 @@ fn cull_above_ground() {
              heights above the ground, give --above-ground)"
         ),
     );
+    // Huge values are written short, not as hundreds of digits.
+    fails_with(
+        &["cull", s(&tch), "--eye", "10000,12000,-1e308"],
+        &format!("z -1e308 is 1.0e308 m below the ground (at z {ground:.3} there)"),
+    );
+    fails_with(
+        &["cull", s(&tch), "--eye", "10000,12000,-1e308", "--above-ground"],
+        "must be 0 or more (an eye below the ground sees none of the terrain), got -1e308",
+    );
+    fails_with(
+        &["cull", s(&tch), "--eye", "1e300,0,2", "--above-ground"],
+        "eye 1 (--eye) at x 1e300, y 0 is outside the terrain's footprint",
+    );
     let eyes = dir.path().join("eyes.txt");
     std::fs::write(&eyes, format!("# a path\n-5000,0,2\n{below}\n")).expect("eyes");
     let line = format!("eye 2 ({}:3)", eyes.display());

@@ -222,18 +222,22 @@ impl Eyes {
             if let Some(g) = ground
                 && z < g - ground_tolerance(g)
             {
-                // Millimetres, unless the eye is closer than that to the ground.
-                let (depth, ground) = if g - z >= 1e-3 {
-                    (format!("{:.3}", g - z), format!("{g:.3}"))
+                // Millimetres, unless the eye is closer than that to the ground (or farther than any terrain).
+                let depth = if (1e-3..1e9).contains(&(g - z)) {
+                    format!("{:.3}", g - z)
                 } else {
-                    (format!("{:.1e}", g - z), format!("{g}"))
+                    format!("{:.1e}", g - z)
                 };
+                let ground = if g - z >= 1e-3 {
+                    format!("{g:.3}")
+                } else {
+                    format!("{g}")
+                };
+                let [x, y, z] = self.points[i].map(tin::compact_number);
                 anyhow::bail!(
-                    "{} at x {}, y {}, z {z} is {depth} m below the ground (at z {ground} there): an eye below the \
+                    "{} at x {x}, y {y}, z {z} is {depth} m below the ground (at z {ground} there): an eye below the \
                      ground sees none of the terrain{}",
                     self.name(i),
-                    self.points[i][0],
-                    self.points[i][1],
                     if above_ground_flag {
                         " (for heights above the ground, give --above-ground)"
                     } else {
@@ -253,7 +257,7 @@ impl Eyes {
                 "{}: with --above-ground, z is a height above the ground and must be 0 or more (an eye below the \
                  ground sees none of the terrain), got {}",
                 self.name(i),
-                self.points[i][2]
+                tin::compact_number(self.points[i][2])
             );
         }
         for (i, ground) in self.grounds(h).into_iter().enumerate() {
@@ -261,8 +265,8 @@ impl Eyes {
                 format!(
                     "{} at x {}, y {} is outside the terrain's footprint: --above-ground has no ground there",
                     self.name(i),
-                    self.points[i][0],
-                    self.points[i][1]
+                    tin::compact_number(self.points[i][0]),
+                    tin::compact_number(self.points[i][1])
                 )
             })?;
             self.points[i][2] += ground;
