@@ -205,4 +205,25 @@ fn bad_arguments_give_clear_errors() {
         &["failmap", s(&tch), "--cell-size", "5000", "--eye-height=-5", "--json"],
         "--eye-height",
     );
+    // Beyond the exact checker's reach (10,000 km), as for `eval`: refused rather than scored wrongly.
+    fails_with(
+        &[
+            "failmap",
+            s(&tch),
+            "--cell-size",
+            "5000",
+            "--eye-height",
+            "1e308",
+            "--json",
+        ],
+        "--eye-height 1e308: failmap scores eyes within 10000000 m of the terrain",
+    );
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "--above-ground", "0,1e12"],
+        "--above-ground: --check scores sample points within 10000000 m of the terrain's box",
+    );
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "--height-band", "0,1e12"],
+        "and this band reaches",
+    );
 }

@@ -52,6 +52,13 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
          terrain), got {}",
         tin::compact_number(args.eye_height)
     );
+    ensure!(
+        args.eye_height <= super::culling_args::EVAL_REACH,
+        "--eye-height {}: failmap scores eyes within {} m of the terrain (its exact checker works to 1e-9 of the \
+         distance)",
+        tin::compact_number(args.eye_height),
+        tin::compact_number(super::culling_args::EVAL_REACH)
+    );
     // Without -o or --csv the summary alone is the result (as for `pvs`); quietened as well, nothing would be.
     out.require_a_result(
         args.out.is_some() || args.csv.is_some(),

@@ -61,7 +61,11 @@ fn dem_flag(dem: &DemArgs, dem_vertices: Option<usize>) -> Option<String> {
     if let Some(z_scale) = dem.z_scale {
         Some(format!("--z-scale {}", tin::compact_number(z_scale)))
     } else if let Some((dx, dy)) = dem.spacing {
-        Some(format!("--spacing {dx},{dy}"))
+        Some(format!(
+            "--spacing {},{}",
+            tin::compact_number(dx),
+            tin::compact_number(dy)
+        ))
     } else if let Some(b) = dem.band {
         Some(format!("--band {b}"))
     } else {

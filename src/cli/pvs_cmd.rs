@@ -13,6 +13,7 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
+use super::culling_args::EVAL_REACH;
 use super::files::Outputs;
 use super::{Output, OutputArgs};
 
@@ -93,6 +94,31 @@ fn parse_numbers(s: &str, n: usize) -> Result<Vec<f64>, String> {
             _ => Err(format!("{t:?} is not a finite number")),
         })
         .collect()
+}
+
+/// Refuses, for `--check`, a band of heights whose sample points lie farther than [`EVAL_REACH`] above or below the
+/// box of `h`'s vertices: the exact checker that scores them works to `1e-9` of the distance, as for `eval`.
+fn band_within_reach(h: &Hierarchy, height: Height) -> Result<()> {
+    let (lo, hi) = h
+        .mesh
+        .positions
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p[2]), hi.max(p[2]))
+        });
+    let (flag, far) = match height {
+        // An eye at most `top` above the ground is at most `top` above the box.
+        Height::AboveGround([_, top]) => ("--above-ground", top),
+        Height::Band([bottom, top]) => ("--height-band", (lo - bottom).max(top - hi)),
+    };
+    ensure!(
+        far <= EVAL_REACH,
+        "{flag}: --check scores sample points within {} m of the terrain's box (its exact checker works to 1e-9 of the \
+         distance), and this band reaches {} m beyond it",
+        tin::compact_number(EVAL_REACH),
+        tin::compact_number(far)
+    );
+    Ok(())
 }
 
 fn parse_method(s: &str) -> Result<Method, String> {
@@ -186,6 +212,7 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
     if let Some(n) = args.check {
+        band_within_reach(&h, height)?;
         return check(args, &h, height, n, &resolutions, safe_params, out);
     }
     let params = PvsParams {

@@ -160,7 +160,8 @@ pub fn validate(terrain: &Terrain, o: &RenderOptions) -> Result<()> {
         && p.abs() >= 89.0
     {
         return bad(format!(
-            "--pitch must be between -89° and 89° (exclusive: the camera never looks straight up or down), got {p}"
+            "--pitch must be between -89° and 89° (exclusive: the camera never looks straight up or down), got {}",
+            tin::compact_number(p)
         ));
     }
     if let (Some(level), Some(h)) = (o.level, &terrain.hierarchy) {
