@@ -19,7 +19,7 @@ pub struct FailmapArgs {
     /// their false culls are).
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
-    /// Eye height above the ground at each cell centre (m).
+    /// Eye height above the ground at each cell centre (m, 0 to 10,000 km: the exact checker's reach, as for `eval`).
     #[arg(long, default_value_t = 2.0)]
     pub eye_height: f64,
     /// Side of the map's square cells (m; `--cell` is an older name).

@@ -32,7 +32,8 @@ pub struct PvsArgs {
     /// Check N random cells (1 to 1000000) of `--cell-size` against the exact checker from 64 sample points each
     /// (corners, edges, interior, both heights): misses (target 0), PVS size against the union of the sampled visible
     /// sets and of the safe culler's drawn sets, seconds and bytes per cell; for `koltun` at every `--resolution`,
-    /// `regions`, and `both` at the highest resolution.
+    /// `regions`, and `both` at the highest resolution. The heights must lie within 10,000 km of the terrain (the
+    /// exact checker's reach, as for `eval`).
     #[arg(long, value_name = "N")]
     pub check: Option<usize>,
     /// Side of the random cells of `--check` (m) [default: 100].
