@@ -378,7 +378,8 @@ fn check(
     let view_seed = args.view_seed.unwrap_or(1);
     ensure!(
         cell_size.is_finite() && cell_size > 0.0,
-        "--cell-size must be positive, got {cell_size}"
+        "--cell-size must be positive, got {}",
+        tin::compact_number(cell_size)
     );
     let tin = super::mesh_input::hierarchy_tin_of(h, &args.hierarchy)?;
     let truth = truth::GroundTruth::new(&tin);

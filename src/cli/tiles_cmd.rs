@@ -181,8 +181,9 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         super::mesh_input::refuse_dem_flags_for_mesh(&args.dem, &args.read, None)?;
         if let Some(m) = args.max_error {
             bail!(
-                "{}: --max-error {m} applies to a DEM's tiles (each simplified to it); a mesh's tiles keep its triangles",
+                "{}: --max-error {} applies to a DEM's tiles (each simplified to it); a mesh's tiles keep its triangles",
                 args.dem.display(),
+                tin::compact_number(m),
             );
         }
         return plan_mesh(args, out, files, options, &source, &tiles_dir);

@@ -55,7 +55,7 @@ impl CrystalParams {
                 "max_expanse",
                 format!(
                     "must be a positive fraction of the terrain's area, got {}",
-                    self.max_expanse
+                    tin::compact_number(self.max_expanse)
                 ),
             );
         }
