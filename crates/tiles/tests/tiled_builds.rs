@@ -722,6 +722,19 @@ fn damageable_plan(mesh: bool) -> &'static (serde_json::Value, tempfile::TempDir
     })
 }
 
+/// Writes the plan `doc` to `path`, loads it, builds every tile and merges them; removes the plan file.
+fn run_plan(doc: &serde_json::Value, path: &Path) -> Result<Hierarchy, tiles::TilesError> {
+    std::fs::write(path, serde_json::to_string(doc).expect("JSON")).expect("write the plan");
+    let result = Plan::load(path).and_then(|plan| {
+        let built = (0..plan.tiles.len())
+            .map(|i| tiles::build_tile(&plan, path, i, None).map(|b| b.0))
+            .collect::<Result<Vec<_>, _>>()?;
+        tiles::merge(&plan, &built)
+    });
+    std::fs::remove_file(path).expect("remove the plan");
+    result
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
@@ -747,15 +760,7 @@ proptest! {
         let mut damaged = doc.clone();
         let at = replace_scalar(&mut damaged, &mut (which % scalars(doc)), &value).expect("a scalar");
         // Each case its own plan file beside the shared tile files.
-        let path = dir.path().join(format!("plan-{which}.json"));
-        std::fs::write(&path, serde_json::to_string(&damaged).expect("JSON")).expect("write the plan");
-        let result = Plan::load(&path).and_then(|plan| {
-            let built = (0..plan.tiles.len())
-                .map(|i| tiles::build_tile(&plan, &path, i, None).map(|b| b.0))
-                .collect::<Result<Vec<_>, _>>()?;
-            tiles::merge(&plan, &built)
-        });
-        std::fs::remove_file(&path).expect("remove the plan");
+        let result = run_plan(&damaged, &dir.path().join(format!("plan-{which}.json")));
         if let Ok(h) = result {
             prop_assert!(h.check_invariants().is_ok(), "{at} = {value}: the merge is not a valid hierarchy");
         }
@@ -813,15 +818,7 @@ mod damaged_part {
             let name = format!("plan.tiles/damaged-{tile}-{field}-{index}-{coordinate}.bin");
             std::fs::write(dir.path().join(&name), part.to_bytes().expect("bytes")).expect("write");
             plan_doc["tiles"][tile]["part"] = serde_json::json!(name);
-            let path = dir.path().join(format!("plan-part-{tile}-{field}-{index}-{coordinate}.json"));
-            std::fs::write(&path, serde_json::to_string(&plan_doc).expect("JSON")).expect("write the plan");
-            let result = Plan::load(&path).and_then(|plan| {
-                let built = (0..plan.tiles.len())
-                    .map(|i| tiles::build_tile(&plan, &path, i, None).map(|b| b.0))
-                    .collect::<Result<Vec<_>, _>>()?;
-                tiles::merge(&plan, &built)
-            });
-            std::fs::remove_file(&path).expect("remove the plan");
+            let result = run_plan(&plan_doc, &dir.path().join(format!("plan-part-{tile}-{field}-{index}-{coordinate}.json")));
             std::fs::remove_file(dir.path().join(&name)).expect("remove the part");
             match result {
                 Ok(h) => prop_assert!(h.check_invariants().is_ok()),
