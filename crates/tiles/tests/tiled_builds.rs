@@ -808,7 +808,8 @@ mod damaged_part {
             let (doc, dir) = damageable_plan(true);
             let mut plan_doc = doc.clone();
             let part_path = dir.path().join(plan_doc["tiles"][tile]["part"].as_str().expect("a part"));
-            let mut part = tiles::part::MeshPart::from_bytes(&std::fs::read(&part_path).expect("read"), &part_path).expect("part");
+            let bytes = std::fs::read(&part_path).expect("read");
+            let mut part = tiles::part::MeshPart::from_bytes(&bytes, &part_path).expect("part");
             match field {
                 0 => { let n = part.positions.len(); part.positions[index % n][coordinate] = value; }
                 1 => { let n = part.triangles.len(); part.triangles[index % n][coordinate] = vertex; }
@@ -818,13 +819,15 @@ mod damaged_part {
             let name = format!("plan.tiles/damaged-{tile}-{field}-{index}-{coordinate}.bin");
             std::fs::write(dir.path().join(&name), part.to_bytes().expect("bytes")).expect("write");
             plan_doc["tiles"][tile]["part"] = serde_json::json!(name);
-            let result = run_plan(&plan_doc, &dir.path().join(format!("plan-part-{tile}-{field}-{index}-{coordinate}.json")));
+            let plan_path = dir.path().join(format!("plan-part-{tile}-{field}-{index}-{coordinate}.json"));
+            let result = run_plan(&plan_doc, &plan_path);
             std::fs::remove_file(dir.path().join(&name)).expect("remove the part");
             match result {
                 Ok(h) => prop_assert!(h.check_invariants().is_ok()),
                 Err(e) => {
                     let m = e.to_string();
-                    prop_assert!(m.contains(&name) || m.contains("tile ") || m.contains("tiles "), "the error names neither file nor tile: {m}");
+                    let named = m.contains(&name) || m.contains("tile ") || m.contains("tiles ");
+                    prop_assert!(named, "the error names neither file nor tile: {m}");
                 }
             }
         }

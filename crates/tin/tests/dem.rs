@@ -1177,8 +1177,9 @@ mod damaged_asc {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(256))]
 
-        /// An `.asc` (in metres, or in degrees with its `.prj`) with any one header value replaced (or a second spacing
-        /// key added) is read into a grid that simplifies into a TIN, or refused with an error naming it; never a panic.
+        /// An `.asc` (in metres, or in degrees with its `.prj`) with any one header value replaced (or a second
+        /// spacing key added) is read into a grid that simplifies into a TIN, or refused with an error naming it;
+        /// never a panic.
         #[test]
         fn an_asc_with_any_header_value_replaced_is_read_or_refused(
             which in 0usize..7,
@@ -1194,8 +1195,12 @@ mod damaged_asc {
             let dir = tempfile::tempdir().expect("tempdir");
             let path = dir.path().join("g.asc");
             let mut header = vec![
-                ("ncols", "4".to_string()), ("nrows", "3".to_string()), ("xllcorner", "-123.5".to_string()),
-                ("yllcorner", "43.25".to_string()), ("cellsize", "0.01".to_string()), ("NODATA_value", "-9999".to_string()),
+                ("ncols", "4".to_string()),
+                ("nrows", "3".to_string()),
+                ("xllcorner", "-123.5".to_string()),
+                ("yllcorner", "43.25".to_string()),
+                ("cellsize", "0.01".to_string()),
+                ("NODATA_value", "-9999".to_string()),
                 ("dx", "0.01".to_string()),
             ];
             if !geographic {

@@ -1,7 +1,7 @@
 //! GeoTIFF reader: the three real files of `../shared/dem` against their `.npy` / `.hgt` twins and the README's
 //! georeferencing (these fail, never skip, when the directory is missing), and GeoTIFFs written by the tests with the
-//! `tiff` encoder (sample types, compression, predictors, transformation, bands, and the errors; and any bytes of a small
-//! one damaged: read into a grid that simplifies, or refused, never a panic).
+//! `tiff` encoder (sample types, compression, predictors, transformation, bands, and the errors; and any bytes of a
+//! small one damaged: read into a grid that simplifies, or refused, never a panic).
 #![cfg(feature = "geotiff")]
 
 use std::io::Cursor;
@@ -895,8 +895,8 @@ mod damaged_bytes {
         #![proptest_config(ProptestConfig::with_cases(512))]
 
         /// A small GeoTIFF (float32 and int16; uncompressed, LZW, Deflate; with and without a predictor) with bytes
-        /// replaced and maybe cut short is read into a grid that simplifies into a TIN, or refused with an error; never a
-        /// panic (in this crate or in `tiff`).
+        /// replaced and maybe cut short is read into a grid that simplifies into a TIN, or refused with an error;
+        /// never a panic (in this crate or in `tiff`).
         #[test]
         fn a_geotiff_with_bytes_damaged_is_read_or_refused(
             which in 0usize..6,

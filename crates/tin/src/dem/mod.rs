@@ -372,7 +372,8 @@ fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &P
                 path,
                 format!(
                     "the {axis} spacing {step:e} m is too fine for coordinates near {:e} m: neighbouring samples could \
-                     get the same {axis} in f64 (the spacing must exceed 2^-49 times the summed magnitudes of the origin's and the corners' coordinates)",
+                     get the same {axis} in f64 (the spacing must exceed 2^-49 times the summed magnitudes of the \
+                     origin's and the corners' coordinates)",
                     at.iter().fold(0.0f64, |m, v| m.max(v.abs()))
                 ),
             ));
