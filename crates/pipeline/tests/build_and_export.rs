@@ -231,6 +231,7 @@ mod any_parameters {
     use pipeline::CrystalParams;
     use proptest::prelude::*;
 
+    /// Any float, the awkward ones often.
     fn float() -> impl Strategy<Value = f64> {
         prop_oneof![
             Just(f64::NAN),
@@ -246,6 +247,7 @@ mod any_parameters {
         ]
     }
 
+    /// Build parameters, valid ones mostly, every field sometimes far out of range.
     fn params() -> impl Strategy<Value = BuildParams> {
         let count = prop_oneof![0usize..100, Just(usize::MAX), Just(1usize << 40), any::<usize>()];
         let crystal = (
