@@ -1,6 +1,6 @@
 //! The safe culler and the Lloyd & Egbert culler never cull a visible triangle: adversarial terrains and random TINs,
 //! every cull checked against the exact segment-walk checker (`truth`), at several horizon resolutions, patch sizes
-//! and occluder grids.
+//! and occluder grids; and what a file stores of its nodes (circles, regions) changes nothing they draw.
 //!
 //! The checker's visible set is a lower bound of the true one (finite samples), so every triangle it calls visible
 //! really is: a drawn set missing one of them is a false cull, always a bug.
@@ -626,5 +626,65 @@ proptest! {
         eyes.push(DVec3::new(xy.x, xy.y, loc.ground_height(&tin, xy).unwrap_or(0.0) + 1.0));
         eyes.push(DVec3::new(-40.0, xy.y, 10.0 * f64::from(levels)));
         assert_safe("terraced grid", &tin, &eyes);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// The run-time cullers whose verdicts are theorems read only the mesh and the tree's structure from a file: any
+    /// stored circle (moved, shrunk to nothing, grown to 1e30 m) and any stored region (dropped, or one in every
+    /// sector holding every camera) changes nothing they draw, from any eye: a file cannot make them cull wrongly by
+    /// what it says of its nodes.
+    #[test]
+    fn stored_circles_and_regions_change_nothing_the_run_time_cullers_draw(
+        seed in any::<u64>(),
+        n in 20usize..120,
+        circles in prop::collection::vec(
+            (-1e30f32..1e30, -1e30f32..1e30, prop_oneof![Just(0.0f32), 0.0f32..1e30]),
+            1..64,
+        ),
+        claim_everything in any::<bool>(),
+    ) {
+        let mut next = splitmix(seed);
+        let Some(tin) = random_tin(&mut next, n, 1.0) else { return Ok(()) };
+        let (h, _) = hierarchy_of(&tin, 8, 3);
+        let mut damaged = h.clone();
+        for (i, node) in damaged.nodes.iter_mut().enumerate() {
+            let (x, y, r) = circles[i % circles.len()];
+            node.centre = [x, y];
+            node.radius = r;
+            node.regions = if claim_everything {
+                // A region in every sector that holds every camera below 1e30 m: "always hidden".
+                (0..h.sectors as u16)
+                    .map(|sector| cull::StoredRegion {
+                        sector,
+                        points: vec![[-1e30, 1e30]],
+                        tail_slope: 0.0,
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
+        }
+        prop_assert!(damaged.check_invariants().is_ok());
+        let params = [
+            SafeParams::default(),
+            SafeParams { coarse_columns: 64, work_budget: 40, ..SafeParams::default() },
+        ];
+        for p in params {
+            let (a, b) = (SafeCuller::new(&h, p), SafeCuller::new(&damaged, p));
+            let (c, d) = (
+                LloydEgbertCuller::new(&h, p.columns_per_face),
+                LloydEgbertCuller::new(&damaged, p.columns_per_face),
+            );
+            for _ in 0..4 {
+                let eye = [next() * 700.0 - 100.0, next() * 700.0 - 100.0, next() * 80.0 - 20.0];
+                for camera in [Camera::all_around(eye), Camera { position: eye, yaw: 6.0 * next(), hfov: 1.2 }] {
+                    prop_assert_eq!(a.cull(&camera), b.cull(&camera));
+                    prop_assert_eq!(c.cull(&camera), d.cull(&camera));
+                }
+            }
+        }
     }
 }
