@@ -364,16 +364,24 @@ pub fn compute(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> Resul
     let done = AtomicUsize::new(0);
     // One task per run of consecutive subsectors, a few runs per thread: within a run each sweep hands its sorted
     // order to the next (one sort saved per sweep). Rayon runs at most one task per worker thread at a time, so
-    // the working memory is that of (threads) sweeps, each O(n log n). The result does not depend on the runs.
+    // the working memory is that of (threads) sweeps, each O(n log n), kept from one sweep of a run to the next.
+    // The result does not depend on the runs.
     let run = (total / (4 * rayon::current_num_threads().max(1))).max(1);
     horizons
         .par_chunks_mut((n * run).max(1))
         .enumerate()
         .for_each(|(c, block)| {
-            let mut previous = None;
+            let (mut previous, mut scratch) = (None, sweep::Scratch::default());
             for (k, out) in block.chunks_mut(n.max(1)).enumerate() {
                 let wedge = geometry.wedge(c * run + k);
-                previous = Some(sweep::sweep_subsector(positions, origin, &wedge, out, previous));
+                previous = Some(sweep::sweep_subsector(
+                    positions,
+                    origin,
+                    &wedge,
+                    out,
+                    previous,
+                    &mut scratch,
+                ));
                 let finished = done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
                 if let Some(progress) = &opts.progress {
                     progress(finished, total);

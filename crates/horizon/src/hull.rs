@@ -31,6 +31,9 @@ use crate::predicates::orient2d;
 
 const NIL: u32 = u32::MAX;
 
+/// The first state of a [`HullArena`]'s priority generator (xorshift64*).
+const PRIORITY_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
+
 #[derive(Clone, Copy, Debug)]
 struct Node {
     t: f64,
@@ -94,8 +97,16 @@ impl HullArena {
         HullArena {
             nodes: Vec::with_capacity(capacity),
             free: Vec::new(),
-            rng: 0x9E37_79B9_7F4A_7C15,
+            rng: PRIORITY_SEED,
         }
+    }
+
+    /// Empties the arena as [`HullArena::with_capacity`] makes it (priorities start again from the same seed),
+    /// keeping its memory for reuse.
+    pub fn clear(&mut self) {
+        self.nodes.clear();
+        self.free.clear();
+        self.rng = PRIORITY_SEED;
     }
 
     /// Number of hull vertices alive in all hulls of this arena.
@@ -459,6 +470,20 @@ impl HullSet {
             trees: Vec::new(),
             arena: HullArena::default(),
         }
+    }
+
+    /// Empties the set as [`HullSet::new`] makes it with `small_limit` and `capacity` (every [`HullRef`] into it is
+    /// invalid afterwards), keeping its memory for the next sweep.
+    pub fn clear(&mut self, small_limit: usize, capacity: usize) {
+        let small_limit = small_limit.clamp(1, 1024);
+        let classes = small_limit.next_power_of_two().trailing_zeros() as usize + 1;
+        self.small_limit = small_limit;
+        self.pool.clear();
+        self.pool.reserve(capacity);
+        self.free.iter_mut().for_each(Vec::clear);
+        self.free.resize_with(classes, Vec::new);
+        self.trees.clear();
+        self.arena.clear();
     }
 
     /// The smallest `t` of all points ever inserted into `hull` (its leftmost vertex), or `None` when empty.

@@ -73,13 +73,15 @@ pub(crate) struct DirectionOrder {
 /// Computes, for every vertex, its horizon vertex in the subsector with wedge `wedge` (or [`NO_HORIZON`]), into
 /// `out` (one entry per vertex). `origin` is the local origin of the projection ([`Wedge::project`]). `previous` is
 /// what the sweep of the previous subsector returned, if it ran just before (used when its direction is this
-/// wedge's `a`); the result is the same with or without it.
+/// wedge's `a`); the result is the same with or without it. `scratch` is working memory, kept from one sweep to the
+/// next; the result does not depend on what it holds.
 pub(crate) fn sweep_subsector(
     positions: &[DVec3],
     origin: DVec2,
     wedge: &Wedge,
     out: &mut [u32],
     previous: Option<DirectionOrder>,
+    scratch: &mut Scratch,
 ) -> DirectionOrder {
     sweep_with(
         positions,
@@ -89,10 +91,96 @@ pub(crate) fn sweep_subsector(
         BUCKET,
         HullSet::DEFAULT_SMALL_LIMIT,
         previous,
+        scratch,
     )
 }
 
+/// The working memory of a sweep, reused by the next one: a sweep of a million vertices fills some 250 MB, and
+/// allocating it afresh every time made the system fault in and zero every page of it again (about 4% of a
+/// million-vertex build's horizon time). Every buffer is cleared and refilled before it is read, so what a scratch
+/// holds never changes a result.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    ka: Vec<LineKey>,
+    kb: Vec<LineKey>,
+    t: Vec<f64>,
+    keyed: Vec<(f64, u32)>,
+    /// A leaf or visiting order no longer in use, whose memory the next sort fills.
+    spare: Vec<u32>,
+    leaf_of: Vec<u32>,
+    hi: Vec<u32>,
+    visits: Vec<Visit>,
+    members: Vec<Member>,
+    visited: Vec<bool>,
+    slots: Vec<Slot>,
+    hulls: HullSet,
+}
+
+/// One visit of the main loop, laid out in visiting order: everything it reads of its vertex.
+struct Visit {
+    t: f64,
+    z: f64,
+    vertex: u32,
+    /// Leaf position of the vertex.
+    pos: u32,
+    /// Last leaf position with the same B.
+    hi: u32,
+    /// First leaf position of the bucket of `hi`.
+    first: u32,
+    /// Tree nodes of the buckets of `hi` (query path) and `pos` (insertion path).
+    query_leaf: u32,
+    insert_leaf: u32,
+}
+
+/// The vertex at a leaf position, as a bucket scan reads it.
+#[derive(Clone, Copy)]
+struct Member {
+    t: f64,
+    z: f64,
+    vertex: u32,
+}
+
+impl Member {
+    const UNSET: Member = Member {
+        t: 0.0,
+        z: 0.0,
+        vertex: 0,
+    };
+}
+
+/// Per tree node: its covering set, the index of the last visit whose query path contains the node (a hull that no
+/// later vertex will query needs no insertions), and bounds of every point inserted into the hull (its smallest `t`
+/// answers the degeneracy check without touching the hull; with the largest `t` and `z` they bound the slope of
+/// every hull vertex, see `cannot_beat`). Kept together for cache locality: 32 bytes, aligned, so one slot never
+/// straddles two cache lines. The largest `t` is rounded up to f32 (only ever used as an upper bound).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Slot {
+    hull: HullRef,
+    last: u32,
+    max_t: f32,
+    min_t: f64,
+    max_z: f64,
+}
+
+impl Slot {
+    const EMPTY: Slot = Slot {
+        hull: HullRef::EMPTY,
+        last: 0,
+        max_t: f32::NEG_INFINITY,
+        min_t: f64::INFINITY,
+        max_z: f64::NEG_INFINITY,
+    };
+}
+
+/// Clears `v` and fills it with `n` copies of `value`, keeping its memory.
+fn refill<T: Clone>(v: &mut Vec<T>, n: usize, value: T) {
+    v.clear();
+    v.resize(n, value);
+}
+
 /// [`sweep_subsector`] with a given bucket size and small-hull limit (tests vary both).
+#[allow(clippy::too_many_arguments)]
 fn sweep_with(
     positions: &[DVec3],
     origin: DVec2,
@@ -101,6 +189,7 @@ fn sweep_with(
     bucket: usize,
     small_limit: usize,
     previous: Option<DirectionOrder>,
+    scratch: &mut Scratch,
 ) -> DirectionOrder {
     let n = positions.len();
     debug_assert_eq!(out.len(), n);
@@ -111,9 +200,27 @@ fn sweep_with(
         };
     }
     let xy = |v: u32| positions[v as usize].truncate();
-    let ka: Vec<LineKey> = positions.iter().map(|p| LineKey::new(wedge.a, p.truncate())).collect();
-    let kb: Vec<LineKey> = positions.iter().map(|p| LineKey::new(wedge.b, p.truncate())).collect();
-    let t: Vec<f64> = positions.iter().map(|p| wedge.project(origin, p.truncate())).collect();
+    let Scratch {
+        ka,
+        kb,
+        t,
+        keyed,
+        spare,
+        leaf_of,
+        hi,
+        visits,
+        members,
+        visited,
+        slots,
+        hulls,
+    } = scratch;
+    ka.clear();
+    ka.extend(positions.iter().map(|p| LineKey::new(wedge.a, p.truncate())));
+    kb.clear();
+    kb.extend(positions.iter().map(|p| LineKey::new(wedge.b, p.truncate())));
+    t.clear();
+    t.extend(positions.iter().map(|p| wedge.project(origin, p.truncate())));
+    let (ka, kb, t) = (&ka[..], &kb[..], &t[..]);
     let cmp_b = |x: u32, y: u32| kb[x as usize].cmp_exact(&kb[y as usize], wedge.b, xy(x), xy(y));
     let gap = |keys: &[LineKey]| LineKey::certain_gap(keys.iter().map(LineKey::magnitude).fold(0.0, f64::max));
 
@@ -141,30 +248,39 @@ fn sweep_with(
             }
             order
         }
-        _ => sort_exact(
-            n,
-            |v| -ka[v as usize].value(),
-            gap(&ka),
-            |x, y| {
-                ka[y as usize]
-                    .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
-                    .then_with(|| cmp_b(x, y))
-                    .then(x.cmp(&y))
-            },
-        ),
+        _ => {
+            let mut order = std::mem::take(spare);
+            sort_exact(
+                n,
+                |v| -ka[v as usize].value(),
+                gap(ka),
+                |x, y| {
+                    ka[y as usize]
+                        .cmp_exact(&ka[x as usize], wedge.a, xy(y), xy(x))
+                        .then_with(|| cmp_b(x, y))
+                        .then(x.cmp(&y))
+                },
+                keyed,
+                &mut order,
+            );
+            order
+        }
     };
     // Leaves: B ascending, then index; hi = last leaf of each group of equal B.
-    let order_b = sort_exact(
+    let mut order_b = std::mem::take(spare);
+    sort_exact(
         n,
         |v| kb[v as usize].value(),
-        gap(&kb),
+        gap(kb),
         |x, y| cmp_b(x, y).then(x.cmp(&y)),
+        keyed,
+        &mut order_b,
     );
-    let mut leaf_of = vec![0u32; n];
+    refill(leaf_of, n, 0);
     for (pos, &v) in order_b.iter().enumerate() {
         leaf_of[v as usize] = pos as u32;
     }
-    let mut hi = vec![0u32; n];
+    refill(hi, n, 0);
     hi[n - 1] = (n - 1) as u32;
     for pos in (0..n - 1).rev() {
         hi[pos] = if cmp_b(order_b[pos], order_b[pos + 1]).is_eq() {
@@ -178,52 +294,23 @@ fn sweep_with(
     let buckets = n.div_ceil(bucket);
     let tree_leaves = buckets.next_power_of_two();
     let tree_leaf = |pos: u32| (tree_leaves + pos as usize / bucket) as u32;
-    struct Visit {
-        t: f64,
-        z: f64,
-        vertex: u32,
-        /// Leaf position of the vertex.
-        pos: u32,
-        /// Last leaf position with the same B.
-        hi: u32,
-        /// First leaf position of the bucket of `hi`.
-        first: u32,
-        /// Tree nodes of the buckets of `hi` (query path) and `pos` (insertion path).
-        query_leaf: u32,
-        insert_leaf: u32,
-    }
-    let visits: Vec<Visit> = order_a
-        .iter()
-        .map(|&v| {
-            let pos = leaf_of[v as usize];
-            let hi = hi[pos as usize];
-            Visit {
-                t: t[v as usize],
-                z: positions[v as usize].z,
-                vertex: v,
-                pos,
-                hi,
-                first: (hi as usize / bucket * bucket) as u32,
-                query_leaf: tree_leaf(hi),
-                insert_leaf: tree_leaf(pos),
-            }
-        })
-        .collect();
-    #[derive(Clone, Copy)]
-    struct Member {
-        t: f64,
-        z: f64,
-        vertex: u32,
-    }
-    let mut members = vec![
-        Member {
-            t: 0.0,
-            z: 0.0,
-            vertex: 0
-        };
-        n
-    ];
-    for visit in &visits {
+    visits.clear();
+    visits.extend(order_a.iter().map(|&v| {
+        let pos = leaf_of[v as usize];
+        let hi = hi[pos as usize];
+        Visit {
+            t: t[v as usize],
+            z: positions[v as usize].z,
+            vertex: v,
+            pos,
+            hi,
+            first: (hi as usize / bucket * bucket) as u32,
+            query_leaf: tree_leaf(hi),
+            insert_leaf: tree_leaf(pos),
+        }
+    }));
+    refill(members, n, Member::UNSET);
+    for visit in visits.iter() {
         members[visit.pos as usize] = Member {
             t: visit.t,
             z: visit.z,
@@ -232,34 +319,10 @@ fn sweep_with(
     }
     // Whether the member at each leaf position has been visited: one byte per position, apart from the members,
     // so that the scan of a bucket touches the members only where it needs them.
-    let mut visited = vec![false; n];
-    drop((order_a, leaf_of, hi));
+    refill(visited, n, false);
+    *spare = order_a;
 
-    // Per tree node: its covering set, the index of the last visit whose query path contains the node (a hull
-    // that no later vertex will query needs no insertions), and bounds of every point inserted into the hull (its
-    // smallest `t` answers the degeneracy check without touching the hull; with the largest `t` and `z` they bound
-    // the slope of every hull vertex, see `cannot_beat`). Kept together for cache locality.
-    // 32 bytes, aligned: one slot never straddles two cache lines. The largest `t` is rounded up to f32 (only
-    // ever used as an upper bound).
-    #[derive(Clone, Copy)]
-    #[repr(C, align(32))]
-    struct Slot {
-        hull: HullRef,
-        last: u32,
-        max_t: f32,
-        min_t: f64,
-        max_z: f64,
-    }
-    let mut slots = vec![
-        Slot {
-            hull: HullRef::EMPTY,
-            last: 0,
-            max_t: f32::NEG_INFINITY,
-            min_t: f64::INFINITY,
-            max_z: f64::NEG_INFINITY,
-        };
-        2 * tree_leaves
-    ];
+    refill(slots, 2 * tree_leaves, Slot::EMPTY);
     for (i, visit) in visits.iter().enumerate() {
         let mut node = visit.query_leaf as usize;
         while node >= 1 {
@@ -267,7 +330,7 @@ fn sweep_with(
             node >>= 1;
         }
     }
-    let mut hulls = HullSet::new(small_limit, 4 * n);
+    hulls.clear(small_limit, 4 * n);
     for (i, visit) in visits.iter().enumerate() {
         // The main loop is bound by memory latency: fetch what later visits will read (their bucket, the bottom
         // of their query path, and the hulls there) ahead of time. No effect on the result.
@@ -327,7 +390,7 @@ fn sweep_with(
             node >>= 1;
         }
         if degenerate {
-            best = best_in_wedge(positions, wedge, p, &ka, &kb, &t);
+            best = best_in_wedge(positions, wedge, p, ka, kb, t);
         }
         out[p as usize] = match best {
             Some(Candidate {
@@ -388,11 +451,19 @@ fn cannot_beat(apex: DVec2, min_t: f64, max_t: f64, max_z: f64, best: DVec2) -> 
     cmp_slope(apex, corner, best) == Ordering::Less
 }
 
-/// The vertices `0..n` sorted by `exact`, a total order that agrees with the approximate keys `approx` whenever
-/// they differ by more than `gap`: sort by the approximations, then re-sort each run of approximations closer
-/// than `gap` with the exact comparison.
-fn sort_exact(n: usize, approx: impl Fn(u32) -> f64, gap: f64, exact: impl Fn(u32, u32) -> Ordering) -> Vec<u32> {
-    let mut keyed: Vec<(f64, u32)> = (0..n as u32).map(|v| (approx(v), v)).collect();
+/// Writes into `out` the vertices `0..n` sorted by `exact`, a total order that agrees with the approximate keys
+/// `approx` whenever they differ by more than `gap`: sort by the approximations, then re-sort each run of
+/// approximations closer than `gap` with the exact comparison. `keyed` is working memory.
+fn sort_exact(
+    n: usize,
+    approx: impl Fn(u32) -> f64,
+    gap: f64,
+    exact: impl Fn(u32, u32) -> Ordering,
+    keyed: &mut Vec<(f64, u32)>,
+    out: &mut Vec<u32>,
+) {
+    keyed.clear();
+    keyed.extend((0..n as u32).map(|v| (approx(v), v)));
     keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let mut start = 0;
     while start < n {
@@ -405,7 +476,8 @@ fn sort_exact(n: usize, approx: impl Fn(u32) -> f64, gap: f64, exact: impl Fn(u3
         }
         start = end;
     }
-    keyed.into_iter().map(|(_, v)| v).collect()
+    out.clear();
+    out.extend(keyed.iter().map(|&(_, v)| v));
 }
 
 #[cfg(test)]
@@ -466,7 +538,7 @@ mod tests {
         #![proptest_config(ProptestConfig { cases: 150, ..ProptestConfig::default() })]
 
         /// Every bucket size (1 = the thesis' tree down to single leaves) and a tiny small-hull limit (treaps
-        /// inside the sweep) give the oracle's answer.
+        /// inside the sweep) give the oracle's answer, with a fresh scratch and with one used before.
         #[test]
         fn any_bucket_and_hull_limit_matches_the_oracle(n in 1usize..90, grid in any::<bool>(),
                                                         heights in prop::collection::vec(-2i32..3, 1..20),
@@ -476,14 +548,19 @@ mod tests {
             let g = SectorGeometry::new(&SectorConfig::new(s, k).expect("valid"));
             let origin = DVec2::new(1.0, 2.0);
             let expect = vertex_horizons(&positions, origin, &g);
+            // One scratch kept through every sweep, as a run of subsectors keeps it, begun by a sweep of another
+            // mesh that leaves it holding more than this one needs.
+            let mut kept = Scratch::default();
+            let other = grid_or_random(2 * n + 7, !grid, &[3, -1, 4, 1, -5]);
+            sweep_with(&other, origin, &g.wedge(0), &mut vec![0; other.len()], bucket, limit + 1, None, &mut kept);
             let mut previous = None;
             for j in 0..g.total() {
                 let mut out = vec![0; n];
-                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, None);
+                sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, None, &mut Scratch::default());
                 prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {}", j);
-                // Handing on the previous subsector's leaf order gives the same.
+                // Handing on the previous subsector's leaf order, with the kept scratch, gives the same.
                 let mut out = vec![0; n];
-                previous = Some(sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, previous));
+                previous = Some(sweep_with(&positions, origin, &g.wedge(j), &mut out, bucket, limit, previous, &mut kept));
                 prop_assert_eq!(&out[..], &expect[j * n..(j + 1) * n], "subsector {} after {}", j, j.max(1) - 1);
             }
         }
