@@ -7,7 +7,9 @@
  * For every eye it prints one line, the ranges to draw as `start-end` pairs (half-open), the same ranges as
  * `tincull cull FILE.tch --method M --eye X,Y,Z --yaw YAW --fov FOV --json` (YAW 0 and FOV 360 when not given), with
  * `--columns` and `--work-budget` set through tc_set_params as `tincull cull` takes them.
- * The file is loaded twice, once by path and once from a memory buffer, and both cullers must agree.
+ * The file is loaded twice, once by path and once from a memory buffer, and both cullers must agree. On standard
+ * error it describes the hierarchy and its mesh (tc_mesh: what a renderer uploads) and, per eye, what is drawn and
+ * the lowest point of it (read from the mesh through the ranges, as a renderer draws them).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -107,6 +109,18 @@ int main(int argc, char **argv) {
     if (st != TC_OK) return fail("tc_info", st);
     fprintf(stderr, "%u triangles, %u nodes, %u sectors, origin %.3f %.3f %.3f\n", info.triangles, info.nodes,
             info.sectors, info.origin[0], info.origin[1], info.origin[2]);
+    TcMesh mesh;
+    st = tc_mesh(by_path, &mesh);
+    if (st != TC_OK) return fail("tc_mesh", st);
+    if (mesh.triangles != info.triangles || mesh.vertices != info.vertices) {
+        fprintf(stderr, "error: tc_mesh and tc_info disagree on the counts\n");
+        return 1;
+    }
+    if (mesh.triangles > 0) {
+        const uint32_t *t = mesh.indices;
+        fprintf(stderr, "mesh: %u vertices, %u triangles, the first %u %u %u\n", mesh.vertices, mesh.triangles, t[0],
+                t[1], t[2]);
+    }
 
     /* Start small to exercise TC_ERR_BUFFER_TOO_SMALL, then grow to what the library asks for. */
     size_t capacity = 1;
@@ -151,8 +165,20 @@ int main(int argc, char **argv) {
         if (st != TC_OK) return fail("tc_work", st);
         for (size_t i = 0; i < count; i++) printf("%s%u-%u", i ? " " : "", ranges[i].start, ranges[i].end);
         printf("\n");
-        fprintf(stderr, "eye %s: %u of %u triangles drawn in %u ranges, %u nodes tested, %u work units\n", argv[a],
+        /* The ranges index the mesh's triangles: the lowest vertex drawn, as a renderer would reach it. */
+        double lowest = 0;
+        int any = 0;
+        for (size_t i = 0; i < count; i++)
+            for (uint32_t t = ranges[i].start; t < ranges[i].end; t++)
+                for (int k = 0; k < 3; k++) {
+                    double z = mesh.positions[3 * (size_t)mesh.indices[3 * (size_t)t + k] + 2];
+                    if (!any || z < lowest) lowest = z;
+                    any = 1;
+                }
+        fprintf(stderr, "eye %s: %u of %u triangles drawn in %u ranges, %u nodes tested, %u work units", argv[a],
                 stats.triangles_drawn, info.triangles, stats.ranges, stats.nodes_tested, work.work);
+        if (any) fprintf(stderr, ", lowest drawn vertex at z %.3f", lowest);
+        fprintf(stderr, "\n");
     }
 
     /* Errors come back as codes with a message, never as a crash. */

@@ -11,7 +11,7 @@
  * ABI version: `major << 16 | minor`. The major part changes when a function, struct or constant changes
  * incompatibly; the minor part when something is added.
  */
-#define TC_ABI_VERSION ((1 << 16) | 2)
+#define TC_ABI_VERSION ((1 << 16) | 3)
 
 /**
  * Success.
@@ -168,6 +168,31 @@ typedef struct TcInfo {
 } TcInfo;
 
 /**
+ * The mesh of a loaded hierarchy, as a renderer uploads it once and draws the ranges of [`tc_cull`] from: arrays owned
+ * by the culler, valid and unchanged until [`tc_free`].
+ */
+typedef struct TcMesh {
+  /**
+   * `3 * vertices` coordinates: x, y, z of each vertex in world metres, z up (subtract `TcInfo::origin` before
+   * converting to single precision for the GPU).
+   */
+  const double *positions;
+  /**
+   * Vertices of the mesh.
+   */
+  uint32_t vertices;
+  /**
+   * `3 * triangles` vertex indices (0-based), counter-clockwise seen from above, in the hierarchy's triangle order:
+   * triangle `t` of a [`TcRange`] is `indices[3t .. 3t + 3]`.
+   */
+  const uint32_t *indices;
+  /**
+   * Triangles of the mesh.
+   */
+  uint32_t triangles;
+} TcMesh;
+
+/**
  * Run-time parameters of the horizon cullers, as `tincull cull`'s flags of the same names: all of them for
  * `TC_METHOD_SAFE`, `columns_per_face` alone for `TC_METHOD_LLOYD_EGBERT`; the region cullers (`TC_METHOD_THESIS`,
  * `TC_METHOD_STEWART`) have none. No value changes whether a triangle culled is hidden, only how much is culled and
@@ -286,6 +311,16 @@ int32_t tc_stats(const struct TcCuller *culler,
  * `culler` comes from a `tc_load_*` call; `out` is writable.
  */
 int32_t tc_info(const struct TcCuller *culler, struct TcInfo *out);
+
+/**
+ * The mesh of the hierarchy behind `culler` ([`TcMesh`]): pointers into the culler's own arrays, valid until
+ * [`tc_free`], never to be written through.
+ *
+ * # Safety
+ * `culler` comes from a `tc_load_*` call; `out` is writable.
+ */
+int32_t tc_mesh(const struct TcCuller *culler,
+                struct TcMesh *out);
 
 /**
  * Writes the default [`TcParams`] (those of `tincull cull` without flags, and of a culler just loaded) to `*out`.

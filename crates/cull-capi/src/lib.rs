@@ -20,7 +20,7 @@ use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy, HierarchyError, S
 
 /// ABI version: `major << 16 | minor`. The major part changes when a function, struct or constant changes
 /// incompatibly; the minor part when something is added.
-pub const TC_ABI_VERSION: u32 = (1 << 16) | 2;
+pub const TC_ABI_VERSION: u32 = (1 << 16) | 3;
 
 /// Success.
 pub const TC_OK: i32 = 0;
@@ -171,6 +171,23 @@ pub struct TcInfo {
     pub method: u32,
     /// The hierarchy's local origin (world coordinates, m).
     pub origin: [f64; 3],
+}
+
+/// The mesh of a loaded hierarchy, as a renderer uploads it once and draws the ranges of [`tc_cull`] from: arrays owned
+/// by the culler, valid and unchanged until [`tc_free`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct TcMesh {
+    /// `3 * vertices` coordinates: x, y, z of each vertex in world metres, z up (subtract `TcInfo::origin` before
+    /// converting to single precision for the GPU).
+    pub positions: *const f64,
+    /// Vertices of the mesh.
+    pub vertices: u32,
+    /// `3 * triangles` vertex indices (0-based), counter-clockwise seen from above, in the hierarchy's triangle order:
+    /// triangle `t` of a [`TcRange`] is `indices[3t .. 3t + 3]`.
+    pub indices: *const u32,
+    /// Triangles of the mesh.
+    pub triangles: u32,
 }
 
 thread_local! {
@@ -475,6 +492,28 @@ pub unsafe extern "C" fn tc_info(culler: *const TcCuller, out: *mut TcInfo) -> i
                     CullMethod::LloydEgbert => TC_METHOD_LLOYD_EGBERT,
                 },
                 origin: h.origin,
+            })
+        })
+    }
+}
+
+/// The mesh of the hierarchy behind `culler` ([`TcMesh`]): pointers into the culler's own arrays, valid until
+/// [`tc_free`], never to be written through.
+///
+/// # Safety
+/// `culler` comes from a `tc_load_*` call; `out` is writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tc_mesh(culler: *const TcCuller, out: *mut TcMesh) -> i32 {
+    // SAFETY: the caller's contract, as `answer` needs it.
+    unsafe {
+        answer("tc_mesh", culler, out, |c| {
+            let mesh = &c.hierarchy.mesh;
+            let count = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+            Ok(TcMesh {
+                positions: mesh.positions.as_ptr().cast(),
+                vertices: count(mesh.positions.len()),
+                indices: mesh.triangles.as_ptr().cast(),
+                triangles: count(mesh.triangles.len()),
             })
         })
     }

@@ -209,8 +209,37 @@ fn c_example_prints_the_rust_ranges() {
         let stdout = String::from_utf8(out.stdout).expect("utf-8");
         let lines: Vec<&str> = stdout.lines().collect();
         let defaults = AnyCuller::new(&h, method);
-        let expected = printed(&params.map_or_else(|| defaults.clone(), |p| AnyCuller::with_params(&h, method, p)));
+        let culler = params.map_or_else(|| defaults.clone(), |p| AnyCuller::with_params(&h, method, p));
+        let expected = printed(&culler);
         assert_eq!(lines, expected, "{method} {options:?}");
+        // It reads the mesh through `tc_mesh`, and the lowest vertex of what it draws through the ranges.
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let [a, b, c] = h.mesh.triangles[0];
+        let mesh_line = format!(
+            "mesh: {} vertices, {} triangles, the first {a} {b} {c}\n",
+            h.mesh.positions.len(),
+            h.mesh.triangles.len()
+        );
+        assert!(
+            stderr.contains(&mesh_line),
+            "{method} {options:?}: no {mesh_line:?} in {stderr}"
+        );
+        let eye_lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("eye ")).collect();
+        assert_eq!(eye_lines.len(), eyes.len(), "{stderr}");
+        for (e, line) in eyes.iter().zip(eye_lines) {
+            let lowest = culler
+                .cull(&camera(e))
+                .ranges
+                .iter()
+                .flat_map(|&[s, t]| s..t)
+                .flat_map(|t| h.mesh.triangles[t as usize])
+                .map(|v| h.mesh.positions[v as usize][2])
+                .reduce(f64::min);
+            match lowest {
+                Some(z) => assert!(line.ends_with(&format!(", lowest drawn vertex at z {z:.3}")), "{line}"),
+                None => assert!(!line.contains("lowest"), "{line}"),
+            }
+        }
         if params.is_some() {
             assert_ne!(
                 expected,
@@ -744,5 +773,62 @@ fn parameters_set_from_c_cull_as_the_rust_culler_with_them() {
         assert_eq!(tc_work(c, &mut work), TC_OK);
         assert_eq!(work, TcWork::default());
         tc_free(c);
+    }
+}
+
+/// `tc_mesh` hands out the hierarchy's own mesh, exactly (the positions in f64, the triangles in the order the ranges
+/// count), for a culler loaded from a path or from memory, and refuses NULL pointers.
+#[test]
+fn the_mesh_is_the_hierarchys() {
+    let h = bundled_hierarchy();
+    let bytes = h.to_bytes().expect("to_bytes");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tch = dir.path().join("j2k.tch");
+    std::fs::write(&tch, &bytes).expect("write the .tch");
+    let path = std::ffi::CString::new(tch.to_str().expect("utf-8 path")).expect("no NUL");
+    for by_path in [true, false] {
+        let mut c: *mut TcCuller = std::ptr::null_mut();
+        // SAFETY: valid pointers; the culler is freed below.
+        let loaded = unsafe {
+            if by_path {
+                tc_load_path(path.as_ptr(), TC_METHOD_SAFE, &mut c)
+            } else {
+                tc_load_buffer(bytes.as_ptr(), bytes.len(), TC_METHOD_SAFE, &mut c)
+            }
+        };
+        assert_eq!(loaded, TC_OK, "{}", last_error());
+        let mut mesh = TcMesh {
+            positions: std::ptr::null(),
+            vertices: 0,
+            indices: std::ptr::null(),
+            triangles: 0,
+        };
+        // SAFETY: a culler from tc_load_*, a writable TcMesh.
+        assert_eq!(unsafe { tc_mesh(c, &mut mesh) }, TC_OK);
+        assert_eq!(mesh.vertices as usize, h.mesh.positions.len());
+        assert_eq!(mesh.triangles as usize, h.mesh.triangles.len());
+        // SAFETY: tc_mesh's arrays hold 3 × the counts, valid until tc_free.
+        let (positions, indices) = unsafe {
+            (
+                std::slice::from_raw_parts(mesh.positions, 3 * mesh.vertices as usize),
+                std::slice::from_raw_parts(mesh.indices, 3 * mesh.triangles as usize),
+            )
+        };
+        let want_positions: Vec<u64> = h.mesh.positions.iter().flatten().map(|x| x.to_bits()).collect();
+        let got_positions: Vec<u64> = positions.iter().map(|x| x.to_bits()).collect();
+        assert_eq!(got_positions, want_positions);
+        assert_eq!(indices, h.mesh.triangles.concat());
+        // SAFETY: NULL arguments are refused, not read.
+        unsafe {
+            assert_eq!(tc_mesh(std::ptr::null(), &mut mesh), TC_ERR_NULL);
+            assert_eq!(tc_mesh(c, std::ptr::null_mut()), TC_ERR_NULL);
+        }
+        assert!(
+            last_error().contains("tc_mesh: culler and out must not be NULL"),
+            "{}",
+            last_error()
+        );
+        // SAFETY: from tc_load_*, freed once.
+        unsafe { tc_free(c) };
     }
 }
