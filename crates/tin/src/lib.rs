@@ -18,6 +18,7 @@ pub mod obj;
 pub mod predicates;
 pub mod prefetch;
 pub mod simplify;
+pub mod sniff;
 pub mod synth;
 pub mod validate;
 

@@ -479,30 +479,9 @@ pub fn parse_obj(text: &[u8], name: &str, opts: &ObjImportOptions) -> Result<(Ti
     import(text, &PathBuf::from(name), opts)
 }
 
-/// What a file that is not an OBJ mesh is, from its first bytes, with what to do about it.
-fn foreign_format(head: &[u8]) -> Option<&'static str> {
-    let starts = |magic: &[u8]| head.starts_with(magic);
-    Some(if starts(b"II*\0") || starts(b"MM\0*") {
-        "a TIFF: name it .tif or .tiff to read it as a DEM (GeoTIFF)"
-    } else if starts(b"\x89PNG\r\n\x1a\n") {
-        "a PNG: name it .png to read it as a height map (with --spacing)"
-    } else if starts(b"\x93NUMPY") {
-        "a NumPy array: name it .npy to read it as a DEM"
-    } else if starts(b"\x1f\x8b") || starts(b"PK\x03\x04") {
-        "compressed (gzip or zip): unpack it first"
-    } else if starts(b"glTF") {
-        "a binary glTF: tincull reads OBJ meshes; convert it to OBJ"
-    } else if starts(b"ply\n") || starts(b"ply\r\n") {
-        "a PLY mesh: tincull reads OBJ meshes; convert it to OBJ"
-    } else if starts(b"solid ") && head.windows(5).any(|w| w == b"facet") {
-        "an ASCII STL mesh: tincull reads OBJ meshes; convert it to OBJ"
-    } else {
-        return None;
-    })
-}
-
 fn import(text: &[u8], path: &Path, opts: &ObjImportOptions) -> Result<(Tin, ObjImportReport)> {
-    if let Some(what) = foreign_format(&text[..text.len().min(512)]) {
+    if let Some(what) = crate::sniff::sniff(&text[..text.len().min(crate::sniff::HEAD)]).and_then(|f| f.as_mesh_hint())
+    {
         return Err(TinError::format(
             path,
             format!("not an OBJ mesh: it starts like {what}"),

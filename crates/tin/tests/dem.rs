@@ -934,6 +934,32 @@ fn dispatch_and_options() {
     let m = format_message(read_dem(Path::new("terrain.xyz"), &opts()));
     assert!(m.contains("unsupported DEM extension \"xyz\""), "{m}");
     assert!(m.contains(".tif"), "{m}");
+    // A DEM under a name that says nothing (as a pipe's, `<(cat x.tif)`): its first bytes say what to name it; an
+    // OBJ mesh is told to go where meshes are read.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let dem = |name: &str| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/dem")
+            .join(name)
+    };
+    for (source, says) in [
+        (dem("dfw_srtm.tif"), "it starts like a TIFF: name it .tif or .tiff"),
+        (dem("crater_lake.npy"), "it starts like a NumPy array: name it .npy"),
+        (
+            dem("jacksboro_fault.asc"),
+            "it starts like an ESRI ASCII grid: name it .asc",
+        ),
+        (
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../meshes/jacksboro-2k.obj"),
+            "it starts like an OBJ mesh, which is not a DEM grid",
+        ),
+    ] {
+        let bytes = std::fs::read(&source).unwrap_or_else(|e| panic!("{}: {e}", source.display()));
+        let unnamed = dir.path().join("63");
+        std::fs::write(&unnamed, bytes).expect("write");
+        let m = format_message(read_dem(&unnamed, &opts()));
+        assert!(m.contains("unsupported DEM extension \"\"") && m.contains(says), "{m}");
+    }
     for bad in [
         DemOptions {
             spacing: None,

@@ -325,11 +325,21 @@ fn extension(path: &Path) -> Result<String> {
         .unwrap_or_default();
     match ext.as_str() {
         "npy" | "asc" | "hgt" | "png" | "tif" | "tiff" => Ok(ext),
-        _ => Err(TinError::format(
-            path,
-            format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt, .png, .tif or .tiff"),
-        )),
+        _ => Err(unsupported(path, &ext)),
     }
+}
+
+/// The error for a DEM named with an extension no reader takes, saying what its first bytes look like when they tell
+/// (a pipe such as `<(cat x.tif)` has no extension).
+fn unsupported(path: &Path, ext: &str) -> TinError {
+    let hint = crate::sniff::head_of(path)
+        .and_then(|head| crate::sniff::sniff(&head))
+        .map(|f| format!("; {}", f.as_dem_hint()))
+        .unwrap_or_default();
+    TinError::format(
+        path,
+        format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt, .png, .tif or .tiff{hint}"),
+    )
 }
 
 /// Refuses a window (or a whole grid) whose corner samples have coordinates no stage can handle, naming the file
@@ -431,10 +441,7 @@ fn read_dem_unchecked(path: &Path, opts: &DemOptions) -> Result<Grid> {
             path,
             "GeoTIFF rasters need the `geotiff` feature of the tin crate, which this build lacks",
         )),
-        ext => Err(TinError::format(
-            path,
-            format!("unsupported DEM extension {ext:?}: expected .npy, .asc, .hgt, .png, .tif or .tiff"),
-        )),
+        ext => Err(unsupported(path, ext)),
     }
 }
 
