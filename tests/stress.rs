@@ -132,7 +132,7 @@ fn large_offsets_give_the_same_groups_and_culling() {
 
 #[test]
 fn vertical_exaggeration_stays_valid() {
-    for name in ["z x 100", "z x 0.01"] {
+    for name in ["z x 100", "z x 0.01", "z x -1"] {
         let c = case(name);
         assert!(c.invariants_ok && c.status == "ok", "{name}");
         assert_eq!(c.triangles, case("baseline").triangles);
@@ -207,6 +207,33 @@ fn synthetic_constructions() {
     assert!(steep, "a near-vertical wall");
     let f = stress::flat_tin(5).expect("flat");
     assert!(f.positions().iter().all(|p| p.z == 0.0));
+    let base = small_tin();
+    let t = stress::terraces_tin(&base, 8).expect("terraces");
+    let (lo, hi) = base
+        .positions()
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), p| (lo.min(p.z), hi.max(p.z)));
+    let step = (hi - lo) / 8.0;
+    let mut levels: Vec<u64> = t.positions().iter().map(|p| p.z.to_bits()).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    assert_eq!(levels.len(), 8, "eight levels");
+    assert_eq!(t.triangles(), base.triangles(), "the same triangulation");
+    for (p, q) in base.positions().iter().zip(t.positions()) {
+        assert_eq!((p.x, p.y), (q.x, q.y));
+        assert!(q.z <= p.z && q.z > p.z - step * (1.0 + 1e-9), "{p} terraced to {q}");
+    }
+    let level = (0..t.num_triangles()).filter(|&i| t.corners(i).iter().all(|c| c.z == t.corners(i)[0].z));
+    let level = level.count();
+    assert!(
+        level * 20 > t.num_triangles(),
+        "level plateaus: {level} of {} triangles",
+        t.num_triangles()
+    );
+    assert_eq!(
+        stress::terraces_tin(&f, 8).expect("flat terraces").positions(),
+        f.positions()
+    );
 }
 
 /// The failure map of the bundled 2k mesh at a coarse cell: PNG size, CSV rows, and each row checked against an

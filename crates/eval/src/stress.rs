@@ -9,9 +9,9 @@
 //! | --- | --- |
 //! | `baseline` | the input mesh with the default parameters (16 × 4 sectors) |
 //! | `sectors` | too few sectors (4 × 1, 8 × 1); too thin sectors (64 × 4, 128 × 1), each with and without the undersampling fix at a radius of 2 × the mean edge length |
-//! | `geometry` | slivers (few widely spaced rows of dense points, Delaunay), a one-vertex-wide knife-edge ridge, isolated spikes, a near-vertical cliff (0.01 m horizontal for 100 m of rise) |
+//! | `geometry` | slivers (few widely spaced rows of dense points, Delaunay), a one-vertex-wide knife-edge ridge, isolated spikes, a near-vertical cliff (0.01 m horizontal for 100 m of rise), the input mesh terraced (heights rounded down to 8 levels: plateaus of exactly level triangles) |
 //! | `flat` | a perfectly flat grid (all points cocircular in groups of four); Crater Lake simplified (a flat lake) when `../shared/dem/crater_lake.npy` exists |
-//! | `coords` | the mesh offset by (5e5, 5e6, 0), (5e6, 5e6, 1000) and (1e7, 1e7, 0); vertical exaggeration × 0.01 and × 100 |
+//! | `coords` | the mesh offset by (5e5, 5e6, 0), (5e6, 5e6, 1000) and (1e7, 1e7, 0); vertical exaggeration × 0.01 and × 100; the terrain upside down (z × −1: every valley a ridge, every ridge a valley) |
 //! | `viewpoints` | eyes exactly on a vertex, on an edge midpoint, at ground level, 10 m below the surface, far outside the footprint, 1e6 m up, and at sector-boundary azimuths from group centres |
 //! | `seeds` | the crystal grouping with 20 random seeds (5 with `quick`): spread of groups, orphans, occlusion captured |
 //!
@@ -448,6 +448,29 @@ pub fn flat_tin(n: usize) -> Result<Tin> {
     grid_tin(n, |_, _| 0.0)
 }
 
+/// `tin` terraced: every height rounded down to one of `levels` levels spread evenly over its range, on the same
+/// triangulation, so the plateaus are exactly level triangles and the steps between them steep ones (a flat mesh stays
+/// as it is).
+pub fn terraces_tin(tin: &Tin, levels: u32) -> Result<Tin> {
+    let (lo, hi) = tin
+        .positions()
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.z), hi.max(p.z))
+        });
+    let step = (hi - lo) / f64::from(levels.max(1));
+    if step.is_nan() || step <= 0.0 {
+        return map_tin(tin, |p| p);
+    }
+    map_tin(tin, |p| {
+        DVec3::new(
+            p.x,
+            p.y,
+            lo + ((p.z - lo) / step).floor().min(f64::from(levels - 1)) * step,
+        )
+    })
+}
+
 /// Crater Lake simplified to `vertices` vertices, or `None` when the DEM is missing.
 pub fn crater_lake_tin(dem_dir: &Path, vertices: usize) -> Result<Option<Tin>> {
     let path = dem_dir.join("crater_lake.npy");
@@ -685,6 +708,11 @@ pub fn run(tin: &Tin, mesh: &str, opts: &StressOptions, progress: &dyn Fn(&str))
             cliff_tin(g),
         ),
         ("flat terrain", "perfectly flat grid, cocircular points", flat_tin(g)),
+        (
+            "terraces",
+            "the input mesh's heights rounded down to 8 levels: level plateaus, steep steps",
+            terraces_tin(tin, 8),
+        ),
     ];
     for (name, note, t) in geometry {
         progress(name);
@@ -749,12 +777,16 @@ pub fn run(tin: &Tin, mesh: &str, opts: &StressOptions, progress: &dyn Fn(&str))
         }
         cases.push(case);
     }
-    for scale in [0.01, 100.0] {
+    for (scale, note) in [
+        (0.01, "vertical exaggeration"),
+        (100.0, "vertical exaggeration"),
+        (-1.0, "upside down: every valley a ridge"),
+    ] {
         let name = format!("z x {scale}");
         progress(&name);
         let t = map_tin(tin, |p| DVec3::new(p.x, p.y, p.z * scale))?;
         let e = standard_eyes(&t, n);
-        cases.push(run_case(&name, "coords", "vertical exaggeration", &t, &default, &e).0);
+        cases.push(run_case(&name, "coords", note, &t, &default, &e).0);
     }
 
     // Degenerate viewpoints, scored on the baseline build.
