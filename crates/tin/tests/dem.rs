@@ -852,6 +852,7 @@ fn a_little_endian_hgt_is_refused() {
 
 // ---------------------------------------------------------------- png
 
+#[cfg(feature = "png")]
 fn write_png(path: &Path, w: u32, h: u32, color: png::ColorType, depth: png::BitDepth, data: &[u8]) {
     let file = std::fs::File::create(path).expect("create");
     let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
@@ -861,6 +862,7 @@ fn write_png(path: &Path, w: u32, h: u32, color: png::ColorType, depth: png::Bit
     writer.write_image_data(data).expect("data");
 }
 
+#[cfg(feature = "png")]
 #[test]
 fn png_height_maps() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -981,6 +983,47 @@ fn dispatch_and_options() {
             read_dem(Path::new("x.asc"), &bad),
             Err(TinError::InvalidParameter(_))
         ));
+    }
+}
+
+/// A build without the `png` or the `geotiff` feature refuses those files by every reader, naming the file and the
+/// feature it lacks (`cargo test -p tin --no-default-features`, which `scripts/test` runs).
+#[cfg(not(all(feature = "png", feature = "geotiff")))]
+#[test]
+fn formats_left_out_of_the_build_name_their_feature() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut cases: Vec<(PathBuf, &str)> = Vec::new();
+    if cfg!(not(feature = "png")) {
+        let png = dir.path().join("heights.png");
+        std::fs::write(&png, b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR").expect("write");
+        cases.push((png, "PNG height maps need the `png` feature of the tin crate"));
+    }
+    if cfg!(not(feature = "geotiff")) {
+        let tif = shared_dem().join("dfw_srtm.tif");
+        cases.push((tif, "GeoTIFF rasters need the `geotiff` feature of the tin crate"));
+    }
+    let o = with_spacing(10.0, 10.0);
+    for (path, says) in &cases {
+        let name = path.file_name().and_then(|n| n.to_str()).expect("name");
+        let messages = [
+            refused(read_dem(path, &o)),
+            refused(tin::dem::read_dem_header(path, &o)),
+            refused(tin::dem::read_dem_window(path, &o, [0, 1], [0, 1])),
+            refused(tin::dem::read_dem_strips(path, &o, 4, |_, _| Ok(()))),
+        ];
+        for m in messages {
+            assert!(m.contains(says) && m.contains(name), "{m}");
+        }
+    }
+}
+
+/// The whole message (file named) of a read refused as a format error.
+#[cfg(not(all(feature = "png", feature = "geotiff")))]
+fn refused<T>(r: tin::Result<T>) -> String {
+    match r {
+        Err(e @ TinError::Format { .. }) => e.to_string(),
+        Err(e) => panic!("expected a format error, got {e}"),
+        Ok(_) => panic!("expected a format error, got a result"),
     }
 }
 
