@@ -55,6 +55,8 @@ fn every_case_builds_with_valid_invariants() {
         "isolated spikes",
         "near-vertical cliff",
         "flat terrain",
+        "terraces",
+        "flipped diagonals",
         "crater lake",
         "eye on a vertex",
         "eye on an edge",
@@ -65,6 +67,7 @@ fn every_case_builds_with_valid_invariants() {
         "eye at sector boundary",
         "z x 0.01",
         "z x 100",
+        "z x -1",
     ];
     for name in expected {
         let c = case(name);
@@ -233,6 +236,28 @@ fn synthetic_constructions() {
     assert_eq!(
         stress::terraces_tin(&f, 8).expect("flat terraces").positions(),
         f.positions()
+    );
+    // Flipped diagonals: the same vertices, as many triangles, a valid height field, and most triangles not the
+    // Delaunay ones of the input.
+    let flipped = stress::flipped_tin(&base).expect("flipped diagonals");
+    assert_eq!(flipped.positions(), base.positions(), "the same vertices");
+    assert_eq!(flipped.num_triangles(), base.num_triangles());
+    assert!(flipped.validate().is_height_field());
+    let sorted = |t: &[u32; 3]| {
+        let mut t = *t;
+        t.sort_unstable();
+        t
+    };
+    let delaunay: std::collections::HashSet<[u32; 3]> = base.triangles().iter().map(sorted).collect();
+    let changed = flipped
+        .triangles()
+        .iter()
+        .filter(|t| !delaunay.contains(&sorted(t)))
+        .count();
+    assert!(
+        changed * 2 > flipped.num_triangles(),
+        "{changed} of {} triangles flipped",
+        flipped.num_triangles()
     );
 }
 

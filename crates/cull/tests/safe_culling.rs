@@ -457,6 +457,42 @@ fn a_wall_hides_the_far_side() {
 /// tested in all (`r` roots; every node has at most two children: `B` refining tests push at most `2 B` nodes, the
 /// splits after the budget, at most `⌈B / 8⌉`, push `2 ⌈B / 8⌉` more). Culls are deterministic, a budget draws at least what the
 /// unlimited culler draws (its horizon is never higher), and a budget never reached changes nothing.
+/// A fan: every triangle shares one vertex placed near the rim of a convex polygon (a mesh's own faces, the least
+/// Delaunay triangulation there is: slivers up to 2 km long, every node's circle reaching the hub), over a ring of
+/// hills. Eyes on the hub, a hair above it, on the rim, between the hills and above them. Little of a fan can be
+/// hidden (every triangle reaches the hub); what is attacked here is the bounds of long thin nodes seen from within
+/// their circles.
+#[test]
+fn a_fan_of_slivers_around_one_vertex() {
+    let n = 90u32;
+    let mut pts = vec![DVec3::new(-950.0, 20.0, 5.0)];
+    for i in 0..n {
+        let a = TAU * f64::from(i) / f64::from(n);
+        let z = 40.0 * (7.0 * a).sin().max(0.0) + if i % 11 == 0 { 90.0 } else { 0.0 };
+        pts.push(DVec3::new(1000.0 * a.cos(), 1000.0 * a.sin(), z));
+    }
+    let tris: Vec<[u32; 3]> = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
+    let tin = Tin::from_parts(pts.clone(), tris).expect("a fan over a convex polygon");
+    assert!(tin.validate().is_height_field());
+    let loc = truth::Locator::new(&tin);
+    let above = |x: f64, y: f64, h: f64| {
+        let ground = loc.ground_height(&tin, glam::DVec2::new(x, y)).expect("inside the fan");
+        DVec3::new(x, y, ground + h)
+    };
+    let hub = pts[0];
+    let eyes = [
+        hub,
+        hub + DVec3::new(0.0, 0.0, 1e-9),
+        above(-947.0, 20.0, 2.0),
+        above(999.0, 0.0, 0.5),
+        pts[23],
+        above(400.0, -300.0, 2.0),
+        above(0.0, 0.0, 150.0),
+        DVec3::new(1500.0, 0.0, 20.0),
+    ];
+    assert_safe("fan", &tin, &eyes);
+}
+
 #[test]
 fn the_work_budget_bounds_every_cull() {
     let tin = grid_tin(61, 600.0, DVec3::ZERO, |x, y| {
@@ -626,6 +662,62 @@ proptest! {
         eyes.push(DVec3::new(xy.x, xy.y, loc.ground_height(&tin, xy).unwrap_or(0.0) + 1.0));
         eyes.push(DVec3::new(-40.0, xy.y, 10.0 * f64::from(levels)));
         assert_safe("terraced grid", &tin, &eyes);
+    }
+
+    /// Triangulations that are not Delaunay (a mesh's own faces, as `--keep-faces` reads them): a grid stretched up
+    /// to 100 times along one axis (triangles up to 100 times longer than wide), inner vertices jittered by a tenth
+    /// of a cell, each cell cut along a random diagonal; rolling heights, noise and random spikes. Eyes on vertices (at
+    /// their height and a hair above), on edge midpoints (on the terrain), above random points and off the terrain.
+    #[test]
+    fn non_delaunay_grids_have_no_false_culls(
+        seed in any::<u64>(),
+        nx in 3usize..16,
+        ny in 3usize..16,
+        stretch in -2.0f64..2.0,
+        rough in 0.0f64..3.0,
+    ) {
+        let mut next = splitmix(seed);
+        let (dx, dy) = (40.0 * 10f64.powf(stretch / 2.0), 40.0 / 10f64.powf(stretch / 2.0));
+        let (w, h) = (dx * (nx - 1) as f64, dy * (ny - 1) as f64);
+        let mut pts = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                let inner = |k: usize, n: usize| if k == 0 || k == n - 1 { 0.0 } else { 1.0 };
+                let x = dx * (i as f64 + inner(i, nx) * 0.2 * (next() - 0.5));
+                let y = dy * (j as f64 + inner(j, ny) * 0.2 * (next() - 0.5));
+                let spike = if next() < 0.1 { 60.0 } else { 0.0 };
+                let z = 40.0 * (9.0 * x / w).sin() * (6.0 * y / h).cos() + rough * 15.0 * next() + spike;
+                pts.push(DVec3::new(x, y, z));
+            }
+        }
+        let mut tris = Vec::new();
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let a = (j * nx + i) as u32;
+                let (b, c, d) = (a + 1, a + nx as u32, a + nx as u32 + 1);
+                if next() < 0.5 {
+                    tris.extend([[a, b, d], [a, d, c]]);
+                } else {
+                    tris.extend([[a, b, c], [b, d, c]]);
+                }
+            }
+        }
+        let tin = Tin::from_parts(pts.clone(), tris.clone()).expect("a grid jittered by a tenth of a cell");
+        prop_assert!(tin.validate().is_height_field());
+        let loc = truth::Locator::new(&tin);
+        let mut eyes = Vec::new();
+        for above in [0.0, 1e-9, 0.5] {
+            eyes.push(pts[(next() * pts.len() as f64) as usize % pts.len()] + DVec3::new(0.0, 0.0, above));
+        }
+        for above in [1e-9, 2.0] {
+            let t = tris[(next() * tris.len() as f64) as usize % tris.len()];
+            let (p, q) = (pts[t[0] as usize], pts[t[1] as usize]);
+            eyes.push((p + q) * 0.5 + DVec3::new(0.0, 0.0, above));
+        }
+        let xy = glam::DVec2::new(next() * w, next() * h);
+        eyes.push(DVec3::new(xy.x, xy.y, loc.ground_height(&tin, xy).unwrap_or(0.0) + 10.0));
+        eyes.push(DVec3::new(-0.3 * w, 0.5 * h, 30.0));
+        assert_safe("non-Delaunay grid", &tin, &eyes);
     }
 }
 

@@ -9,7 +9,7 @@
 //! | --- | --- |
 //! | `baseline` | the input mesh with the default parameters (16 × 4 sectors) |
 //! | `sectors` | too few sectors (4 × 1, 8 × 1); too thin sectors (64 × 4, 128 × 1), each with and without the undersampling fix at a radius of 2 × the mean edge length |
-//! | `geometry` | slivers (few widely spaced rows of dense points, Delaunay), a one-vertex-wide knife-edge ridge, isolated spikes, a near-vertical cliff (0.01 m horizontal for 100 m of rise), the input mesh terraced (heights rounded down to 8 levels: plateaus of exactly level triangles) |
+//! | `geometry` | slivers (few widely spaced rows of dense points, Delaunay), a one-vertex-wide knife-edge ridge, isolated spikes, a near-vertical cliff (0.01 m horizontal for 100 m of rise), the input mesh terraced (heights rounded down to 8 levels: plateaus of exactly level triangles), the input mesh's diagonals flipped (its vertices triangulated not Delaunay, as a mesh's own faces may be) |
 //! | `flat` | a perfectly flat grid (all points cocircular in groups of four); Crater Lake simplified (a flat lake) when `../shared/dem/crater_lake.npy` exists |
 //! | `coords` | the mesh offset by (5e5, 5e6, 0), (5e6, 5e6, 1000) and (1e7, 1e7, 0); vertical exaggeration × 0.01 and × 100; the terrain upside down (z × −1: every valley a ridge, every ridge a valley) |
 //! | `viewpoints` | eyes exactly on a vertex, on an edge midpoint, at ground level, 10 m below the surface, far outside the footprint, 1e6 m up, and at sector-boundary azimuths from group centres |
@@ -471,6 +471,40 @@ pub fn terraces_tin(tin: &Tin, levels: u32) -> Result<Tin> {
     })
 }
 
+/// `tin` with its diagonals flipped: in triangle order, every interior edge whose two triangles are both still as
+/// they were and form a strictly convex quadrilateral is replaced by the quadrilateral's other diagonal. The same
+/// vertices on a triangulation that is not Delaunay (a flipped edge breaks the empty-circle property unless its four
+/// points are cocircular), as a mesh's own faces read with `--keep-faces` may be: thinner triangles, edges across
+/// valleys and ridges.
+pub fn flipped_tin(tin: &Tin) -> Result<Tin> {
+    let pos = tin.positions();
+    let xy = |v: u32| pos[v as usize].truncate();
+    let neighbours = tin.neighbours();
+    let mut tris = tin.triangles().to_vec();
+    let mut touched = vec![false; tris.len()];
+    for t in 0..tris.len() {
+        for k in 0..3 {
+            let u = neighbours[t][k];
+            if touched[t] || u == tin::NO_NEIGHBOUR || touched[u as usize] {
+                continue;
+            }
+            // `t` is (p, q, r) counter-clockwise with the shared edge p → q; its neighbour holds q, p and s, so the
+            // quadrilateral is p, s, q, r counter-clockwise, convex at p and q when both new triangles are.
+            let (p, q, r) = (tris[t][k], tris[t][(k + 1) % 3], tris[t][(k + 2) % 3]);
+            let Some(&s) = tris[u as usize].iter().find(|&&v| v != p && v != q) else {
+                continue;
+            };
+            if tin::orient2d(xy(p), xy(s), xy(r)) > 0.0 && tin::orient2d(xy(s), xy(q), xy(r)) > 0.0 {
+                tris[t] = [p, s, r];
+                tris[u as usize] = [s, q, r];
+                touched[t] = true;
+                touched[u as usize] = true;
+            }
+        }
+    }
+    Ok(Tin::from_parts(pos.to_vec(), tris)?)
+}
+
 /// Crater Lake simplified to `vertices` vertices, or `None` when the DEM is missing.
 pub fn crater_lake_tin(dem_dir: &Path, vertices: usize) -> Result<Option<Tin>> {
     let path = dem_dir.join("crater_lake.npy");
@@ -712,6 +746,11 @@ pub fn run(tin: &Tin, mesh: &str, opts: &StressOptions, progress: &dyn Fn(&str))
             "terraces",
             "the input mesh's heights rounded down to 8 levels: level plateaus, steep steps",
             terraces_tin(tin, 8),
+        ),
+        (
+            "flipped diagonals",
+            "the input mesh's vertices, triangulated not Delaunay: every convex quadrilateral's diagonal flipped",
+            flipped_tin(tin),
         ),
     ];
     for (name, note, t) in geometry {
