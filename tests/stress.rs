@@ -68,6 +68,8 @@ fn every_case_builds_with_valid_invariants() {
         "z x 0.01",
         "z x 100",
         "z x -1",
+        "scale x 1e-4",
+        "scale x 1e3",
     ];
     for name in expected {
         let c = case(name);
@@ -130,6 +132,20 @@ fn large_offsets_give_the_same_groups_and_culling() {
         assert_eq!(c.drawn_diff, Some(0), "{}: drawn sets changed", c.name);
         assert_eq!(c.false_culls_max, base.false_culls_max, "{}", c.name);
         assert_eq!(c.culled_mean, base.culled_mean, "{}", c.name);
+    }
+}
+
+/// Scaled uniformly with its eyes (by 1e-4 and 1e3), the mesh gives the same views: the same groups and the same drawn
+/// sets, with every coordinate rounded anew and the margins of the proofs at another size.
+#[test]
+fn uniform_scales_give_the_same_groups_and_culling() {
+    let base = case("baseline");
+    for name in ["scale x 1e-4", "scale x 1e3"] {
+        let c = case(name);
+        assert_eq!(c.groups_diff, Some(0), "{name}: groups changed");
+        assert_eq!(c.drawn_diff, Some(0), "{name}: drawn sets changed");
+        assert_eq!(c.false_culls_max, base.false_culls_max, "{name}");
+        assert_eq!(c.culled_mean, base.culled_mean, "{name}");
     }
 }
 

@@ -11,7 +11,7 @@
 //! | `sectors` | too few sectors (4 × 1, 8 × 1); too thin sectors (64 × 4, 128 × 1), each with and without the undersampling fix at a radius of 2 × the mean edge length |
 //! | `geometry` | slivers (few widely spaced rows of dense points, Delaunay), a one-vertex-wide knife-edge ridge, isolated spikes, a near-vertical cliff (0.01 m horizontal for 100 m of rise), the input mesh terraced (heights rounded down to 8 levels: plateaus of exactly level triangles), the input mesh's diagonals flipped (its vertices triangulated not Delaunay, as a mesh's own faces may be) |
 //! | `flat` | a perfectly flat grid (all points cocircular in groups of four); Crater Lake simplified (a flat lake) when `../shared/dem/crater_lake.npy` exists |
-//! | `coords` | the mesh offset by (5e5, 5e6, 0), (5e6, 5e6, 1000) and (1e7, 1e7, 0); vertical exaggeration × 0.01 and × 100; the terrain upside down (z × −1: every valley a ridge, every ridge a valley) |
+//! | `coords` | the mesh offset by (5e5, 5e6, 0), (5e6, 5e6, 1000) and (1e7, 1e7, 0); the mesh and its eyes scaled uniformly by 1e-4 and 1e3 (the same views); vertical exaggeration × 0.01 and × 100; the terrain upside down (z × −1: every valley a ridge, every ridge a valley) |
 //! | `viewpoints` | eyes exactly on a vertex, on an edge midpoint, at ground level, 10 m below the surface, far outside the footprint, 1e6 m up, and at sector-boundary azimuths from group centres |
 //! | `seeds` | the crystal grouping with 20 random seeds (5 with `quick`): spread of groups, orphans, occlusion captured |
 //!
@@ -810,6 +810,21 @@ pub fn run(tin: &Tin, mesh: &str, opts: &StressOptions, progress: &dyn Fn(&str))
         let t = map_tin(tin, |p| p + off)?;
         let e: Vec<Eye> = eyes.iter().map(|(l, p)| (l.clone(), *p + off)).collect();
         let (mut case, s) = run_case(&name, "coords", "same mesh and eyes, translated", &t, &default, &e);
+        if let (Some(a), Some(b)) = (&base_scores, &s) {
+            case.drawn_diff = Some(mask_diff(a, b));
+            case.groups_diff = Some(case.groups as i64 - cases[0].groups as i64);
+        }
+        cases.push(case);
+    }
+    // Scaled uniformly about the origin, eyes with it: the same views (visibility does not depend on the unit), with
+    // every coordinate rounded anew, and the margins, tolerances and distances of the proofs at another size.
+    for scale in [1e-4, 1e3] {
+        let name = format!("scale x {scale:e}");
+        progress(&name);
+        let t = map_tin(tin, |p| p * scale)?;
+        let e: Vec<Eye> = eyes.iter().map(|(l, p)| (l.clone(), *p * scale)).collect();
+        let note = "same mesh and eyes, scaled uniformly (the same views)";
+        let (mut case, s) = run_case(&name, "coords", note, &t, &default, &e);
         if let (Some(a), Some(b)) = (&base_scores, &s) {
             case.drawn_diff = Some(mask_diff(a, b));
             case.groups_diff = Some(case.groups as i64 - cases[0].groups as i64);
