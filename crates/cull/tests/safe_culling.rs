@@ -493,6 +493,65 @@ fn a_fan_of_slivers_around_one_vertex() {
     assert_safe("fan", &tin, &eyes);
 }
 
+/// Footprints that are not one convex piece (a mesh's own faces): a grid with a hole in the middle and cut into two
+/// islands by a gap, ridges running across both. Sight lines over the hole and the gap meet no terrain there (the
+/// exact checker sees through them), so nothing beyond may be hidden by what is not there. Eyes on the hole's rim,
+/// above the hole (no ground below), on both shores of the gap, level with the ridges, and outside.
+#[test]
+fn a_footprint_with_a_hole_and_two_islands() {
+    let (n, d) = (26usize, 40.0);
+    let height = |i: usize, j: usize| {
+        let (x, y) = (i as f64 * d, j as f64 * d);
+        30.0 * (x / 150.0).sin() * (y / 120.0).cos() + if i % 7 == 3 { 60.0 } else { 0.0 }
+    };
+    let kept = |i: usize, j: usize| {
+        let hole = (10..15).contains(&i) && (9..15).contains(&j);
+        let gap = i == 19;
+        !hole && !gap
+    };
+    let pts: Vec<DVec3> = (0..n * n)
+        .map(|k| DVec3::new((k % n) as f64 * d, (k / n) as f64 * d, height(k % n, k / n)))
+        .collect();
+    let mut tris = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            if kept(i, j) {
+                let a = (j * n + i) as u32;
+                let (b, c, e) = (a + 1, a + n as u32, a + n as u32 + 1);
+                tris.extend([[a, b, e], [a, e, c]]);
+            }
+        }
+    }
+    // Drop the vertices no triangle uses (those inside the hole).
+    let mut new_index = vec![u32::MAX; pts.len()];
+    let mut used = Vec::new();
+    for t in &mut tris {
+        for v in t.iter_mut() {
+            if new_index[*v as usize] == u32::MAX {
+                new_index[*v as usize] = used.len() as u32;
+                used.push(pts[*v as usize]);
+            }
+            *v = new_index[*v as usize];
+        }
+    }
+    let tin = Tin::from_parts(used, tris).expect("a grid with a hole and a gap");
+    assert!(tin.validate().is_height_field());
+    let at = |i: usize, j: usize, above: f64| DVec3::new(i as f64 * d, j as f64 * d, height(i, j) + above);
+    let eyes = [
+        at(10, 12, 0.0),
+        at(10, 12, 1e-9),
+        at(15, 9, 2.0),
+        DVec3::new(12.5 * d, 12.0 * d, 5.0),
+        DVec3::new(12.5 * d, 12.0 * d, -40.0),
+        at(19, 5, 2.0),
+        at(20, 5, 0.5),
+        at(17, 20, 60.0),
+        at(3, 3, 2.0),
+        DVec3::new(-200.0, 500.0, 90.0),
+    ];
+    assert_safe("hole and islands", &tin, &eyes);
+}
+
 #[test]
 fn the_work_budget_bounds_every_cull() {
     let tin = grid_tin(61, 600.0, DVec3::ZERO, |x, y| {
