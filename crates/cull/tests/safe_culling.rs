@@ -452,11 +452,6 @@ fn a_wall_hides_the_far_side() {
     assert!(captured > 0.6, "captured {captured}");
 }
 
-/// The work budget bounds a cull whatever the view: at most `B` work units (nodes tested while refining, occluder
-/// edges and chains written: no slack, each unit is checked before it is spent), and at most `3 B + 2 ⌈B / 8⌉ + r` nodes
-/// tested in all (`r` roots; every node has at most two children: `B` refining tests push at most `2 B` nodes, the
-/// splits after the budget, at most `⌈B / 8⌉`, push `2 ⌈B / 8⌉` more). Culls are deterministic, a budget draws at least what the
-/// unlimited culler draws (its horizon is never higher), and a budget never reached changes nothing.
 /// A fan: every triangle shares one vertex placed near the rim of a convex polygon (a mesh's own faces, the least
 /// Delaunay triangulation there is: slivers up to 2 km long, every node's circle reaching the hub), over a ring of
 /// hills. Eyes on the hub, a hair above it, on the rim, between the hills and above them. Little of a fan can be
@@ -552,6 +547,11 @@ fn a_footprint_with_a_hole_and_two_islands() {
     assert_safe("hole and islands", &tin, &eyes);
 }
 
+/// The work budget bounds a cull whatever the view: at most `B` work units (nodes tested while refining, occluder
+/// edges and chains written: no slack, each unit is checked before it is spent), and at most `3 B + 2 ⌈B / 8⌉ + r` nodes
+/// tested in all (`r` roots; every node has at most two children: `B` refining tests push at most `2 B` nodes, the
+/// splits after the budget, at most `⌈B / 8⌉`, push `2 ⌈B / 8⌉` more). Culls are deterministic, a budget draws at least what the
+/// unlimited culler draws (its horizon is never higher), and a budget never reached changes nothing.
 #[test]
 fn the_work_budget_bounds_every_cull() {
     let tin = grid_tin(61, 600.0, DVec3::ZERO, |x, y| {
