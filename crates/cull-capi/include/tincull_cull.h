@@ -233,7 +233,8 @@ typedef struct TcWork {
    */
   uint32_t work;
   /**
-   * Occluder edges written into the horizon (`occluder_edges`).
+   * Occluder edges written into the horizon (`occluder_edges`: patch edges while refining, cell-edge segments after
+   * a spent work budget).
    */
   uint32_t occluder_edges;
 } TcWork;

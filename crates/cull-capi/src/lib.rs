@@ -113,7 +113,8 @@ impl TcParams {
 pub struct TcWork {
     /// Work units spent (`work`), at most `TcParams::work_budget`.
     pub work: u32,
-    /// Occluder edges written into the horizon (`occluder_edges`).
+    /// Occluder edges written into the horizon (`occluder_edges`: patch edges while refining, cell-edge segments after
+    /// a spent work budget).
     pub occluder_edges: u32,
 }
 

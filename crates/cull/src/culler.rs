@@ -153,7 +153,8 @@ pub struct CullStats {
     /// Safe culler: work units spent ([`crate::SafeParams::work_budget`]: nodes tested while refining, occluder edges
     /// and chains written); 0 for the other cullers.
     pub work: u32,
-    /// Safe culler: occluder edges written into the horizon; 0 for the other cullers.
+    /// Safe culler: occluder edges written into the horizon (patch edges while refining, cell-edge segments after a
+    /// spent work budget); 0 for the other cullers.
     pub occluder_edges: u32,
 }
 

@@ -190,10 +190,158 @@ struct ChordEnd {
 pub struct LeScratch {
     horizon: Option<Horizon>,
     queue: BinaryHeap<Reverse<(u64, u32)>>,
+    edges: EdgeQueue,
+    drawn: Vec<[u32; 2]>,
+}
+
+/// The pending cell-edge occluders of one cull, nearest first by their greatest distance `d_max` from the camera, and
+/// which cell edges were queued already (each once a cull).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct EdgeQueue {
     pending: BinaryHeap<Reverse<(u64, u32)>>,
     stamp: Vec<u32>,
     round: u32,
-    drawn: Vec<[u32; 2]>,
+}
+
+impl EdgeQueue {
+    /// Starts a cull over the occluders of `cells`: nothing pending, no edge queued.
+    pub(crate) fn begin(&mut self, cells: &CellEdges) {
+        self.pending.clear();
+        if self.stamp.len() != cells.grid.edges() || self.round == u32::MAX {
+            self.stamp = vec![0; cells.grid.edges()];
+            self.round = 0;
+        }
+        self.round += 1;
+    }
+}
+
+/// The occluders of a hierarchy's grid of cells (see the module documentation: the grid, the occluders and (i)): one
+/// segment on or below the terrain per stretch of a cell edge that the TIN covers. Shared by
+/// [`LloydEgbertCuller`] and the safe culler's work budget ([`crate::safe`]).
+#[derive(Clone, Debug)]
+pub(crate) struct CellEdges {
+    grid: Grid,
+    occluders: Vec<Occluder>,
+    /// Occluders of edge `e`: `occluders[edge_start[e]..edge_start[e + 1]]`.
+    edge_start: Vec<u32>,
+}
+
+impl CellEdges {
+    /// The grid of `h` (its quadtree's stored depth, or else the least depth with at least as many cells as leaf
+    /// groups; 1 to [`MAX_GRID_DEPTH`]) over the square of side the larger extent of `scale`'s box, and its occluders.
+    pub(crate) fn new(h: &Hierarchy, scale: &Scale) -> CellEdges {
+        let (lo, hi) = (scale.lo, scale.hi);
+        let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count().max(1);
+        let depth = match h.build.grouping {
+            Grouping::Quadtree { stored_depth, .. } => stored_depth,
+            Grouping::Crystal => {
+                let mut d = 0;
+                while (1usize << (2 * d)) < leaves && d < MAX_GRID_DEPTH {
+                    d += 1;
+                }
+                d
+            }
+        }
+        .clamp(1, MAX_GRID_DEPTH);
+        let side = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let n = 1usize << depth;
+        let grid = Grid {
+            min: if h.mesh.positions.is_empty() {
+                [0.0; 2]
+            } else {
+                [lo[0], lo[1]]
+            },
+            cell: if side.is_finite() && side > 0.0 {
+                side / n as f64
+            } else {
+                1.0
+            },
+            n,
+        };
+        let (occluders, edge_start) = occluders(h, &grid);
+        CellEdges {
+            grid,
+            occluders,
+            edge_start,
+        }
+    }
+
+    /// Makes the occluders on the edges of the cells `x.0 ..= x.1` by `y.0 ..= y.1` pending (each edge once a cull),
+    /// at most `room` of them (decreased by those queued).
+    fn queue_cells(&self, x: (usize, usize), y: (usize, usize), eye: [f64; 3], q: &mut EdgeQueue, room: &mut usize) {
+        if *room == 0 {
+            return;
+        }
+        let g = &self.grid;
+        // Whether there is room left after queueing edge `e`'s occluders.
+        let mut visit = |e: usize| {
+            if q.stamp[e] != q.round {
+                q.stamp[e] = q.round;
+                for o in self.edge_start[e]..self.edge_start[e + 1] {
+                    if *room == 0 {
+                        return false;
+                    }
+                    *room -= 1;
+                    let occ = &self.occluders[o as usize];
+                    let d = |p: [f64; 3]| (p[0] - eye[0]).hypot(p[1] - eye[1]);
+                    let dmax = d(occ.a).max(d(occ.b)) * (1.0 + 1e-12);
+                    q.pending.push(Reverse((key(dmax), o)));
+                }
+            }
+            *room > 0
+        };
+        // Vertical lines x = X_i (axis 0) with segments j along y; horizontal lines y = Y_j (axis 1).
+        for i in x.0..=x.1 + 1 {
+            for j in y.0..=y.1 {
+                if !visit(g.edge(0, i, j)) {
+                    return;
+                }
+            }
+        }
+        for j in y.0..=y.1 + 1 {
+            for i in x.0..=x.1 {
+                if !visit(g.edge(1, j, i)) {
+                    return;
+                }
+            }
+        }
+    }
+
+    /// Makes the occluders on the edges of the grid cells that the box `lo`..`hi` meets pending, at most `room`.
+    pub(crate) fn queue_box(&self, lo: [f64; 2], hi: [f64; 2], eye: [f64; 3], q: &mut EdgeQueue, room: &mut usize) {
+        let g = &self.grid;
+        self.queue_cells(g.cells(0, lo[0], hi[0]), g.cells(1, lo[1], hi[1]), eye, q, room);
+    }
+
+    /// Writes (lowered by `mu`) every pending occluder whose greatest distance from the camera is below `dmin`,
+    /// nearest first; returns how many.
+    pub(crate) fn write_nearer(
+        &self,
+        dmin: f64,
+        eye: [f64; 3],
+        mu: f64,
+        horizon: &mut Horizon,
+        q: &mut EdgeQueue,
+    ) -> usize {
+        let mut written = 0;
+        while let Some(&Reverse((dmax_key, o))) = q.pending.peek() {
+            if !(f64::from_bits(dmax_key) < dmin) {
+                break;
+            }
+            q.pending.pop();
+            let o = &self.occluders[o as usize];
+            let pa = project(sub(o.a, eye), mu, o.ida);
+            let pb = project(sub(o.b, eye), mu, o.idb);
+            horizon.write_segment([&pa, &pb]);
+            written += 1;
+        }
+        written
+    }
+
+    /// Occluder segments in all.
+    pub(crate) fn len(&self) -> usize {
+        self.occluders.len()
+    }
 }
 
 impl PartialEq for LeScratch {
@@ -212,10 +360,7 @@ pub struct LloydEgbertCuller {
     roots: Vec<u32>,
     always_visible: [u32; 2],
     triangles: u32,
-    grid: Grid,
-    occluders: Vec<Occluder>,
-    /// Occluders of edge `e`: `occluders[edge_start[e]..edge_start[e + 1]]`.
-    edge_start: Vec<u32>,
+    cells: CellEdges,
     scale: Scale,
     precompute: Duration,
 }
@@ -233,30 +378,8 @@ impl LloydEgbertCuller {
         let start = Instant::now();
         let pos = &h.mesh.positions;
         let scale = Scale::of(pos);
-        let (lo, hi) = (scale.lo, scale.hi);
-        let leaves = h.nodes.iter().filter(|n| n.children.is_empty()).count().max(1);
-        let depth = match h.build.grouping {
-            Grouping::Quadtree { stored_depth, .. } => stored_depth,
-            Grouping::Crystal => {
-                let mut d = 0;
-                while (1usize << (2 * d)) < leaves && d < MAX_GRID_DEPTH {
-                    d += 1;
-                }
-                d
-            }
-        }
-        .clamp(1, MAX_GRID_DEPTH);
-        let side = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-        let n = 1usize << depth;
-        let grid = Grid {
-            min: if pos.is_empty() { [0.0; 2] } else { [lo[0], lo[1]] },
-            cell: if side.is_finite() && side > 0.0 {
-                side / n as f64
-            } else {
-                1.0
-            },
-            n,
-        };
+        let cells = CellEdges::new(h, &scale);
+        let grid = cells.grid;
         let nodes = h
             .nodes
             .iter()
@@ -299,9 +422,7 @@ impl LloydEgbertCuller {
             roots: Vec::new(),
             always_visible: h.always_visible,
             triangles: h.mesh.triangles.len() as u32,
-            grid,
-            occluders: Vec::new(),
-            edge_start: Vec::new(),
+            cells,
             scale,
             precompute: Duration::ZERO,
         };
@@ -312,9 +433,6 @@ impl LloydEgbertCuller {
         }
         c.roots = h.roots.clone();
         c.roots.sort_by_key(|&r| h.nodes[r as usize].triangles[0]);
-        let (occluders, edge_start) = occluders(h, &grid);
-        c.occluders = occluders;
-        c.edge_start = edge_start;
         c.precompute = start.elapsed();
         c
     }
@@ -326,12 +444,12 @@ impl LloydEgbertCuller {
 
     /// Cells a side of the occluder grid.
     pub fn grid_cells(&self) -> usize {
-        self.grid.n
+        self.cells.grid.n
     }
 
     /// Occluder segments (a cell edge has one per stretch the TIN covers).
     pub fn occluder_count(&self) -> usize {
-        self.occluders.len()
+        self.cells.len()
     }
 
     /// Wall-clock time spent preparing the culler (boxes, profiles and occluder lines).
@@ -379,13 +497,8 @@ impl LloydEgbertCuller {
         };
         horizon.clear();
         s.queue.clear();
-        s.pending.clear();
         s.drawn.clear();
-        if s.stamp.len() != self.grid.edges() || s.round == u32::MAX {
-            s.stamp = vec![0; self.grid.edges()];
-            s.round = 0;
-        }
-        s.round += 1;
+        s.edges.begin(&self.cells);
         let mu = self.scale.margin(eye);
         let frustum = camera.frustum();
         let dmin_of = |n: &BoxNode| {
@@ -401,16 +514,7 @@ impl LloydEgbertCuller {
             let node = &self.nodes[id as usize];
             let dist = dmin_of(node);
             let dmin = dist * (1.0 - 1e-12);
-            while let Some(&Reverse((dmax_key, o))) = s.pending.peek() {
-                if !(f64::from_bits(dmax_key) < dmin) {
-                    break;
-                }
-                s.pending.pop();
-                let o = &self.occluders[o as usize];
-                let pa = project(sub(o.a, eye), mu, o.ida);
-                let pb = project(sub(o.b, eye), mu, o.idb);
-                horizon.write_segment([&pa, &pb]);
-            }
+            self.cells.write_nearer(dmin, eye, mu, &mut horizon, &mut s.edges);
             tested += 1;
             if let Some((yaw, half_fov)) = frustum {
                 let centre = [
@@ -455,33 +559,10 @@ impl LloydEgbertCuller {
     /// Makes the occluders on the edges of the leaf's own cell (over a quadtree), or else of the grid cells that its
     /// box meets, pending (each edge once a cull).
     fn queue_edges(&self, node: &BoxNode, eye: [f64; 3], s: &mut LeScratch) {
-        let g = &self.grid;
-        let ((x0, x1), (y0, y1)) = match node.cell {
-            Some([ix, iy]) => ((ix, ix), (iy, iy)),
-            None => (g.cells(0, node.lo[0], node.hi[0]), g.cells(1, node.lo[1], node.hi[1])),
-        };
-        let visit = |e: usize, s: &mut LeScratch| {
-            if s.stamp[e] == s.round {
-                return;
-            }
-            s.stamp[e] = s.round;
-            for o in self.edge_start[e]..self.edge_start[e + 1] {
-                let occ = &self.occluders[o as usize];
-                let d = |p: [f64; 3]| (p[0] - eye[0]).hypot(p[1] - eye[1]);
-                let dmax = d(occ.a).max(d(occ.b)) * (1.0 + 1e-12);
-                s.pending.push(Reverse((key(dmax), o)));
-            }
-        };
-        // Vertical lines x = X_i (axis 0) with segments j along y; horizontal lines y = Y_j (axis 1).
-        for i in x0..=x1 + 1 {
-            for j in y0..=y1 {
-                visit(g.edge(0, i, j), s);
-            }
-        }
-        for j in y0..=y1 + 1 {
-            for i in x0..=x1 {
-                visit(g.edge(1, j, i), s);
-            }
+        let mut room = usize::MAX;
+        match node.cell {
+            Some([ix, iy]) => self.cells.queue_cells((ix, ix), (iy, iy), eye, &mut s.edges, &mut room),
+            None => self.cells.queue_box(node.lo, node.hi, eye, &mut s.edges, &mut room),
         }
     }
 }
@@ -855,7 +936,7 @@ mod tests {
         // 2 · 8 · 9 cell edges, each covered by the terrain once, in `PIECES` pieces.
         assert_eq!(c.occluder_count(), 2 * 8 * 9 * PIECES);
         let mut gap: f64 = 0.0;
-        for o in &c.occluders {
+        for o in &c.cells.occluders {
             for k in 0..=20 {
                 let s = k as f64 / 20.0;
                 let p: Vec<f64> = (0..3).map(|i| o.a[i] + s * (o.b[i] - o.a[i])).collect();
@@ -878,13 +959,13 @@ mod tests {
             p[0] *= 2.0;
         }
         let c = LloydEgbertCuller::new(&h, 64);
-        for o in &c.occluders {
+        for o in &c.cells.occluders {
             assert!(o.a[1] <= 40.0 && o.b[1] <= 40.0, "{o:?}");
         }
         // Ends at grid corners carry ids, equal at the same corner.
         let at = |p: [f64; 3]| ((p[0] * 1e6) as i64, (p[1] * 1e6) as i64);
         let mut ids = std::collections::HashMap::new();
-        for o in &c.occluders {
+        for o in &c.cells.occluders {
             for (p, id) in [(o.a, o.ida), (o.b, o.idb)] {
                 if id != NO_VERTEX {
                     assert_eq!(*ids.entry(id).or_insert(at(p)), at(p));

@@ -78,25 +78,44 @@
 //! tested while refining, one per occluder edge written, one per chain or crest written. Each unit is checked before it is
 //! spent, so a cull spends at most `B` of them. Once they are spent:
 //!
-//! - nothing more is written, and no node is refined any more. Every node still queued (and each descendant taken
-//!   below) is at least as far as every node tested so far (its points are at least at its queue key `d_min`, the keys
-//!   of its queued ancestors, and the queue pops keys in order), so every occluder in the horizon lies nearer than every
-//!   one of its points, as when that occluder was written: the theorem applies to them against the horizon as it stands;
+//! - no node is refined any more, and no patch edge, chain or crest is written. Every node still queued (and each
+//!   descendant taken below) is at least as far as every node tested so far (its points are at least at its queue key
+//!   `d_min`, the keys of its queued ancestors, and the queue pops keys in order), so every occluder in the horizon lies
+//!   nearer than every one of its points, as when that occluder was written: the theorem applies to them against the
+//!   horizon as it stands;
 //! - the queued nodes are taken largest first (by triangles): each is culled if its cylinder is hidden (the same test
-//!   as above, `H` only), else split into its children while fewer than `⌈B / 8⌉` nodes were split this way, else
-//!   drawn whole. Drawing a node whole draws a superset of what refining it would have drawn. The splits get an eighth
-//!   of the budget: in a view that sees most of the terrain (the views that spend it) few of them cull anything, and
-//!   with as many splits as units they cost as much again as the refining.
+//!   as above, `H` only), else split into its children while fewer than `⌈B / 8⌉` nodes were split this way, else kept
+//!   to be drawn whole. Drawing a node whole draws a superset of what refining it would have drawn. The splits get an
+//!   eighth of the budget: in a view that sees most of the terrain (the views that spend it) few of them cull anything,
+//!   and with as many splits as units they cost as much again as the refining;
+//! - the kept nodes are then taken nearest first, sorted by the computed `d_min` of their own circles (the same
+//!   `(|m − c| − r)(1 − 1e-12)` as while refining, at most the least distance of their points), and tested once more:
+//!   before node `X` is tested, every pending *cell-edge occluder* whose greatest distance `d_max` is below `X`'s
+//!   `d_min` is written (lowered by `μ`); `X` is culled if its cylinder is now hidden, else drawn whole, and the
+//!   cell-edge occluders around it become pending: those of [`crate::lloyd_egbert`] (its grid over this hierarchy),
+//!   one segment under the TIN's profile along each edge of the grid cells that the square around `X`'s circle meets
+//!   (each edge once a cull, at most `⌈B / 8⌉` segments in all, within [`SafeParams::occluder_budget`]). Each segment
+//!   lies on or below the terrain, rounding included (that module's (i)), and its `d_max`, the larger of its ends'
+//!   horizontal distances from the camera (a segment's farthest point from a point is an end) grown by a relative
+//!   1e-12, is at least its true greatest distance (that module's (ii)). A segment written before `X` is tested has
+//!   `d_max < d_min(X) ≤ d_min(Y)` for every node `Y` tested after `X` (sorted), so it lies nearer than every point of
+//!   `X` and of every later `Y`: an occluder in the theorem's sense for each of them, as a drawn patch's edge is for
+//!   the nodes tested after it. The earlier occluders stay valid for the kept nodes (first item). The horizon only
+//!   rises, so this pass culls a subset of what was kept and draws no more than the largest-first pass alone: the
+//!   terrain drawn whole hides what lies behind it at the cost of one test per kept node and at most `⌈B / 8⌉`
+//!   segments.
 //!
 //! Hence at most `B` refining tests (each pushing at most `c` children, `c` the most children of a node: 2 in a crystal
 //! hierarchy and its halving trees), at most `⌈B / 8⌉` splits pushing `c` each, and every pushed node tested once: at
-//! most `(1 + c) B + c ⌈B / 8⌉ + r` nodes tested (`r` roots; `3.25 B + 2 + r` with `c = 2`), and at most `B` edges and
-//! chains written. The verdicts "hidden" are the
-//! same theorem's; without coarse nodes, with a spent budget the culler draws more, never less, than without one (its
-//! horizon is never higher when any node is tested). With coarse nodes neither draw list need hold the other: a node
-//! that the cull without a budget draws whole as coarse may be split in the budget phase and some of its children
-//! culled.
-//!
+//! most `(1 + c) B + c ⌈B / 8⌉ + r` nodes tested (`r` roots; `3.25 B + 2 + r` with `c = 2`), each kept one once more,
+//! at most `B` edges and chains written while refining and `⌈B / 8⌉` cell-edge segments after. The verdicts "hidden"
+//! are the same theorem's. A budget never reached changes nothing; a spent one draws more than the cull without a
+//! budget where it stopped refining, and may draw less behind the cell edges (a horizon built without a budget holds
+//! none), so neither draw list need hold the other. The grid's occluders are computed when the culler is prepared
+//! (one pass over the triangles), and only if some cull could spend the budget: every node is tested at most once,
+//! every patch edge and crest written at most once, and a patch has no more chains than edges, so when the nodes, twice
+//! the patch edges and the crests number fewer than `B` in all, no cull can.
+
 //! Every "hidden" is thus an instance of the theorem, whatever the order, the tree or the parameters; the order and
 //! the parameters only decide how much is culled. With a horizontal field of view below 360°, a node entirely
 //! outside it is culled by the same azimuth test as [`crate::Culler`]'s (a node outside the view cannot be seen).
@@ -116,6 +135,7 @@ use std::collections::BinaryHeap;
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
 use crate::horizon::{FACES, Horizon, Projected, REL, Reach, Scale, face_coords, project};
+use crate::lloyd_egbert::{CellEdges, EdgeQueue};
 use crate::sector::circle_outside_view;
 
 /// The default [`SafeParams::work_budget`]: far above what any view of the bundled 10k-vertex meshes needs (at most
@@ -131,14 +151,16 @@ pub struct SafeParams {
     /// Largest patch (triangles) below the hierarchy's leaves: clamped to 1 ..= 64.
     pub patch: usize,
     /// Most occluder edges written into the horizon per cull, nearest first (fewer occluders only cull less, never
-    /// wrongly). It bounds the writing, not the cost: with few occluders every visible node is refined and tested
+    /// wrongly); the cell-edge segments written after a spent work budget count too. It bounds the writing, not the cost: with few occluders every visible node is refined and tested
     /// ([`SafeParams::work_budget`] bounds the cost). `usize::MAX`: unlimited (`null` when serialized, which JSON
     /// readers hold exactly).
     #[serde(with = "unlimited")]
     pub occluder_budget: usize,
     /// Most work units per cull: nodes tested while refining, occluder edges and chains written. Once spent, the
-    /// culler stops refining and writing: every node still queued is tested against the horizon as it stands
-    /// (split at most `⌈B / 8⌉` times in all) and drawn whole unless hidden. A count, not a time, so culls are reproducible; see the module documentation.
+    /// culler stops refining and writing edges: every node still queued is tested against the horizon as it stands
+    /// (split at most `⌈B / 8⌉` times in all), and those left are tested once more, nearest first, with the cell-edge
+    /// occluders around the ones drawn before them (at most `⌈B / 8⌉` segments), and drawn whole unless hidden. A
+    /// count, not a time, so culls are reproducible; see the module documentation.
     pub work_budget: usize,
     /// A visible inner node whose circle spans fewer than this many columns (about `radius · columns / distance`)
     /// is drawn whole instead of refined, and writes its crests as occluders; 0 refines every visible node. Only inner
@@ -257,13 +279,17 @@ pub struct SafeScratch {
     horizon: Option<Horizon>,
     queue: BinaryHeap<Reverse<(u64, u32)>>,
     pending: BinaryHeap<Reverse<(u64, u32, u32)>>,
-    /// Nodes left when the work budget is spent, largest first: `(triangles, node)`.
-    by_size: BinaryHeap<(u32, u32)>,
     projected: Vec<Projected>,
     drawn: Vec<[u32; 2]>,
     /// Drawn patches nearer than the node under test, not written yet: `(patch, offset in projected, what it can
     /// write)`.
     eligible: Vec<(u32, u32, Reach)>,
+    /// Nodes left when the work budget is spent, largest first: `(triangles, node)`.
+    by_size: BinaryHeap<(u32, u32)>,
+    /// Nodes left to be drawn whole once the work budget is spent: `(key of d_min, node)`.
+    whole: Vec<(u64, u32)>,
+    /// Cell-edge occluders pending once the work budget is spent.
+    cell_edges: EdgeQueue,
 }
 
 impl PartialEq for SafeScratch {
@@ -292,6 +318,9 @@ pub struct SafeCuller {
     normals: Vec<[f64; 3]>,
     triangles: u32,
     scale: Scale,
+    /// The cell-edge occluders written once the work budget is spent; `None` when no cull can spend it (fewer work
+    /// units in the whole tree than the budget).
+    cells: Option<CellEdges>,
 }
 
 /// The work of one cull, in the units of [`SafeParams::work_budget`].
@@ -305,6 +334,8 @@ struct Count {
     flats: usize,
     /// Nodes split after the budget was spent.
     splits: usize,
+    /// Cell-edge occluders written after the budget was spent.
+    cell_edges: usize,
 }
 
 impl Count {
@@ -503,6 +534,7 @@ impl SafeCuller {
             normals: Vec::new(),
             triangles: h.mesh.triangles.len() as u32,
             scale: Scale::of(pos),
+            cells: None,
         };
         // Hierarchy nodes first (same ids), then the halving trees. A hierarchy node's extent is its children's
         // together (they partition its range): computed bottom-up, by increasing level.
@@ -556,6 +588,12 @@ impl SafeCuller {
                     c.nodes[id].crests = [start, c.crests.len() as u32];
                 }
             }
+        }
+        // Every node is tested at most once, every patch edge and every crest written at most once, and a patch has
+        // no more chains than edges: a budget above their sum is never spent.
+        let most_work = c.nodes.len() + 2 * c.edges.len() + c.crests.len();
+        if most_work >= c.params.work_budget {
+            c.cells = Some(CellEdges::new(h, &c.scale));
         }
         c
     }
@@ -1021,12 +1059,14 @@ impl SafeCuller {
             // The budget is spent. Every occluder in the horizon is nearer than every point of every node still
             // queued (as when it was written), so the horizon stays valid for them and their descendants. The
             // largest nodes first: each is tested once by its cylinder and culled if hidden, else split while fewer
-            // than `⌈B / 8⌉` were, else drawn whole.
+            // than `⌈B / 8⌉` were, else kept to be drawn whole.
             scratch.by_size.clear();
+            scratch.whole.clear();
             for Reverse((_, id)) in scratch.queue.drain() {
                 let [s, e] = self.nodes[id as usize].triangles;
                 scratch.by_size.push((e - s, id));
             }
+            let cap = self.params.work_budget.div_ceil(8);
             let mut splits = 0usize;
             while let Some((_, id)) = scratch.by_size.pop() {
                 let node = &self.nodes[id as usize];
@@ -1037,14 +1077,15 @@ impl SafeCuller {
                     out.stats.culled_by_frustum += 1;
                     continue;
                 }
-                if !(distance(node) <= node.radius) {
+                let dist = distance(node);
+                if !(dist <= node.radius) {
                     let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
                     if horizon.disk_hidden(m, node.radius, node.zmax - eye[2] + mu, false) {
                         out.stats.culled_by_occlusion += 1;
                         continue;
                     }
                 }
-                if node.kids[0] < node.kids[1] && splits < self.params.work_budget.div_ceil(8) {
+                if node.kids[0] < node.kids[1] && splits < cap {
                     splits += 1;
                     for &c in &self.children[node.kids[0] as usize..node.kids[1] as usize] {
                         let [s, e] = self.nodes[c as usize].triangles;
@@ -1052,9 +1093,40 @@ impl SafeCuller {
                     }
                     continue;
                 }
-                scratch.drawn.push(node.triangles);
+                scratch.whole.push((key(dist - node.radius), id));
             }
             count.splits = splits;
+            // The nodes kept, nearest first (by the least distance of their own circles), tested once more against
+            // the horizon and the cell-edge occluders around the nodes drawn before them (at most `⌈B / 8⌉`
+            // segments, within the occluder budget), each written once it is nearer than the node under test.
+            scratch.whole.sort_unstable();
+            let mut room = cap.min(self.params.occluder_budget.saturating_sub(count.edges));
+            if let Some(cells) = &self.cells {
+                scratch.cell_edges.begin(cells);
+            }
+            for &(_, id) in &scratch.whole {
+                let node = &self.nodes[id as usize];
+                if let Some(cells) = &self.cells {
+                    let dist = distance(node);
+                    let dmin = (dist - node.radius) * (1.0 - 1e-12);
+                    count.cell_edges += cells.write_nearer(dmin, eye, mu, horizon, &mut scratch.cell_edges);
+                    let m = [node.centre[0] - eye[0], node.centre[1] - eye[1]];
+                    if !(dist <= node.radius)
+                        && count.cell_edges > 0
+                        && horizon.disk_hidden(m, node.radius, node.zmax - eye[2] + mu, false)
+                    {
+                        out.stats.culled_by_occlusion += 1;
+                        continue;
+                    }
+                    let r = node.radius;
+                    let (lo, hi) = (
+                        [node.centre[0] - r, node.centre[1] - r],
+                        [node.centre[0] + r, node.centre[1] + r],
+                    );
+                    cells.queue_box(lo, hi, eye, &mut scratch.cell_edges, &mut room);
+                }
+                scratch.drawn.push(node.triangles);
+            }
         }
         scratch.drawn.sort_unstable();
         for &r in &scratch.drawn {
@@ -1062,7 +1134,7 @@ impl SafeCuller {
         }
         out.stats.nodes_tested = tested;
         out.stats.work = count.work() as u32;
-        out.stats.occluder_edges = count.edges as u32;
+        out.stats.occluder_edges = (count.edges + count.cell_edges) as u32;
         out.stats.nodes_skipped = self.nodes.len() as u32 - tested;
         out.stats.triangles_culled = self.triangles - out.stats.triangles_drawn;
         scratch.horizon = Some(owned);

@@ -49,13 +49,17 @@ fn assert_safe(name: &str, tin: &Tin, eyes: &[DVec3]) -> Captured {
                 coarse_columns: 0,
             },
             // Tiny work budgets: refining and writing stop almost at once (or midway), the rest is split and
-            // tested against the horizon as it stands, or drawn whole.
+            // tested against the horizon as it stands, with cell-edge occluders written, or drawn whole.
             SafeParams {
                 work_budget: 1,
                 ..SafeParams::default()
             },
             SafeParams {
                 work_budget: 7,
+                ..SafeParams::default()
+            },
+            SafeParams {
+                work_budget: 120,
                 ..SafeParams::default()
             },
             SafeParams {
@@ -433,16 +437,21 @@ fn utm_offsets() {
     }
 }
 
-/// A tall wall hides the far side almost entirely from a ground-level eye: the culler must capture most of it.
-#[test]
-fn a_wall_hides_the_far_side() {
-    let tin = grid_tin(41, 400.0, DVec3::ZERO, |x, y| {
+/// A 400 m square of 10 m cells, bumps of ±2 m, and a wall 60 m high and 30 m thick across it at x = 200 m.
+fn wall() -> Tin {
+    grid_tin(41, 400.0, DVec3::ZERO, |x, y| {
         if (x - 200.0).abs() < 15.0 {
             60.0
         } else {
             2.0 * ((x + y) / 37.0).sin()
         }
-    });
+    })
+}
+
+/// A tall wall hides the far side almost entirely from a ground-level eye: the culler must capture most of it.
+#[test]
+fn a_wall_hides_the_far_side() {
+    let tin = wall();
     let eye = DVec3::new(100.0, 200.0, 4.0);
     let captured = assert_safe("wall", &tin, &[eye]).safe;
     assert!(captured > 0.6, "captured {captured}");
@@ -548,22 +557,24 @@ fn a_footprint_with_a_hole_and_two_islands() {
 }
 
 /// The work budget bounds a cull whatever the view: at most `B` work units (nodes tested while refining, occluder
-/// edges and chains written: no slack, each unit is checked before it is spent), and at most `3 B + 2 ⌈B / 8⌉ + r` nodes
-/// tested in all (`r` roots; every node has at most two children: `B` refining tests push at most `2 B` nodes, the
-/// splits after the budget, at most `⌈B / 8⌉`, push `2 ⌈B / 8⌉` more). Culls are deterministic, a budget draws at least what the
-/// unlimited culler draws (its horizon is never higher), and a budget never reached changes nothing.
+/// edges and chains written: no slack, each unit is checked before it is spent), at most `⌈B / 8⌉` cell-edge occluders
+/// written after it is spent (`occluder_edges` counts both), and at most `3 B + 2 ⌈B / 8⌉ + r` nodes tested in all
+/// (`r` roots; every node has at most two children: `B` refining tests push at most `2 B` nodes, the splits after the
+/// budget, at most `⌈B / 8⌉`, push `2 ⌈B / 8⌉` more). Culls are deterministic, culls nothing the exact checker sees,
+/// and a budget never reached changes nothing.
 #[test]
 fn the_work_budget_bounds_every_cull() {
     let tin = grid_tin(61, 600.0, DVec3::ZERO, |x, y| {
         25.0 * ((x / 50.0).sin() * (y / 70.0).cos()) + 0.05 * x
     });
-    let (h, _) = hierarchy_of(&tin, 8, 5);
+    let (h, order) = hierarchy_of(&tin, 8, 5);
+    let truth = GroundTruth::new(&tin);
     let unlimited = SafeCuller::new(&h, SafeParams::default());
     let eyes = eyes_over(&tin, &[DVec3::new(300.0, 300.0, 400.0), DVec3::new(10.0, 10.0, 3.0)]);
     for &eye in &eyes {
         let camera = Camera::all_around(eye.to_array());
         let full = unlimited.cull(&camera);
-        let mut last_drawn = u32::MAX;
+        let visible = truth.visible_triangles(eye);
         for budget in [1usize, 3, 10, 50, 200, 1000, 100_000] {
             let culler = SafeCuller::new(
                 &h,
@@ -580,22 +591,69 @@ fn the_work_budget_bounds_every_cull() {
                 s.work
             );
             assert!(
+                s.occluder_edges as usize <= budget + budget.div_ceil(8),
+                "eye {eye}, budget {budget}: {} occluder edges",
+                s.occluder_edges
+            );
+            assert!(
                 s.nodes_tested as usize <= 3 * budget + 2 * budget.div_ceil(8) + culler.roots(),
                 "eye {eye}, budget {budget}: {} nodes tested",
                 s.nodes_tested
             );
             assert_eq!(list, culler.cull(&camera), "deterministic");
+            let mask = list.mask(order.len());
+            assert!(
+                order.iter().enumerate().all(|(i, &t)| mask[i] || !visible[t as usize]),
+                "eye {eye}, budget {budget}: a visible triangle culled"
+            );
             if (full.stats.work as usize) < budget {
                 assert_eq!(
                     list.ranges, full.ranges,
                     "eye {eye}: a budget never reached changes nothing"
                 );
             }
-            assert!(s.triangles_drawn >= full.stats.triangles_drawn);
-            last_drawn = last_drawn.min(s.triangles_drawn);
         }
-        assert_eq!(last_drawn, full.stats.triangles_drawn);
     }
+}
+
+/// Once the work budget is spent, the nodes left to be drawn whole are tested once more, nearest first, against the
+/// horizon and the cell-edge occluders around the nodes drawn before them: a wall beyond the refined terrain still
+/// hides much of the far side. Two eyes 2–3 m above bumpy ground, 110 and 180 m before a 60 m wall, a budget of 600
+/// units (about a third of what the unlimited culls spend): 1,220 of the 2,880 triangles hidden behind the wall are
+/// culled (without the cell edges, with the horizon of what was refined alone, 50), and nothing visible.
+#[test]
+fn a_spent_budget_still_culls_behind_a_wall() {
+    let tin = wall();
+    let (h, order) = hierarchy_of(&tin, 40, 0);
+    let truth = GroundTruth::new(&tin);
+    let culler = SafeCuller::new(
+        &h,
+        SafeParams {
+            work_budget: 600,
+            ..SafeParams::default()
+        },
+    );
+    let (mut hidden, mut culled) = (0usize, 0usize);
+    for eye in [DVec3::new(90.37, 143.1, 3.0), DVec3::new(20.0, 300.0, 2.0)] {
+        let list = culler.cull(&Camera::all_around(eye.to_array()));
+        assert_eq!(list.stats.work, 600, "eye {eye}: the budget is spent");
+        let visible = truth.visible_triangles(eye);
+        let mask = list.mask(order.len());
+        for (i, &t) in order.iter().enumerate() {
+            assert!(
+                mask[i] || !visible[t as usize],
+                "eye {eye}: visible triangle {t} culled"
+            );
+            if !visible[t as usize] && tin.corners(t as usize).iter().all(|p| p.x > 215.0) {
+                hidden += 1;
+                culled += usize::from(!mask[i]);
+            }
+        }
+    }
+    assert!(
+        culled * 3 > hidden,
+        "behind the wall: {culled} of {hidden} hidden triangles culled"
+    );
 }
 
 /// Coarse nodes take effect on a terrain of this size: some visible inner nodes are drawn whole (more is drawn than
