@@ -85,12 +85,13 @@ fn sweep_writes_every_combination_and_resumes() {
                 .parse::<f64>()
                 .unwrap_or_else(|_| panic!("{name}: {:?}", r[col(name)]))
         };
-        assert_eq!(num("viewpoints"), 1.0);
+        assert_eq!(num("viewpoints_per_class"), 1.0);
         assert_eq!(num("seeds"), (num("triangles") / 200.0).floor().max(1.0));
         assert!(num("groups") >= 1.0 && num("nodes") >= num("groups"));
         assert!(num("horizon_seconds") > 0.0);
+        // Viewpoints scored on the line, as in `eval`'s CSV: one per class here, both classes' in `all`.
         let views = if r[col("class")] == "all" { 2.0 } else { 1.0 };
-        assert_eq!(num("views"), views);
+        assert_eq!(num("viewpoints"), views);
         match r[col("method")] {
             "none" => {
                 assert_eq!(num("triangles_drawn_mean"), num("triangles"));

@@ -8,8 +8,10 @@
 //! Choices:
 //!
 //! - The results are a CSV table, one line per combination × method × class (the classes, then `all`). Lines are
-//!   kept sorted by the combination's key `(sectors, subsectors, seeds, rng_seed, viewpoints)`, then in the
+//!   kept sorted by the combination's key `(sectors, subsectors, seeds, rng_seed, viewpoints_per_class)`, then in the
 //!   evaluation's method and class order, so the file's order does not depend on the order the combinations ran in.
+//!   The column `viewpoints` counts the viewpoints scored on the line (every class's on an `all` line), as in
+//!   `eval`'s CSV.
 //! - A sweep resumes: combinations whose key is already in the file with every line are not run again (one that
 //!   lost a line is run again; a malformed field or a repeated line is refused). The key leaves out the
 //!   viewpoint classes, the viewpoint seed and the field of view: resume only with the same ones.
@@ -32,10 +34,11 @@ use crate::evaluate::{
 };
 use pipeline::{BuildParams, BuildProgress, BuildReport, build, per_triangle_hierarchy, triangle_regions};
 
-/// The header line of a sweep CSV (without the newline).
-pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints,vertices,triangles,horizon_seconds,\
+/// The header line of a sweep CSV (without the newline): `viewpoints_per_class` is the key's count of viewpoints
+/// per class, `viewpoints` those scored on the line (as in `eval`'s CSV).
+pub const HEADER: &str = "sectors,subsectors,seeds,rng_seed,viewpoints_per_class,vertices,triangles,horizon_seconds,\
 regions_seconds,grouping_seconds,visibility_bytes,groups,orphans,orphan_passes_run,nodes,levels,top_level,method,class,\
-views,false_culls_mean,false_culls_max,viewpoints_with_false_culls,false_cull_area_mean,occlusion_captured_mean,\
+viewpoints,false_culls_mean,false_culls_max,viewpoints_with_false_culls,false_cull_area_mean,occlusion_captured_mean,\
 occlusion_captured_p50,overdraw_mean,triangles_drawn_mean,cull_ns,visible_fraction,drawn_fraction,leaf_limit,setup";
 
 /// The digest of everything a sweep's lines depend on besides their key (the mesh, the build options every
