@@ -163,6 +163,27 @@ fn dfw_srtm_georeference_is_exact() {
     assert!(i.conversion.contains("111320"), "{}", i.conversion);
 }
 
+/// The real tiled file, its 529 tiles recompressed by ZSTD: the same grid.
+#[test]
+fn dfw_srtm_recompressed_with_zstd_reads_the_same() {
+    let path = shared_dem().join("dfw_srtm.tif");
+    let bytes = std::fs::read(&path).expect("dfw_srtm.tif");
+    let opts = DemOptions::default();
+    let (plain, _) = parse_geotiff(&bytes, &path, &opts).expect("the original");
+    let zstd = zstd_chunks(bytes);
+    let (packed, i) = parse_geotiff(&zstd, &path, &opts).expect("recompressed");
+    assert_eq!(
+        (i.layout.as_str(), i.compression.as_str()),
+        ("tiles", "zstd, predictor none")
+    );
+    assert_eq!(packed, plain);
+    // From a file, as the commands read it (tile by tile).
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let file = dir.path().join("dfw_zstd.tif");
+    std::fs::write(&file, &zstd).expect("write");
+    assert_eq!(read_dem(&file, &opts).expect("read_dem"), plain);
+}
+
 #[test]
 fn missing_file_names_it() {
     let p = Path::new("/nonexistent/dem.tif");
@@ -322,6 +343,93 @@ fn sample_types_compressions_and_predictors() {
             let f32s: Vec<f32> = vals.iter().map(|&v| v as f32).collect();
             check(write_tif!(colortype::Gray32Float, w, h, &f32s, &spec), "float32");
             check(write_tif!(colortype::Gray64Float, w, h, &vals, &spec), "float64");
+        }
+    }
+}
+
+/// `bytes` (a little-endian TIFF with uncompressed strips or tiles, as `write_tif!` writes them) with every strip or
+/// tile compressed by ZSTD (compression 50000, as GDAL's `COMPRESS=ZSTD` writes it): the chunks are appended
+/// compressed and the compression, offsets and byte counts rewritten in the IFD.
+fn zstd_chunks(mut bytes: Vec<u8>) -> Vec<u8> {
+    let u16_at = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"));
+    assert_eq!(&bytes[..4], b"II*\0", "a little-endian classic TIFF");
+    let ifd = u32_at(&bytes, 4) as usize;
+    let find = |b: &[u8], tag: u16| {
+        (0..u16_at(b, ifd) as usize)
+            .map(|i| ifd + 2 + 12 * i)
+            .find(|&e| u16_at(b, e) == tag)
+    };
+    let entry = |b: &[u8], tag: u16| find(b, tag).unwrap_or_else(|| panic!("no tag {tag}"));
+    // The values of a LONG array entry: inline when there is one, else at its offset.
+    let longs = |b: &[u8], e: usize| {
+        assert_eq!(u16_at(b, e + 2), 4, "LONG values");
+        let n = u32_at(b, e + 4) as usize;
+        let at = if n == 1 { e + 8 } else { u32_at(b, e + 8) as usize };
+        (0..n).map(|i| at + 4 * i).collect::<Vec<usize>>()
+    };
+    let compression = entry(&bytes, 259);
+    bytes[compression + 8..compression + 10].copy_from_slice(&50000u16.to_le_bytes());
+    // StripOffsets and StripByteCounts, or TileOffsets and TileByteCounts.
+    let [offsets, counts] = match find(&bytes, 273) {
+        Some(strips) => [strips, entry(&bytes, 279)],
+        None => [entry(&bytes, 324), entry(&bytes, 325)],
+    }
+    .map(|e| longs(&bytes, e));
+    for (&o, &c) in offsets.iter().zip(&counts) {
+        let (start, len) = (u32_at(&bytes, o) as usize, u32_at(&bytes, c) as usize);
+        let packed = zstd::encode_all(&bytes[start..start + len], 3).expect("zstd");
+        let at = u32::try_from(bytes.len()).expect("small");
+        bytes.extend_from_slice(&packed);
+        bytes[o..o + 4].copy_from_slice(&at.to_le_bytes());
+        bytes[c..c + 4].copy_from_slice(&u32::try_from(packed.len()).expect("small").to_le_bytes());
+    }
+    bytes
+}
+
+/// ZSTD strips (GDAL's `COMPRESS=ZSTD`), with and without the horizontal predictor, decode to the same heights.
+#[test]
+fn zstd_compressed_strips_decode() {
+    let (w, h) = (7u32, 5u32);
+    let vals: Vec<f64> = (0..w * h).map(|i| f64::from(i * 37 % 23) * 4.0 + 250.0).collect();
+    for p in [Predictor::None, Predictor::Horizontal] {
+        let spec = Spec {
+            predictor: p,
+            ..Spec::default()
+        };
+        let i16s: Vec<i16> = vals.iter().map(|&v| v as i16).collect();
+        let u16s: Vec<u16> = vals.iter().map(|&v| v as u16).collect();
+        let f32s: Vec<f32> = vals.iter().map(|&v| v as f32).collect();
+        let mut files = vec![
+            ("int16", write_tif!(colortype::GrayI16, w, h, &i16s, &spec)),
+            ("uint16", write_tif!(colortype::Gray16, w, h, &u16s, &spec)),
+        ];
+        if p == Predictor::None {
+            files.push(("float32", write_tif!(colortype::Gray32Float, w, h, &f32s, &spec)));
+        }
+        for (ty, plain) in files {
+            let packed = zstd_chunks(plain.clone());
+            let (g, i) = parse(&packed).unwrap_or_else(|e| panic!("{ty}, {p:?}: {e}"));
+            assert_eq!(i.sample_type, ty);
+            let predictor = if p == Predictor::None { "none" } else { "horizontal" };
+            assert_eq!(i.compression, format!("zstd, predictor {predictor}"));
+            assert_eq!((g.rows, g.cols), (5, 7));
+            assert!(same_heights(&g.z, &vals), "{ty}, {p:?}: {:?}", g.z);
+            assert_eq!(g, parse(&plain).expect("the uncompressed file").0, "{ty}, {p:?}");
+            // Cut short inside the last strip's compressed bytes: named as truncated; a strip that is not ZSTD
+            // data (its frame's magic number broken): named with its compression. Never a panic.
+            let m = message(parse(&packed[..packed.len() - 3]));
+            assert!(
+                m.contains("(zstd, predictor") && m.contains("a truncated file?"),
+                "{ty}, {p:?}: {m}"
+            );
+            let mut broken = packed.clone();
+            broken[plain.len()] ^= 0xff;
+            let m = message(parse(&broken));
+            assert!(
+                m.starts_with("cannot decode strip or tile 0 (zstd, predictor"),
+                "{ty}, {p:?}: {m}"
+            );
         }
     }
 }
