@@ -34,7 +34,9 @@ pub enum Sniffed {
 /// The format that `head` (a file's first bytes, [`HEAD`] of them or the whole file) starts like, if one is known.
 pub fn sniff(head: &[u8]) -> Option<Sniffed> {
     let starts = |magic: &[u8]| head.starts_with(magic);
-    Some(if starts(b"II*\0") || starts(b"MM\0*") {
+    // Classic TIFF (42) and BigTIFF (43), either byte order.
+    let tiff = [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"].iter().any(|m| starts(*m));
+    Some(if tiff {
         Sniffed::Tiff
     } else if starts(b"\x89PNG\r\n\x1a\n") {
         Sniffed::Png
@@ -117,9 +119,11 @@ mod tests {
 
     #[test]
     fn formats_are_told_from_their_first_bytes() {
-        let cases: [(&[u8], Option<Sniffed>); 12] = [
+        let cases: [(&[u8], Option<Sniffed>); 14] = [
             (b"II*\0\x08\0\0\0", Some(Sniffed::Tiff)),
             (b"MM\0*\0\0\0\x08", Some(Sniffed::Tiff)),
+            (b"II+\0\x08\0\0\0", Some(Sniffed::Tiff)),
+            (b"MM\0+\0\x08\0\0", Some(Sniffed::Tiff)),
             (b"\x89PNG\r\n\x1a\n....", Some(Sniffed::Png)),
             (b"\x93NUMPY\x01\0", Some(Sniffed::Npy)),
             (b"NCOLS 403\nnrows 344\n", Some(Sniffed::AsciiGrid)),

@@ -2,11 +2,12 @@
 //! which builds its own libzstd).
 //!
 //! What is read:
-//! - one image (the first IFD); samples int8/16/32/64, uint8/16/32/64, float32 or float64, in strips or tiles,
-//!   uncompressed, LZW, Deflate, PackBits or ZSTD (GDAL's `COMPRESS=ZSTD`), with no predictor, the horizontal
-//!   predictor (2) or the floating-point predictor (3): whatever the `tiff` crate decodes. Strips and tiles are
-//!   decoded one by one at their full padded width (see `decode_window`); a whole-file read decodes at most
-//!   [`MAX_DECODED_BYTES`], and a file that ends before the data its tags point at is named as truncated;
+//! - one image (the first IFD) of a classic TIFF or a BigTIFF; samples int8/16/32/64, uint8/16/32/64, float32 or
+//!   float64, in strips or tiles, uncompressed, LZW, Deflate, PackBits or ZSTD (GDAL's `COMPRESS=ZSTD`), with no
+//!   predictor, the horizontal predictor (2) or the floating-point predictor (3): whatever the `tiff` crate decodes.
+//!   Strips and tiles are decoded one by one at their full padded width (see `decode_window`); a whole-file read
+//!   decodes at most [`MAX_DECODED_BYTES`], and a file that ends before the data its tags point at is named as
+//!   truncated;
 //! - one band: a single-band image, or band [`DemOptions::band`] (1-based, like GDAL) of an interleaved multi-band
 //!   image; a multi-band image without a chosen band is an error;
 //! - `GDAL_NODATA` (tag 42113): samples equal to it become voids, as do NaN samples; for float32 samples, also those
