@@ -385,27 +385,18 @@ fn a_bigtiff_reads_like_a_classic_tiff() {
 /// tile compressed by ZSTD (compression 50000, as GDAL's `COMPRESS=ZSTD` writes it): the chunks are appended
 /// compressed and the compression, offsets and byte counts rewritten in the IFD.
 fn zstd_chunks(mut bytes: Vec<u8>) -> Vec<u8> {
-    let u16_at = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
     let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"));
-    assert_eq!(&bytes[..4], b"II*\0", "a little-endian classic TIFF");
-    let ifd = u32_at(&bytes, 4) as usize;
-    let find = |b: &[u8], tag: u16| {
-        (0..u16_at(b, ifd) as usize)
-            .map(|i| ifd + 2 + 12 * i)
-            .find(|&e| u16_at(b, e) == tag)
-    };
-    let entry = |b: &[u8], tag: u16| find(b, tag).unwrap_or_else(|| panic!("no tag {tag}"));
+    let entry = |b: &[u8], tag: u16| ifd_entry(b, tag).unwrap_or_else(|| panic!("no tag {tag}"));
     // The values of a LONG array entry: inline when there is one, else at its offset.
     let longs = |b: &[u8], e: usize| {
-        assert_eq!(u16_at(b, e + 2), 4, "LONG values");
+        assert_eq!(u16::from_le_bytes([b[e + 2], b[e + 3]]), 4, "LONG values");
         let n = u32_at(b, e + 4) as usize;
         let at = if n == 1 { e + 8 } else { u32_at(b, e + 8) as usize };
         (0..n).map(|i| at + 4 * i).collect::<Vec<usize>>()
     };
-    let compression = entry(&bytes, 259);
-    bytes[compression + 8..compression + 10].copy_from_slice(&50000u16.to_le_bytes());
+    set_compression(&mut bytes, 50000);
     // StripOffsets and StripByteCounts, or TileOffsets and TileByteCounts.
-    let [offsets, counts] = match find(&bytes, 273) {
+    let [offsets, counts] = match ifd_entry(&bytes, 273) {
         Some(strips) => [strips, entry(&bytes, 279)],
         None => [entry(&bytes, 324), entry(&bytes, 325)],
     }
@@ -419,6 +410,41 @@ fn zstd_chunks(mut bytes: Vec<u8>) -> Vec<u8> {
         bytes[c..c + 4].copy_from_slice(&u32::try_from(packed.len()).expect("small").to_le_bytes());
     }
     bytes
+}
+
+/// Where the entry of `tag` starts in the first IFD of a little-endian classic TIFF.
+fn ifd_entry(b: &[u8], tag: u16) -> Option<usize> {
+    assert_eq!(&b[..4], b"II*\0", "a little-endian classic TIFF");
+    let ifd = u32::from_le_bytes(b[4..8].try_into().expect("4 bytes")) as usize;
+    (0..usize::from(u16::from_le_bytes([b[ifd], b[ifd + 1]])))
+        .map(|i| ifd + 2 + 12 * i)
+        .find(|&e| u16::from_le_bytes([b[e], b[e + 1]]) == tag)
+}
+
+/// Rewrites the Compression tag (a SHORT held in its entry) of a little-endian classic TIFF.
+fn set_compression(b: &mut [u8], code: u16) {
+    let e = ifd_entry(b, 259).expect("a Compression tag");
+    b[e + 8..e + 10].copy_from_slice(&code.to_le_bytes());
+}
+
+/// Compressions the `tiff` crate does not decode (those GDAL writes named) are refused before any sample is read,
+/// saying which are read and how to convert the file.
+#[test]
+fn compressions_not_read_are_named() {
+    let data: Vec<i16> = (0..20).collect();
+    for (code, name) in [
+        (34887u16, "compression 34887 (LERC)"),
+        (7, "compression 7 (JPEG)"),
+        (9, "compression 9 "),
+    ] {
+        let mut b = write_tif!(colortype::GrayI16, 5, 4, &data, &Spec::default());
+        set_compression(&mut b, code);
+        let m = message(parse(&b));
+        assert!(
+            m.starts_with(name) && m.contains("ZSTD are") && m.contains("gdal_translate"),
+            "{m}"
+        );
+    }
 }
 
 /// ZSTD strips (GDAL's `COMPRESS=ZSTD`), with and without the horizontal predictor, decode to the same heights.

@@ -422,6 +422,23 @@ fn gdal_scale_offset(xml: &str, band: usize, path: &Path) -> Result<Option<(f64,
     })
 }
 
+/// The error for a TIFF compression that is not read, naming the ones GDAL writes and how to convert the file.
+fn unread_compression(code: u64) -> String {
+    let name = match code {
+        6 | 7 => " (JPEG)",
+        34712 => " (JPEG 2000)",
+        34887 => " (LERC)",
+        34925 => " (LZMA)",
+        50001 => " (WebP)",
+        50002 => " (JPEG XL)",
+        _ => "",
+    };
+    format!(
+        "compression {code}{name} is not read (none, LZW, Deflate, PackBits and ZSTD are): convert the file first, \
+         e.g. `gdal_translate -co COMPRESS=DEFLATE IN.tif OUT.tif`"
+    )
+}
+
 /// Opens a TIFF, reads its tags and georeference ([`Meta`]).
 fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Result<(Decoder<R>, Meta)> {
     let err = |m: String| TinError::format(path, m);
@@ -450,7 +467,7 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         8 | 32946 => "deflate".to_string(),
         32773 => "packbits".to_string(),
         50000 => "zstd".to_string(),
-        c => format!("compression {c}"),
+        c => return Err(err(unread_compression(c))),
     };
     let predictor = match find_u64(&mut dec, Tag::Predictor, path)?.unwrap_or(1) {
         1 => "none".to_string(),
