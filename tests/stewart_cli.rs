@@ -291,3 +291,108 @@ fn quadtree_build_eval_and_cull() {
         fails_with(&["cull", s(&crystal), flag, value, "--eye", eye], message);
     }
 }
+
+/// `build --grouping quadtree --no-regions`: no horizons, no regions, the quadtree build's cells; the safe culler
+/// draws from it what it draws from the build with regions, `stewart` culls nothing in it; what it cannot honour is
+/// refused and no file is written.
+#[test]
+fn a_quadtree_without_regions_culls_as_the_one_with_them() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (with, without) = (dir.path().join("with.tch"), dir.path().join("without.tch"));
+    let m = mesh("jacksboro-2k.obj");
+    ok(&["build", s(&m), "-o", s(&with), "--grouping", "quadtree", "-q"]);
+    let out = ok(&[
+        "build",
+        s(&m),
+        "-o",
+        s(&without),
+        "--grouping",
+        "quadtree",
+        "--no-regions",
+        "--json",
+        "-q",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    assert_eq!(report["without_regions"], true);
+    assert_eq!(
+        (report["horizon_seconds"].as_f64(), report["regions_seconds"].as_f64()),
+        (Some(0.0), Some(0.0))
+    );
+    assert!(
+        report["quadtree_levels"]
+            .as_array()
+            .expect("levels")
+            .iter()
+            .all(|l| l["regions"] == 0)
+    );
+    let eyes = dir.path().join("eyes.txt");
+    std::fs::write(&eyes, "15000,15000,2\n4000,26000,30\n29000,3000,300\n1000,1000,2\n").expect("eyes");
+    let ranges = |file: &std::path::Path, method: &str| {
+        let out = ok(&[
+            "cull",
+            s(file),
+            "--eyes",
+            s(&eyes),
+            "--above-ground",
+            "--method",
+            method,
+            "--json",
+        ]);
+        String::from_utf8(out.stdout)
+            .expect("UTF-8")
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("JSON line")["ranges"].clone())
+            .collect::<Vec<_>>()
+    };
+    let safe = ranges(&without, "safe");
+    assert_eq!(safe.len(), 4);
+    assert_eq!(safe, ranges(&with, "safe"));
+    let everything = serde_json::json!([[0, count_triangles(&m)]]);
+    assert!(safe.iter().any(|r| *r != everything), "safe culls");
+    assert!(
+        ranges(&without, "stewart").iter().all(|r| *r == everything),
+        "stewart culls nothing"
+    );
+    let out = ok(&[
+        "cull",
+        s(&without),
+        "--eye",
+        "15000,15000,2",
+        "--above-ground",
+        "--method",
+        "stewart",
+    ]);
+    let warning = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        warning.contains("holds no regions") && warning.contains("`stewart` culls nothing"),
+        "{warning}"
+    );
+    let refused = dir.path().join("refused.tch");
+    fails_with(
+        &["build", s(&m), "-o", s(&refused), "--no-regions"],
+        "--grouping quadtree",
+    );
+    for flag in [["--sectors", "8"], ["--subsectors", "2"], ["--undersampling", "100"]] {
+        let mut args = vec![
+            "build",
+            s(&m),
+            "-o",
+            s(&refused),
+            "--grouping",
+            "quadtree",
+            "--no-regions",
+        ];
+        args.extend(flag);
+        fails_with(&args, "computes no horizons");
+    }
+    assert!(!refused.exists());
+}
+
+/// The triangles of an OBJ (its `f` lines).
+fn count_triangles(obj: &std::path::Path) -> u64 {
+    std::fs::read_to_string(obj)
+        .expect("OBJ")
+        .lines()
+        .filter(|l| l.starts_with("f "))
+        .count() as u64
+}

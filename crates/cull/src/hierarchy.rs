@@ -234,6 +234,12 @@ impl Hierarchy {
         leaves
     }
 
+    /// Whether any node holds a region: none in a hierarchy built without them (`tincull build --no-regions`), where
+    /// the region tests ([`crate::CullMethod::Thesis`], [`crate::CullMethod::Stewart`]) cull nothing.
+    pub fn has_regions(&self) -> bool {
+        self.nodes.iter().any(|n| !n.regions.is_empty())
+    }
+
     /// Bytes of visibility data: regions, circles, ranges and child links (not the mesh).
     pub fn visibility_bytes(&self) -> usize {
         self.nodes

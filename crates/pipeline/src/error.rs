@@ -15,6 +15,9 @@ pub enum BuildError {
     /// A quadtree parameter is out of range, or the quadtree failed.
     #[error(transparent)]
     Quadtree(#[from] quadtree::QuadtreeError),
+    /// A build without regions ([`crate::build_without_regions`]) asked for crystal groups, which grow from them.
+    #[error("crystal groups grow from the occlusion regions: a build without regions needs the quadtree grouping")]
+    RegionsNeeded,
     /// Vertex regions computed elsewhere ([`crate::build_from_regions`]) do not fit the terrain or the parameters.
     #[error(
         "{rows} vertex region rows of {sectors} sectors do not match a terrain of {vertices} vertices built with \

@@ -183,6 +183,9 @@ pub struct BuildReport {
     /// For a quadtree: every depth built, root first, with its bytes and whether it is stored (memory levels).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub quadtree_levels: Vec<LevelStats>,
+    /// Built by [`build_without_regions`]: no horizons, no regions.
+    #[serde(default)]
+    pub without_regions: bool,
 }
 
 /// The result of [`build`]: the exported hierarchy, the figures, and the intermediate data that evaluation reuses.
@@ -191,7 +194,8 @@ pub struct Build {
     pub hierarchy: Hierarchy,
     /// Figures.
     pub report: BuildReport,
-    /// Per-vertex regions (the grouping's input); [`triangle_regions`] derives the per-triangle ones from them.
+    /// Per-vertex regions (the grouping's input); [`triangle_regions`] derives the per-triangle ones from them. Empty
+    /// (no rows) from [`build_without_regions`].
     pub vertex_regions: RegionTable,
     /// The new triangle order: `order[k]` is the original index of the hierarchy's triangle `k`.
     pub order: Vec<u32>,
@@ -236,6 +240,80 @@ pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -
     )
 }
 
+/// A quadtree hierarchy without the thesis' visibility data: no horizons, no regions (every node's region empty),
+/// for the run-time cullers (`safe`, the default, and `lloyd-egbert`), which read only the mesh and the nodes. The
+/// same cells, triangle order and nodes as [`build`] with the same quadtree parameters, in a fraction of its time
+/// (the horizon sweep is most of a build); the region tests (`stewart`, `thesis`) cull nothing in it. `params` must
+/// name [`Grouping::Quadtree`] (crystal groups grow from the regions); its sectors and subsectors are recorded only.
+/// [`Build::vertex_regions`] is empty.
+pub fn build_without_regions(
+    tin: &Tin,
+    params: &BuildParams,
+    progress: Option<BuildProgress>,
+) -> Result<Build, BuildError> {
+    params.validate()?;
+    let Grouping::Quadtree(qp) = &params.grouping else {
+        return Err(BuildError::RegionsNeeded);
+    };
+    if let Some(p) = &progress {
+        p("grouping", 0, 1);
+    }
+    let start = Instant::now();
+    let quadtree = quadtree::build_without_regions(tin, params.sectors, qp)?;
+    let seconds = [0.0, 0.0, start.elapsed().as_secs_f64()];
+    let empty = RegionTable::from_rows(params.sectors, glam::DVec2::ZERO, Vec::new());
+    let mut b = quadtree_build(tin, quadtree, empty, params, seconds);
+    b.report.without_regions = true;
+    if let Some(p) = &progress {
+        p("grouping", 1, 1);
+    }
+    Ok(b)
+}
+
+/// The [`Build`] of a quadtree: its hierarchy and figures; `seconds` are the horizon, region and grouping times.
+fn quadtree_build(
+    tin: &Tin,
+    quadtree: Quadtree,
+    vertex_regions: RegionTable,
+    params: &BuildParams,
+    seconds: [f64; 3],
+) -> Build {
+    let [horizon_seconds, regions_seconds, grouping_seconds] = seconds;
+    let hierarchy = export_quadtree(tin, &quadtree, params);
+    let visibility_bytes = hierarchy.visibility_bytes();
+    let leaves = hierarchy.nodes.iter().filter(|n| n.children.is_empty()).count();
+    let report = BuildReport {
+        vertices: tin.num_vertices(),
+        triangles: tin.num_triangles(),
+        sectors: params.sectors,
+        subsectors: params.subsectors,
+        seeds: 0,
+        first_pass_crystals: 0,
+        horizon_seconds,
+        regions_seconds,
+        grouping_seconds,
+        orphan_passes_run: 0,
+        orphans: 0,
+        groups: leaves,
+        nodes: hierarchy.nodes.len(),
+        levels: quadtree.stored_depth + 1,
+        top_level: hierarchy.roots.len(),
+        visibility_bytes,
+        visibility_bytes_per_triangle: visibility_bytes as f64 / tin.num_triangles().max(1) as f64,
+        grouping: "quadtree".into(),
+        quadtree_levels: quadtree.levels.clone(),
+        without_regions: false,
+    };
+    Build {
+        hierarchy,
+        report,
+        vertex_regions,
+        order: quadtree.order.clone(),
+        crystal: None,
+        quadtree: Some(quadtree),
+    }
+}
+
 /// The grouping and export stages of [`build`], from per-vertex regions computed elsewhere (a tile job computes
 /// them with terrain from outside its tile: crate `tiles`). `seconds` are the horizon and region times to report.
 pub fn build_from_regions(
@@ -261,39 +339,8 @@ pub fn build_from_regions(
     let start = Instant::now();
     if let Grouping::Quadtree(qp) = &params.grouping {
         let quadtree = quadtree::build(tin, &vertex_regions, qp)?;
-        let grouping_seconds = start.elapsed().as_secs_f64();
-        let hierarchy = export_quadtree(tin, &quadtree, params);
-        let visibility_bytes = hierarchy.visibility_bytes();
-        let leaves = hierarchy.nodes.iter().filter(|n| n.children.is_empty()).count();
-        let report = BuildReport {
-            vertices: tin.num_vertices(),
-            triangles: tin.num_triangles(),
-            sectors: params.sectors,
-            subsectors: params.subsectors,
-            seeds: 0,
-            first_pass_crystals: 0,
-            horizon_seconds,
-            regions_seconds,
-            grouping_seconds,
-            orphan_passes_run: 0,
-            orphans: 0,
-            groups: leaves,
-            nodes: hierarchy.nodes.len(),
-            levels: quadtree.stored_depth + 1,
-            top_level: hierarchy.roots.len(),
-            visibility_bytes,
-            visibility_bytes_per_triangle: visibility_bytes as f64 / tin.num_triangles().max(1) as f64,
-            grouping: "quadtree".into(),
-            quadtree_levels: quadtree.levels.clone(),
-        };
-        return Ok(Build {
-            hierarchy,
-            report,
-            vertex_regions,
-            order: quadtree.order.clone(),
-            crystal: None,
-            quadtree: Some(quadtree),
-        });
+        let seconds = [horizon_seconds, regions_seconds, start.elapsed().as_secs_f64()];
+        return Ok(quadtree_build(tin, quadtree, vertex_regions, params, seconds));
     }
     let crystal = crystal::build(tin, &vertex_regions, &params.crystal)?;
     let grouping_seconds = start.elapsed().as_secs_f64();
@@ -324,6 +371,7 @@ pub fn build_from_regions(
         visibility_bytes_per_triangle: visibility_bytes as f64 / tin.num_triangles().max(1) as f64,
         grouping: "crystal".into(),
         quadtree_levels: Vec::new(),
+        without_regions: false,
     };
     Ok(Build {
         hierarchy,

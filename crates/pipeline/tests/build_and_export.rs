@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use pipeline::export::{from_json, mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
-use pipeline::{BuildError, BuildParams, Grouping, QuadtreeParams, build, build_from_regions};
+use pipeline::{BuildError, BuildParams, Grouping, QuadtreeParams, build, build_from_regions, build_without_regions};
 use tin::{SynthOptions, synth_tin};
 
 fn built() -> pipeline::Build {
@@ -132,6 +132,63 @@ fn quadtree_build_exports_a_valid_quadtree_hierarchy() {
     assert!(small.hierarchy.visibility_bytes() as u64 <= budget);
     assert!(small.hierarchy.nodes.len() < h.nodes.len());
     small.hierarchy.check_invariants().expect("invariants");
+}
+
+/// A build without regions is the quadtree build with every region left out: the same mesh, triangle order, nodes
+/// and build record, so the safe culler (which reads no region) draws the same triangles from every eye; crystal
+/// groups, which grow from the regions, are refused.
+#[test]
+fn a_build_without_regions_is_the_quadtree_build_less_its_regions() {
+    let tin = synth_tin(&SynthOptions::new(600, 3)).expect("synthetic terrain");
+    let mut regions_seen = false;
+    for depth in [None, Some(0), Some(3)] {
+        let params = BuildParams {
+            grouping: Grouping::Quadtree(QuadtreeParams {
+                depth,
+                ..QuadtreeParams::default()
+            }),
+            ..BuildParams::default()
+        };
+        let with = build(&tin, &params, None).expect("builds");
+        let without = build_without_regions(&tin, &params, None).expect("builds without regions");
+        let (h, bare) = (&with.hierarchy, &without.hierarchy);
+        bare.check_invariants().expect("invariants");
+        let q = without.quadtree.as_ref().expect("a quadtree");
+        q.check_invariants(&tin).expect("quadtree invariants");
+        regions_seen |= h.nodes.iter().any(|n| !n.regions.is_empty());
+        assert!(bare.nodes.iter().all(|n| n.regions.is_empty()));
+        let mut stripped = h.clone();
+        stripped.nodes.iter_mut().for_each(|n| n.regions.clear());
+        assert_eq!(*bare, stripped, "depth {depth:?}");
+        assert_eq!(without.order, with.order);
+        assert!(without.vertex_regions.is_empty());
+        let r = &without.report;
+        assert!(r.without_regions && !with.report.without_regions);
+        assert_eq!((r.horizon_seconds, r.regions_seconds), (0.0, 0.0));
+        assert_eq!(
+            (r.nodes, r.groups, r.levels),
+            (with.report.nodes, with.report.groups, with.report.levels)
+        );
+        assert_eq!(r.visibility_bytes, bare.visibility_bytes());
+        let (a, b) = (
+            cull::SafeCuller::new(h, cull::SafeParams::default()),
+            cull::SafeCuller::new(bare, cull::SafeParams::default()),
+        );
+        let (lo, hi) = (tin.bbox().min, tin.bbox().max);
+        for k in 0..12 {
+            let f = f64::from(k) / 12.0;
+            let eye = [
+                lo.x + f * (hi.x - lo.x),
+                hi.y - f * (hi.y - lo.y),
+                lo.z + (hi.z - lo.z) * (0.3 + f),
+            ];
+            let camera = cull::Camera::all_around(eye);
+            assert_eq!(a.cull(&camera).ranges, b.cull(&camera).ranges, "eye {eye:?}");
+        }
+    }
+    assert!(regions_seen, "the quadtree builds have regions to leave out");
+    let crystal = build_without_regions(&tin, &BuildParams::default(), None);
+    assert!(matches!(crystal, Err(BuildError::RegionsNeeded)), "{:?}", crystal.err());
 }
 
 #[test]

@@ -71,7 +71,7 @@ pub fn region_bytes(points: usize) -> usize {
     2 + 4 + 8 * points
 }
 
-/// Errors of [`build`].
+/// Errors of [`build`] and [`build_without_regions`].
 #[derive(Debug, thiserror::Error)]
 pub enum QuadtreeError {
     /// The terrain has no triangle.
@@ -358,16 +358,35 @@ struct Pending {
 /// Builds the quadtree of `tin` over the per-vertex regions `vertex_regions` (one row per vertex; see the crate
 /// documentation).
 pub fn build(tin: &Tin, vertex_regions: &RegionTable, params: &QuadtreeParams) -> Result<Quadtree, QuadtreeError> {
-    params.validate()?;
-    let n = tin.num_triangles();
-    if n == 0 {
-        return Err(QuadtreeError::Empty);
-    }
     if vertex_regions.len() != tin.num_vertices() {
         return Err(QuadtreeError::Regions {
             rows: vertex_regions.len(),
             vertices: tin.num_vertices(),
         });
+    }
+    build_cells(tin, Some(vertex_regions), vertex_regions.sectors(), params)
+}
+
+/// The same cells, triangle order and nodes as [`build`], without regions (every node's region empty in each of
+/// `sectors` sectors): a spatial hierarchy for the run-time cullers, which read none, built without the horizons.
+pub fn build_without_regions(tin: &Tin, sectors: u32, params: &QuadtreeParams) -> Result<Quadtree, QuadtreeError> {
+    if sectors == 0 {
+        return Err(QuadtreeError::Params("a quadtree needs at least one sector".into()));
+    }
+    build_cells(tin, None, sectors, params)
+}
+
+/// [`build`] over `vertex_regions`, or [`build_without_regions`] when there are none.
+fn build_cells(
+    tin: &Tin,
+    vertex_regions: Option<&RegionTable>,
+    sectors: u32,
+    params: &QuadtreeParams,
+) -> Result<Quadtree, QuadtreeError> {
+    params.validate()?;
+    let n = tin.num_triangles();
+    if n == 0 {
+        return Err(QuadtreeError::Empty);
     }
     let bbox = tin.bbox();
     let root_min = bbox.min.truncate();
@@ -435,7 +454,10 @@ pub fn build(tin: &Tin, vertex_regions: &RegionTable, params: &QuadtreeParams) -
             v
         })
         .collect();
-    let mut below = vertex_regions.intersect_rows(leaf_vertices.len(), |l| leaf_vertices[l].iter().copied());
+    let mut below = match vertex_regions {
+        Some(v) => v.intersect_rows(leaf_vertices.len(), |l| leaf_vertices[l].iter().copied()),
+        None => RegionTable::from_rows(sectors, DVec2::ZERO, vec![None; leaf_vertices.len() * sectors as usize]),
+    };
     let mut tables: Vec<RegionTable> = Vec::with_capacity(depth as usize + 1);
     for d in (0..depth as usize).rev() {
         let level = &depths[d];
@@ -446,7 +468,6 @@ pub fn build(tin: &Tin, vertex_regions: &RegionTable, params: &QuadtreeParams) -
     tables.reverse();
 
     // Level figures and the byte budget.
-    let sectors = vertex_regions.sectors();
     let mut levels: Vec<LevelStats> = depths
         .iter()
         .enumerate()
@@ -520,7 +541,7 @@ pub fn build(tin: &Tin, vertex_regions: &RegionTable, params: &QuadtreeParams) -
     }
     Ok(Quadtree {
         sectors,
-        region_origin: vertex_regions.origin(),
+        region_origin: vertex_regions.map_or(DVec2::ZERO, RegionTable::origin),
         root_min,
         root_side,
         built_depth: depth,
