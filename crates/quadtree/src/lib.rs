@@ -441,22 +441,25 @@ fn build_cells(
     depths.reverse(); // depths[d] is depth d.
 
     // Regions bottom-up: leaves from their vertices, inner nodes from their children.
-    let triangles = tin.triangles();
-    let leaf_vertices: Vec<Vec<u32>> = depths[depth as usize]
-        .iter()
-        .map(|p| {
-            let mut v: Vec<u32> = order[p.range.start as usize..p.range.end as usize]
-                .iter()
-                .flat_map(|&t| triangles[t as usize])
-                .collect();
-            v.sort_unstable();
-            v.dedup();
-            v
-        })
-        .collect();
+    let leaves = &depths[depth as usize];
     let mut below = match vertex_regions {
-        Some(v) => v.intersect_rows(leaf_vertices.len(), |l| leaf_vertices[l].iter().copied()),
-        None => RegionTable::from_rows(sectors, DVec2::ZERO, vec![None; leaf_vertices.len() * sectors as usize]),
+        Some(v) => {
+            let triangles = tin.triangles();
+            let leaf_vertices: Vec<Vec<u32>> = leaves
+                .iter()
+                .map(|p| {
+                    let mut v: Vec<u32> = order[p.range.start as usize..p.range.end as usize]
+                        .iter()
+                        .flat_map(|&t| triangles[t as usize])
+                        .collect();
+                    v.sort_unstable();
+                    v.dedup();
+                    v
+                })
+                .collect();
+            v.intersect_rows(leaf_vertices.len(), |l| leaf_vertices[l].iter().copied())
+        }
+        None => RegionTable::from_rows(sectors, DVec2::ZERO, vec![None; leaves.len() * sectors as usize]),
     };
     let mut tables: Vec<RegionTable> = Vec::with_capacity(depth as usize + 1);
     for d in (0..depth as usize).rev() {
