@@ -181,11 +181,18 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         count(h.roots.len(), "root"),
         count((b - a) as usize, "triangle")
     ));
-    out.say(format!(
-        "  regions       {regions} in {} sectors x {} subsectors; visibility data {bytes} bytes ({per_triangle:.2} per \
-         triangle)",
-        h.sectors, b_info.subsectors
-    ));
+    if h.has_regions() {
+        out.say(format!(
+            "  regions       {regions} in {} sectors x {} subsectors; visibility data {bytes} bytes ({per_triangle:.2} \
+             per triangle)",
+            h.sectors, b_info.subsectors
+        ));
+    } else {
+        out.say(format!(
+            "  regions       none (for the run-time cullers: `build --no-regions`); visibility data {bytes} bytes \
+             ({per_triangle:.2} per triangle)"
+        ));
+    }
     out.say(format!(
         "  height field  {}",
         match &check {

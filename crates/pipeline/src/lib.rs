@@ -1,7 +1,7 @@
 //! The preprocessing pipeline of tincull, as a library: horizons → vertex regions → grouping (crystals, or the
 //! quadtree of Stewart's baseline, [`Grouping`]; nodes' regions intersected from their vertices' regions) → the
-//! exported [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink). Per-triangle regions are only made for the per-triangle evaluation method
-//! ([`triangle_regions`]).
+//! exported [`cull::Hierarchy`] (regions rounded to f32 so that they only shrink). Per-triangle regions are only made
+//! for the per-triangle evaluation method ([`triangle_regions`]).
 //!
 //! Where it sits: the data of a build flows `tin → horizon → occlusion → crystal → cull::Hierarchy`, and this crate
 //! drives that flow. Crate dependencies point one way, down: this crate uses `tin`, `horizon`, `occlusion`,
@@ -10,16 +10,20 @@
 //! round. It writes no files (see [`export`]) and compiles no GPU or GUI code (`cargo tree -e normal -p pipeline`
 //! shows what it does compile).
 //!
+//! [`build_without_regions`] stops before the horizons: the quadtree's cells alone, for the run-time cullers, which
+//! read no region.
+//!
 //! Besides [`build`] it owns the content for people and other tools ([`export`]: the grouped OBJ + MTL and the
 //! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
 //!
 //! The crates whose types its functions take and return are re-exported, so that a library user needs only this one
 //! dependency: `pipeline::tin` (the terrain, its readers) and `pipeline::cull` (the hierarchy, cameras, cullers).
 //!
-//! Errors: [`build`], [`build_from_regions`] and [`BuildParams::validate`] return a [`BuildError`], whose variant
-//! says which stage refused (the horizon sweep, crystal grouping, the quadtree, or regions that do not fit the
-//! terrain) and holds that stage's own error; the file-format helpers ([`export`], [`gltf`]) return an [`ExportError`],
-//! whose messages name the path or the element at fault.
+//! Errors: [`build`], [`build_from_regions`], [`build_without_regions`] and [`BuildParams::validate`] return a
+//! [`BuildError`], whose variant says which stage refused (the horizon sweep, crystal grouping, the quadtree, regions
+//! that do not fit the terrain, or crystals asked for without regions) and holds that stage's own error; the
+//! file-format helpers ([`export`], [`gltf`]) return an [`ExportError`], whose messages name the path or the element
+//! at fault.
 //!
 //! From a mesh to a `.tch` file and a cull, as `tincull build` and `tincull cull` do it (the file's bytes are
 //! [`cull::Hierarchy::to_bytes`]; [`cull::Hierarchy::load`] reads them back):

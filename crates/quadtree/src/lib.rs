@@ -43,6 +43,9 @@
 //! rounds regions to f32 and may only drop boundary points (on the 100k-vertex Cascades mesh at 64 sectors about 3%
 //! of the bytes), so the exported hierarchy never exceeds the count here.
 //!
+//! [`build_without_regions`] builds the same cells, order and nodes with every region empty, without the per-vertex
+//! regions (no horizons): a spatial hierarchy for the run-time cullers, which read none.
+//!
 //! The run-time test (§5.3, §5.4) lives in the `cull` crate (`CullMethod::Stewart`).
 #![warn(missing_docs)]
 
