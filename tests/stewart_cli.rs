@@ -368,7 +368,7 @@ fn a_quadtree_without_regions_culls_as_the_one_with_them() {
         "{warning}"
     );
     let info = String::from_utf8(ok(&["info", s(&without)]).stdout).expect("UTF-8");
-    assert!(info.contains("regions       none (for the run-time cullers"), "{info}");
+    assert!(info.contains("regions       none (built with --no-regions"), "{info}");
     let refused = dir.path().join("refused.tch");
     fails_with(
         &["build", s(&m), "-o", s(&refused), "--no-regions"],

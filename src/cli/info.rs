@@ -189,7 +189,7 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         ));
     } else {
         out.say(format!(
-            "  regions       none (for the run-time cullers: `build --no-regions`); visibility data {bytes} bytes \
+            "  regions       none (built with --no-regions, or the terrain hides nothing); visibility data {bytes} bytes \
              ({per_triangle:.2} per triangle)"
         ));
     }
