@@ -745,3 +745,103 @@ fn synth_never_replaces_a_json_that_is_not_a_sidecar() {
     ok(&["synth", "--vertices", "900", "-o", s(&npy), "-q"]);
     assert!(std::fs::read_to_string(&plan).expect("sidecar").contains("\"rows\":30"));
 }
+
+/// `tiles plan --grouping quadtree --no-regions`: no far-field files, tiles that read no halo and sweep no horizon,
+/// and a merged file whose safe culls are those of the same plan with regions; what such a plan cannot honour is
+/// refused before anything is written.
+#[test]
+fn a_plan_without_regions_culls_as_the_one_with_them() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("t.npy");
+    ok(&["synth", "--vertices", "3600", "--rng-seed", "4", "-o", s(&npy), "-q"]);
+    let plan = |name: &str, extra: &[&str]| {
+        let path = dir.path().join(format!("{name}.json"));
+        let mut args = vec![
+            "tiles",
+            "plan",
+            s(&npy),
+            "-o",
+            s(&path),
+            "--tile",
+            "20",
+            "--max-error",
+            "0.5",
+            "--grouping",
+            "quadtree",
+            "--json",
+        ];
+        args.extend(extra);
+        (json(&args), path)
+    };
+    let (v, bare) = plan("bare", &["--no-regions"]);
+    assert_eq!((v["tiles"].as_u64(), v["far_blocks"].as_u64()), (Some(9), Some(0)));
+    let files: Vec<String> = std::fs::read_dir(dir.path().join("bare.tiles"))
+        .expect("tiles folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        files.is_empty(),
+        "a plan without regions writes no far field: {files:?}"
+    );
+    let (_, with) = plan("with", &["--halo", "0", "--sectors", "8", "--subsectors", "2"]);
+    let built = json(&["tiles", "build", s(&bare), "--all", "--json"]);
+    for t in built["tiles"].as_array().expect("tiles") {
+        assert_eq!(
+            (t["halo_points"].as_u64(), t["far_points"].as_u64()),
+            (Some(0), Some(0))
+        );
+        assert_eq!(t["build"]["without_regions"], true);
+        assert_eq!(t["build"]["horizon_seconds"].as_f64(), Some(0.0));
+    }
+    ok(&["tiles", "build", s(&with), "--all", "-q"]);
+    let (bare_tch, with_tch) = (dir.path().join("bare.tch"), dir.path().join("with.tch"));
+    ok(&["tiles", "merge", s(&bare), "-o", s(&bare_tch), "-q"]);
+    ok(&["tiles", "merge", s(&with), "-o", s(&with_tch), "-q"]);
+    let info = String::from_utf8(ok(&["info", s(&bare_tch)]).stdout).expect("UTF-8");
+    assert!(info.contains("regions       none (built with --no-regions"), "{info}");
+    // Eyes 2, 20 and 200 m above the ground across the terrain.
+    let bbox = &json(&["info", s(&with_tch), "--json"])["bbox"];
+    let at = |k: usize, f: f64| {
+        let (lo, hi) = (
+            bbox["min"][k].as_f64().expect("min"),
+            bbox["max"][k].as_f64().expect("max"),
+        );
+        lo + f * (hi - lo)
+    };
+    let eyes = dir.path().join("eyes.txt");
+    let lines: Vec<String> = [(0.3, 0.4, 2), (0.7, 0.2, 20), (0.5, 0.8, 200), (0.1, 0.9, 2)]
+        .iter()
+        .map(|&(fx, fy, h)| format!("{},{},{h}", at(0, fx), at(1, fy)))
+        .collect();
+    std::fs::write(&eyes, lines.join("\n")).expect("eyes");
+    let ranges = |file: &std::path::Path| {
+        let out = ok(&["cull", s(file), "--eyes", s(&eyes), "--above-ground", "--json"]);
+        String::from_utf8(out.stdout)
+            .expect("UTF-8")
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).expect("JSON line")["ranges"].clone())
+            .collect::<Vec<_>>()
+    };
+    let safe = ranges(&bare_tch);
+    assert_eq!(safe.len(), 4);
+    assert_eq!(safe, ranges(&with_tch));
+    assert!(
+        safe.iter().any(|r| r.as_array().expect("ranges").len() > 1),
+        "safe culls"
+    );
+
+    let refused = dir.path().join("refused.json");
+    let base = ["tiles", "plan", s(&npy), "-o", s(&refused), "--no-regions"];
+    fails_with(&base, "--grouping quadtree");
+    for (flag, value, message) in [
+        ("--halo", "4", "--halo: a plan without regions"),
+        ("--far-block", "8", "--far-block: a plan without regions"),
+        ("--far-ratio", "4", "--far-ratio: a plan without regions"),
+        ("--sectors", "8", "computes no horizons"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(["--grouping", "quadtree", flag, value]);
+        fails_with(&args, message);
+    }
+    assert!(!refused.exists() && !dir.path().join("refused.tiles").exists());
+}

@@ -350,21 +350,28 @@ pub fn print_report(r: &BuildReport, out: Output) {
     ));
 }
 
+/// Refuses parameters that a build without regions (`--no-regions`, of `build` and `tiles plan`) cannot take: a
+/// grouping other than the quadtree, and horizon parameters other than their defaults, which it would ignore.
+pub fn check_no_regions(params: &BuildParams) -> Result<()> {
+    anyhow::ensure!(
+        matches!(params.grouping, Grouping::Quadtree(_)),
+        "--no-regions needs --grouping quadtree: crystal groups grow from the occlusion regions"
+    );
+    let d = BuildParams::default();
+    anyhow::ensure!(
+        (params.sectors, params.subsectors, params.undersampling) == (d.sectors, d.subsectors, d.undersampling),
+        "--no-regions computes no horizons: --sectors, --subsectors and --undersampling (or their --config keys) \
+         mean nothing to it"
+    );
+    Ok(())
+}
+
 /// Runs `tincull build`.
 pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     let mut out = out;
     let params = args.params.resolve(args.config.as_deref())?;
     if args.no_regions {
-        anyhow::ensure!(
-            matches!(params.grouping, Grouping::Quadtree(_)),
-            "--no-regions needs --grouping quadtree: crystal groups grow from the occlusion regions"
-        );
-        let d = BuildParams::default();
-        anyhow::ensure!(
-            (params.sectors, params.subsectors, params.undersampling) == (d.sectors, d.subsectors, d.undersampling),
-            "--no-regions computes no horizons: --sectors, --subsectors and --undersampling (or their --config keys) \
-             mean nothing to it"
-        );
+        check_no_regions(&params)?;
     }
     let mut files = Outputs::new();
     files.input(&args.mesh.mesh)?;

@@ -41,6 +41,8 @@ const DEFAULT_TILE: usize = 512;
 const DEFAULT_HALO: usize = 16;
 /// Default far-field block of a DEM's plan, in samples (a mesh's: in mean vertex spacings).
 const DEFAULT_FAR_BLOCK: usize = 16;
+/// Default growth of the far field's blocks with distance (see `--far-ratio`).
+const DEFAULT_FAR_RATIO: usize = 16;
 /// Default vertical error bound of a DEM's tiles (m); a mesh's plan records it too, unused.
 const DEFAULT_MAX_ERROR: f64 = 1.0;
 
@@ -77,9 +79,14 @@ pub struct PlanArgs {
     pub far_block: Option<usize>,
     /// Far-field blocks double in size with distance, keeping each within about 1/R radian seen from the tile, so
     /// a tile's far field grows with the logarithm of the terrain, not its area; 0 keeps every block at
-    /// --far-block.
-    #[arg(long, value_name = "R", default_value_t = 16)]
-    pub far_ratio: usize,
+    /// --far-block [default: 16].
+    #[arg(long, value_name = "R")]
+    pub far_ratio: Option<usize>,
+    /// With --grouping quadtree: the tiles compute no horizons and no regions, and need no halo and no far field,
+    /// as `build --no-regions` does: the quadtree's cells alone, for the run-time cullers (`safe`, the default, and
+    /// `lloyd-egbert`); the region tests (`stewart`, `thesis`) cull nothing in the merged file.
+    #[arg(long)]
+    pub no_regions: bool,
     /// Vertical error bound of every tile's TIN (m); 0 keeps every sample that is not exactly interpolated (a DEM
     /// only: a mesh keeps its triangles) [default: 1].
     #[arg(long, value_name = "M")]
@@ -152,14 +159,32 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     files.check(&args.out)?;
     super::files::refuse_other_format(&args.out, "a tiling plan (JSON)", "json")?;
     let params = args.params.resolve(args.config.as_deref())?;
+    if args.no_regions {
+        super::build_cmd::check_no_regions(&params)?;
+        let given = [
+            ("--halo", args.halo.is_some()),
+            ("--far-block", args.far_block.is_some()),
+            ("--far-ratio", args.far_ratio.is_some()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|(_, g)| *g) {
+            bail!(
+                "{flag}: a plan without regions (--no-regions) computes no horizons, so its tiles read no halo or far field"
+            );
+        }
+    }
     // In samples for a DEM; a mesh's plan scales them by its vertex spacing (`plan_mesh`).
     let options = PlanOptions {
         tile: args.tile.unwrap_or(DEFAULT_TILE),
-        halo: args.halo.unwrap_or(DEFAULT_HALO),
+        halo: if args.no_regions {
+            0
+        } else {
+            args.halo.unwrap_or(DEFAULT_HALO)
+        },
         far_block: args.far_block.unwrap_or(DEFAULT_FAR_BLOCK),
-        far_ratio: args.far_ratio,
+        far_ratio: args.far_ratio.unwrap_or(DEFAULT_FAR_RATIO),
         max_error: args.max_error.unwrap_or(DEFAULT_MAX_ERROR),
         params,
+        no_regions: args.no_regions,
     };
     let stem = args
         .out
@@ -231,18 +256,24 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
             count(left.line_samples, "sample")
         ));
     }
+    let far_blocks = if options.no_regions { 0 } else { field.finest() };
+    let beyond = if options.no_regions {
+        "no regions (no halo, no far field)".to_string()
+    } else {
+        format!(
+            "halo {} samples, far field {far_blocks} blocks (at most {far_points} points per tile)",
+            options.halo
+        )
+    };
     out.say(format!(
-        "{} ({} x {} samples) -> {}: {} ({rows} x {cols}{left_out}) of at most {} intervals, halo {} samples, far \
-         field {} blocks (at most {} points per tile); tiles write to {}",
+        "{} ({} x {} samples) -> {}: {} ({rows} x {cols}{left_out}) of at most {} intervals, {beyond}; tiles write to \
+         {}",
         args.dem.display(),
         grid.rows,
         grid.cols,
         args.out.display(),
         count(plan.tiles.len(), "tile"),
         options.tile,
-        options.halo,
-        field.finest(),
-        far_points,
         dir.display()
     ));
     out.json(&json!({
@@ -253,7 +284,7 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         "void_tiles": left.void_tiles,
         "line_tiles": left.line_tiles,
         "line_samples": left.line_samples,
-        "far_blocks": field.finest(),
+        "far_blocks": far_blocks,
         "far_points_max": far_points,
         "tiles_dir": dir,
     }))
@@ -354,7 +385,11 @@ fn plan_mesh(
     let scaled = |given: Option<usize>, samples: usize| given.unwrap_or((samples as f64 * spacing) as usize);
     let options = PlanOptions {
         tile: scaled(args.tile, DEFAULT_TILE),
-        halo: scaled(args.halo, DEFAULT_HALO),
+        halo: if args.no_regions {
+            0
+        } else {
+            scaled(args.halo, DEFAULT_HALO)
+        },
         far_block: scaled(args.far_block, DEFAULT_FAR_BLOCK),
         ..options
     };
@@ -384,17 +419,20 @@ fn plan_mesh(
         .tiles
         .iter()
         .fold((0, 0), |(r, c), t| (r.max(t.tile_row + 1), c.max(t.tile_col + 1)));
+    let beyond = if options.no_regions {
+        "no regions (no halo, no far field)".to_string()
+    } else {
+        format!("halo {} m, far field blocks of {} m", options.halo, options.far_block)
+    };
     out.say(format!(
-        "{} ({} vertices, {} triangles) -> {}: {} (of a {rows} x {cols} grid of {} m squares), halo {} m, far \
-         field blocks of {} m; parts and tiles in {}",
+        "{} ({} vertices, {} triangles) -> {}: {} (of a {rows} x {cols} grid of {} m squares), {beyond}; parts and \
+         tiles in {}",
         args.dem.display(),
         tin.num_vertices(),
         tin.num_triangles(),
         args.out.display(),
         count(plan.tiles.len(), "tile"),
         options.tile,
-        options.halo,
-        options.far_block,
         dir.display()
     ));
     out.json(&json!({
@@ -516,6 +554,13 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
                 String::new(),
             )
         };
+        if r.build.without_regions {
+            out.say(format!(
+                "tile {}: {tin}; no regions; read {:.2} s{simplify}, quadtree {:.2} s",
+                r.index, r.read_seconds, r.build.grouping_seconds
+            ));
+            continue;
+        }
         out.say(format!(
             "tile {}: {tin}; halo {} and far field {} points; read {:.2} s{simplify}, triangulate {:.2} s, horizons \
              {:.2} s, grouping {:.2} s",

@@ -12,6 +12,9 @@
 //! 3. **Hierarchy.** The grouping of the plan's parameters (crystals and their merge hierarchy, or a quadtree) over the
 //!    tile's triangles, exactly as an untiled build ([`pipeline::build_from_regions`]).
 //!
+//! A plan without regions ([`crate::PlanOptions::no_regions`]) skips step 2: its tiles are the quadtree's cells alone
+//! ([`pipeline::build_without_regions`]), for the run-time cullers, and read no halo and no far field.
+//!
 //! Memory: the job reads only the DEM's header and the tile's halo window ([`tin::dem::read_dem_window`]: the
 //! window's slices of a `.npy` or `.hgt`, the strips or tiles of a GeoTIFF that meet it, a streamed `.asc`; a PNG is
 //! decoded whole and cut), so it keeps the window of the grid (8 bytes a sample) and the tile's TIN stages (some
@@ -202,8 +205,10 @@ fn dem_input(plan: &Plan, plan_path: &Path, spec: &TileSpec) -> Result<TileInput
         }
     }
     let halo_points = beyond.len();
-    for p in plan.far_points(plan_path, spec)? {
-        beyond.push(DVec3::from_array(info.position(p.row as usize, p.col as usize, p.z)));
+    if !plan.options.no_regions {
+        for p in plan.far_points(plan_path, spec)? {
+            beyond.push(DVec3::from_array(info.position(p.row as usize, p.col as usize, p.z)));
+        }
     }
     Ok(TileInput {
         tin,
@@ -281,7 +286,41 @@ pub fn build_tile(
         None => dem_input(plan, plan_path, spec)?,
     };
     let tin = &input.tin;
+    let params = &plan.options.params;
+    let far_points = input.beyond.len() - input.halo_points;
+    let (build, triangulate_seconds) = if plan.options.no_regions {
+        let build = pipeline::build_without_regions(tin, params, progress);
+        (build.map_err(|e| TilesError::Parameter(format!("{e:#}")))?, 0.0)
+    } else {
+        build_with_regions(plan_path, index, &input, params, progress)?
+    };
+    let report = TileReport {
+        index,
+        samples: input.samples,
+        vertices: tin.num_vertices(),
+        triangles: tin.num_triangles(),
+        halo_points: input.halo_points,
+        far_points,
+        max_error: input.max_error,
+        read_seconds: input.read_seconds,
+        simplify_seconds: input.simplify_seconds,
+        triangulate_seconds,
+        build: build.report,
+    };
+    Ok((build.hierarchy, report))
+}
 
+/// The tile's hierarchy with its regions: its vertices' horizons swept over the tile, the halo and the far field
+/// (triangulated together first), its regions, and the grouping over them. Returns the build and the seconds the
+/// triangulation took.
+fn build_with_regions(
+    plan_path: &Path,
+    index: usize,
+    input: &TileInput,
+    params: &pipeline::BuildParams,
+    progress: Option<BuildProgress>,
+) -> Result<(pipeline::Build, f64), TilesError> {
+    let tin = &input.tin;
     // The sweep's points: the tile's vertices first, then the halo and the far field, all on or below the terrain.
     let start = Instant::now();
     let mut points: Vec<DVec3> = tin.positions().to_vec();
@@ -307,7 +346,6 @@ pub fn build_tile(
     drop(points);
     let triangulate_seconds = start.elapsed().as_secs_f64();
 
-    let params = &plan.options.params;
     let config = SectorConfig::new(params.sectors, params.subsectors)?;
     let opts = HorizonOptions {
         undersampling_radius: params.undersampling,
@@ -325,18 +363,5 @@ pub fn build_tile(
     let regions_seconds = start.elapsed().as_secs_f64();
     let build = pipeline::build_from_regions(tin, regions, params, [horizon_seconds, regions_seconds], progress)
         .map_err(|e| TilesError::Parameter(format!("{e:#}")))?;
-    let report = TileReport {
-        index,
-        samples: input.samples,
-        vertices: tin.num_vertices(),
-        triangles: tin.num_triangles(),
-        halo_points: input.halo_points,
-        far_points,
-        max_error: input.max_error,
-        read_seconds: input.read_seconds,
-        simplify_seconds: input.simplify_seconds,
-        triangulate_seconds,
-        build: build.report,
-    };
-    Ok((build.hierarchy, report))
+    Ok((build, triangulate_seconds))
 }

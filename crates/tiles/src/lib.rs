@@ -11,6 +11,9 @@
 //! - [`merge`](mod@merge): `tincull tiles merge plan.json -o terrain.tch` joins the tiles' meshes and hierarchies; every tile is
 //!   a node near the top.
 //!
+//! A plan made with [`PlanOptions::no_regions`] (`tiles plan --no-regions --grouping quadtree`) builds tiles as
+//! `build --no-regions` does: no horizons, halo or far field, only the quadtree's cells, for the run-time cullers.
+//!
 //! **Safety.** The default culler (`safe`) decides at run time from the mesh alone, so the merged hierarchy culls
 //! as safely as any other: its proof needs only that every node's range holds the triangles its bounds cover, which
 //! [`cull::Hierarchy::check_invariants`] and the merge's circles (they only grow) give. The stored regions (the

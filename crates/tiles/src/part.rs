@@ -45,9 +45,22 @@ impl MeshPart {
     }
 }
 
+/// What a part carries beyond its tile, for its horizons (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Beyond {
+    /// Width of the halo around the tile's vertices (m).
+    pub halo: f64,
+    /// Side of the far field's finest squares (m).
+    pub far_block: f64,
+    /// Squares grow with distance to span at most about `1 / far_ratio` radian ([`crate::far_field`]); 0 keeps
+    /// them at `far_block`.
+    pub far_ratio: usize,
+}
+
 /// Cuts `tin` into tiles of `tile` metres (see the module docs): `(tile row, tile column, part)` for every tile
-/// that holds a triangle, row by row from the north.
-pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64, far_ratio: usize) -> Vec<(usize, usize, MeshPart)> {
+/// that holds a triangle, row by row from the north. Without `beyond` (a plan without regions, whose tiles compute
+/// no horizons) the parts carry no halo and no far field.
+pub fn mesh_parts(tin: &Tin, tile: f64, beyond: Option<Beyond>) -> Vec<(usize, usize, MeshPart)> {
     let b = tin.bbox();
     let cell = |v: f64, lo: f64, k: usize| (((v - lo) / tile).floor().max(0.0) as usize).min(k - 1);
     let kc = ((b.max.x - b.min.x) / tile).ceil().max(1.0) as usize;
@@ -60,20 +73,22 @@ pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64, far_ratio: us
     }
     // The far field: per square of `far_block` metres, its lowest vertex (the first in vertex order on ties), and
     // the min-pyramid of these squares.
-    let fc = ((b.max.x - b.min.x) / far_block).ceil().max(1.0) as usize;
-    let fr = ((b.max.y - b.min.y) / far_block).ceil().max(1.0) as usize;
-    let fcell = |v: f64, lo: f64, k: usize| (((v - lo) / far_block).floor().max(0.0) as usize).min(k - 1);
     let z = |v: u32| tin.position(v).z;
     let lower = |a: &u32, b: &u32| (z(*a), *a) < (z(*b), *b);
-    let mut lowest: Vec<Option<u32>> = vec![None; fr * fc];
-    for v in 0..tin.num_vertices() as u32 {
-        let p = tin.position(v);
-        let slot = &mut lowest[fcell(b.max.y - p.y, 0.0, fr) * fc + fcell(p.x, b.min.x, fc)];
-        if slot.is_none_or(|w| lower(&v, &w)) {
-            *slot = Some(v);
+    let pyramid = beyond.map(|Beyond { far_block, .. }| {
+        let fc = ((b.max.x - b.min.x) / far_block).ceil().max(1.0) as usize;
+        let fr = ((b.max.y - b.min.y) / far_block).ceil().max(1.0) as usize;
+        let fcell = |v: f64, lo: f64, k: usize| (((v - lo) / far_block).floor().max(0.0) as usize).min(k - 1);
+        let mut lowest: Vec<Option<u32>> = vec![None; fr * fc];
+        for v in 0..tin.num_vertices() as u32 {
+            let p = tin.position(v);
+            let slot = &mut lowest[fcell(b.max.y - p.y, 0.0, fr) * fc + fcell(p.x, b.min.x, fc)];
+            if slot.is_none_or(|w| lower(&v, &w)) {
+                *slot = Some(v);
+            }
         }
-    }
-    let pyramid = MinPyramid::new(fr, fc, lowest, lower);
+        MinPyramid::new(fr, fc, lowest, lower)
+    });
 
     let mut local = vec![u32::MAX; tin.num_vertices()];
     let mut out = Vec::new();
@@ -87,30 +102,41 @@ pub fn mesh_parts(tin: &Tin, tile: f64, halo: f64, far_block: f64, far_ratio: us
         for (i, &v) in vertices.iter().enumerate() {
             local[v as usize] = i as u32;
         }
-        let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
-        for &v in &vertices {
-            lo = lo.min(tin.position(v).truncate());
-            hi = hi.max(tin.position(v).truncate());
-        }
-        let tile_box = (lo, hi);
-        let (lo, hi) = (lo - halo, hi + halo);
-        let near = |p: glam::DVec3| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y;
-        let part = MeshPart {
+        let mut part = MeshPart {
             positions: vertices.iter().map(|&v| tin.position(v).to_array()).collect(),
             triangles: tris
                 .iter()
                 .map(|&t| tin.triangles()[t as usize].map(|v| local[v as usize]))
                 .collect(),
-            halo: (0..tin.num_vertices() as u32)
+            halo: Vec::new(),
+            far: Vec::new(),
+        };
+        if let (Some(beyond), Some(pyramid)) = (beyond, &pyramid) {
+            let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+            for &v in &vertices {
+                lo = lo.min(tin.position(v).truncate());
+                hi = hi.max(tin.position(v).truncate());
+            }
+            let tile_box = (lo, hi);
+            let (lo, hi) = (lo - beyond.halo, hi + beyond.halo);
+            let near = |p: glam::DVec3| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y;
+            part.halo = (0..tin.num_vertices() as u32)
                 .filter(|&v| local[v as usize] == u32::MAX && near(tin.position(v)))
                 .map(|v| tin.position(v).to_array())
-                .collect(),
-            far: far_vertices(&pyramid, far_block, (b.min.x, b.max.y), tile_box, (lo, hi), far_ratio)
-                .into_iter()
-                .filter(|&v| local[v as usize] == u32::MAX && !near(tin.position(v)))
-                .map(|v| tin.position(v).to_array())
-                .collect(),
-        };
+                .collect();
+            part.far = far_vertices(
+                pyramid,
+                beyond.far_block,
+                (b.min.x, b.max.y),
+                tile_box,
+                (lo, hi),
+                beyond.far_ratio,
+            )
+            .into_iter()
+            .filter(|&v| local[v as usize] == u32::MAX && !near(tin.position(v)))
+            .map(|v| tin.position(v).to_array())
+            .collect();
+        }
         for &v in &vertices {
             local[v as usize] = u32::MAX;
         }

@@ -147,6 +147,11 @@ pub struct PlanOptions {
     pub max_error: f64,
     /// The build parameters of every tile.
     pub params: BuildParams,
+    /// Tiles compute no horizons and no regions ([`pipeline::build_without_regions`]), for the run-time cullers
+    /// only: the quadtree grouping, no halo (`halo` 0), and no far field (a DEM's tiles get no far-field file, a
+    /// mesh's parts carry no halo or far-field points).
+    #[serde(default)]
+    pub no_regions: bool,
 }
 
 impl PlanOptions {
@@ -175,7 +180,21 @@ impl PlanOptions {
         // The build parameters every tile job would refuse, refused before any job runs.
         self.params
             .validate()
-            .map_err(|e| TilesError::Parameter(format!("{e:#}")))
+            .map_err(|e| TilesError::Parameter(format!("{e:#}")))?;
+        if self.no_regions {
+            if !matches!(self.params.grouping, pipeline::Grouping::Quadtree(_)) {
+                return bad(
+                    "--no-regions needs --grouping quadtree: crystal groups grow from the occlusion regions".into(),
+                );
+            }
+            if self.halo != 0 {
+                return bad(format!(
+                    "--halo {}: the tiles of a plan without regions (--no-regions) compute no horizons and read no halo",
+                    self.halo
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -320,7 +339,7 @@ pub fn make_plan(
                 rows: [rc[tr], rc[tr + 1]],
                 cols: [cc[tc], cc[tc + 1]],
                 part: None,
-                far: Some(tiles_dir.join(format!("far-{index:05}.bin"))),
+                far: far_name(&options, tiles_dir, index),
                 window_digest: None,
                 file_digest: None,
                 extent: None,
@@ -394,7 +413,7 @@ pub fn make_plan(
     }
     for (index, t) in kept.iter_mut().enumerate() {
         t.index = index;
-        t.far = Some(tiles_dir.join(format!("far-{index:05}.bin")));
+        t.far = far_name(&options, tiles_dir, index);
         t.output = tiles_dir.join(format!("tile-{index:05}.tch"));
     }
     let tiles = kept;
@@ -410,6 +429,11 @@ pub fn make_plan(
     Ok((plan, field, left_out))
 }
 
+/// The far-field file of a DEM's tile `index` in `tiles_dir`; none in a plan without regions.
+fn far_name(options: &PlanOptions, tiles_dir: &Path, index: usize) -> Option<PathBuf> {
+    (!options.no_regions).then(|| tiles_dir.join(format!("far-{index:05}.bin")))
+}
+
 /// Most squares a mesh's plan cuts its footprint into, for its tiles or for its far field's blocks.
 pub const MAX_MESH_SQUARES: usize = 1 << 24;
 
@@ -422,12 +446,14 @@ pub fn make_mesh_plan(
     tiles_dir: &Path,
 ) -> Result<(Plan, Vec<crate::part::MeshPart>), TilesError> {
     options.validate()?;
-    // Both cuts keep a list per square in memory, the empty ones too: refused before they are made when too many.
+    // Both cuts keep a list per square in memory, the empty ones too: refused before they are made when too many
+    // (a plan without regions makes no far field).
     let size = tin.bbox().size();
-    for (what, flag, side) in [
+    let cuts = [
         ("tile side", "--tile", options.tile),
         ("far-field block", "--far-block", options.far_block),
-    ] {
+    ];
+    for &(what, flag, side) in &cuts[..if options.no_regions { 1 } else { 2 }] {
         let squares = (size.x / side as f64).ceil().max(1.0) * (size.y / side as f64).ceil().max(1.0);
         if squares > MAX_MESH_SQUARES as f64 {
             return Err(TilesError::Parameter(format!(
@@ -437,13 +463,12 @@ pub fn make_mesh_plan(
             )));
         }
     }
-    let parts = crate::part::mesh_parts(
-        tin,
-        options.tile as f64,
-        options.halo as f64,
-        options.far_block as f64,
-        options.far_ratio,
-    );
+    let beyond = (!options.no_regions).then_some(crate::part::Beyond {
+        halo: options.halo as f64,
+        far_block: options.far_block as f64,
+        far_ratio: options.far_ratio,
+    });
+    let parts = crate::part::mesh_parts(tin, options.tile as f64, beyond);
     let mut tiles = Vec::with_capacity(parts.len());
     let mut out = Vec::with_capacity(parts.len());
     for (index, (tile_row, tile_col, part)) in parts.into_iter().enumerate() {
@@ -538,9 +563,14 @@ impl Plan {
                 Some(format!("its index is {}", t.index))
             } else {
                 match &plan.grid {
-                    Some(_) if t.part.is_some() || t.far.is_none() => {
-                        Some("a DEM's tile needs a far-field file and no part".to_string())
-                    }
+                    Some(_) if t.part.is_some() || t.far.is_none() != plan.options.no_regions => Some(
+                        if plan.options.no_regions {
+                            "a DEM's tile of a plan without regions has no far-field file and no part"
+                        } else {
+                            "a DEM's tile needs a far-field file and no part"
+                        }
+                        .to_string(),
+                    ),
                     Some(_) if !(t.rows[0] < t.rows[1] && t.cols[0] < t.cols[1]) => Some(format!(
                         "its rows {:?} and columns {:?} are not increasing ranges",
                         t.rows, t.cols

@@ -46,15 +46,25 @@ fn plan_grid_grouped(
         far_ratio: 2,
         max_error,
         params,
+        no_regions: false,
     };
+    write_plan(dir, &npy, options)
+}
+
+/// Plans the DEM `npy` in `dir` with `options`, writes the plan and its tiles' far-field files (a plan without
+/// regions has none), and returns the plan and its path.
+fn write_plan(dir: &Path, npy: &Path, options: PlanOptions) -> (Plan, PathBuf) {
     let (plan, field, _) =
-        tiles::make_plan(&npy, DemOptions::default(), options, Path::new("plan.tiles"), |_, _| {}).expect("plan");
+        tiles::make_plan(npy, DemOptions::default(), options, Path::new("plan.tiles"), |_, _| {}).expect("plan");
     let path = dir.join("plan.json");
     std::fs::write(&path, plan.to_json().expect("json")).expect("write plan");
     std::fs::create_dir_all(dir.join("plan.tiles")).expect("tiles dir");
     for spec in &plan.tiles {
-        let far = Plan::resolve(&path, spec.far.as_ref().expect("a DEM tile's far field"));
-        std::fs::write(far, plan.far_file(&field, spec).expect("far field").0).expect("write far field");
+        assert_eq!(spec.far.is_none(), plan.options.no_regions, "tile {}", spec.index);
+        if let Some(far) = &spec.far {
+            let far = Plan::resolve(&path, far);
+            std::fs::write(far, plan.far_file(&field, spec).expect("far field").0).expect("write far field");
+        }
     }
     (Plan::load(&path).expect("load"), path)
 }
@@ -326,6 +336,126 @@ fn quadtree_tiles_merge_into_a_quadtree_hierarchy() {
     assert_safe_culling(&h);
 }
 
+/// A plan without regions builds the quadtree's cells alone: no far-field files, tiles that read no halo, and a
+/// merged hierarchy that is the merge of the same plan with regions less its regions (the same mesh, nodes and
+/// circles), which the safe culler culls exactly as that one, and safely. A mesh's plan without regions writes parts
+/// with no halo and no far field, and merges into the same mesh.
+#[test]
+fn a_plan_without_regions_merges_into_the_quadtree_less_its_regions() {
+    let grid = synth(48 * 48, 7);
+    let grouping = pipeline::Grouping::Quadtree(pipeline::QuadtreeParams::default());
+    let with_dir = tempfile::tempdir().expect("tempdir");
+    let (plan, path) = plan_grid_grouped(with_dir.path(), &grid, 16, 3, 0.5, grouping.clone());
+    let with = build_all(&plan, &path);
+    assert!(with.has_regions());
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("terrain.npy");
+    std::fs::copy(with_dir.path().join("terrain.npy"), &npy).expect("copy");
+    std::fs::copy(
+        tin::dem::npy::sidecar_path(&with_dir.path().join("terrain.npy")),
+        tin::dem::npy::sidecar_path(&npy),
+    )
+    .expect("copy sidecar");
+    let options = PlanOptions {
+        halo: 0,
+        no_regions: true,
+        ..plan.options.clone()
+    };
+    let (bare_plan, bare_path) = write_plan(dir.path(), &npy, options);
+    assert_eq!(bare_plan.tiles.len(), 9);
+    let (bare, report) = tiles::build_tile(&bare_plan, &bare_path, 4, None).expect("tile 4");
+    assert!(report.build.without_regions && report.halo_points == 0 && report.far_points == 0);
+    assert!(!bare.has_regions());
+    let bare = build_all(&bare_plan, &bare_path);
+    assert!(!bare.has_regions());
+    assert_eq!(bare.mesh, with.mesh);
+    assert_eq!((&bare.roots, bare.always_visible), (&with.roots, with.always_visible));
+    assert_eq!(bare.nodes.len(), with.nodes.len());
+    for (i, (a, b)) in bare.nodes.iter().zip(&with.nodes).enumerate() {
+        assert!(a.regions.is_empty(), "node {i} has regions");
+        let mut b = b.clone();
+        b.regions.clear();
+        assert_eq!(*a, b, "node {i}");
+    }
+    let (safe_bare, safe_with) = (
+        SafeCuller::new(&bare, SafeParams::default()),
+        SafeCuller::new(&with, SafeParams::default()),
+    );
+    for (k, p) in bare.mesh.positions.iter().enumerate().step_by(97) {
+        let camera = Camera::all_around([p[0], p[1], p[2] + [2.0, 20.0, 200.0][k % 3]]);
+        assert_eq!(
+            safe_bare.cull(&camera).ranges,
+            safe_with.cull(&camera).ranges,
+            "eye at vertex {k}"
+        );
+    }
+    assert_safe_culling(&bare);
+
+    // A mesh's plan without regions: parts with nothing beyond their tile.
+    let tin = tin::synth_tin(&SynthOptions::new(2000, 3)).expect("synth");
+    let side = tin.bbox().size().x;
+    let options = PlanOptions {
+        tile: (side / 2.5) as usize,
+        halo: 0,
+        far_block: 1,
+        far_ratio: 0,
+        max_error: 0.0,
+        params: BuildParams {
+            grouping,
+            ..BuildParams::default()
+        },
+        no_regions: true,
+    };
+    let (plan, parts) =
+        tiles::make_mesh_plan(&tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
+    assert_eq!(plan.tiles.len(), 9);
+    assert!(parts.iter().all(|p| p.halo.is_empty() && p.far.is_empty()));
+    assert_eq!(
+        parts.iter().map(|p| p.triangles.len()).sum::<usize>(),
+        tin.num_triangles()
+    );
+}
+
+/// A plan without regions needs the quadtree grouping and no halo; the plan file says which tiles have far fields.
+#[test]
+fn a_plan_without_regions_is_refused_with_crystals_or_a_halo() {
+    let quadtree = pipeline::Grouping::Quadtree(pipeline::QuadtreeParams::default());
+    let options = |halo: usize, grouping: pipeline::Grouping| PlanOptions {
+        tile: 16,
+        halo,
+        far_block: 3,
+        far_ratio: 2,
+        max_error: 0.5,
+        params: BuildParams {
+            grouping,
+            ..BuildParams::default()
+        },
+        no_regions: true,
+    };
+    options(0, quadtree.clone()).validate().expect("valid");
+    let e = options(0, pipeline::Grouping::Crystal)
+        .validate()
+        .expect_err("crystals")
+        .to_string();
+    assert!(e.contains("--no-regions needs --grouping quadtree"), "{e}");
+    let e = options(3, quadtree).validate().expect_err("a halo").to_string();
+    assert!(e.contains("--halo 3") && e.contains("without regions"), "{e}");
+
+    // A plan with regions edited to say it has none (or the reverse) is malformed: its tiles' far fields disagree.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (plan, path) = plan_grid(dir.path(), &synth(24 * 24, 2), 12, 0, 0.5);
+    let mut doc: serde_json::Value = serde_json::from_str(&plan.to_json().expect("json")).expect("parse");
+    doc["options"]["no_regions"] = serde_json::Value::Bool(true);
+    doc["options"]["params"]["grouping"] =
+        serde_json::json!({"quadtree": {"depth": null, "cell": null, "max_bytes": null}});
+    std::fs::write(&path, doc.to_string()).expect("write");
+    let e = Plan::load(&path)
+        .expect_err("far fields in a plan without regions")
+        .to_string();
+    assert!(e.contains("without regions has no far-field file"), "{e}");
+}
+
 #[test]
 fn tiled_builds_are_deterministic_and_tiles_are_nodes_near_the_top() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -557,6 +687,7 @@ fn plan_mesh(dir: &Path, tin: &Tin, per_side: f64) -> (Plan, PathBuf, Vec<tiles:
         far_ratio: 2,
         max_error: 0.0,
         params,
+        no_regions: false,
     };
     let (plan, parts) =
         tiles::make_mesh_plan(tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
