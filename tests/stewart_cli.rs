@@ -367,6 +367,27 @@ fn a_quadtree_without_regions_culls_as_the_one_with_them() {
         warning.contains("holds no regions") && warning.contains("`stewart` culls nothing"),
         "{warning}"
     );
+    // `eval` scores `stewart` too, and says why it culls nothing; over the file with regions it says nothing.
+    let eval = |file: &std::path::Path| {
+        let out = ok(&[
+            "eval",
+            s(file),
+            "--viewpoints",
+            "1",
+            "--classes",
+            "ground",
+            "--no-per-triangle",
+            "--no-safe-regions",
+            "--json",
+        ]);
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let warning = eval(&without);
+    assert!(
+        warning.contains("holds no regions") && warning.contains("`stewart` culls nothing"),
+        "{warning}"
+    );
+    assert!(!eval(&with).contains("holds no regions"));
     let info = String::from_utf8(ok(&["info", s(&without)]).stdout).expect("UTF-8");
     assert!(info.contains("regions       none (built with --no-regions"), "{info}");
     let refused = dir.path().join("refused.tch");

@@ -91,13 +91,7 @@ pub fn run(args: &CullArgs, out: Output) -> Result<()> {
     args.method
         .check(&h)
         .with_context(|| format!("{}: cannot cull with `{}`", args.hierarchy.display(), args.method))?;
-    if matches!(args.method, CullMethod::Thesis | CullMethod::Stewart) && !h.has_regions() {
-        out.warn(format!(
-            "{} holds no regions (built with --no-regions?): `{}` culls nothing in it",
-            args.hierarchy.display(),
-            args.method
-        ));
-    }
+    super::culling_args::warn_if_no_regions(&args.hierarchy, &h, args.method, out);
     let params = args.safe.params()?;
     let culler = AnyCuller::with_params(&h, args.method, params);
     let mut eyes = match (&args.eye, &args.eyes) {

@@ -7,7 +7,19 @@ use anyhow::{Context, Result};
 use clap::Args;
 use cull::{CullMethod, MAX_COLUMNS_PER_FACE, MAX_PATCH, SafeParams, SafeParamsError};
 
+use super::Output;
 use super::cull_cmd::parse_point;
+
+/// Warns that `method` culls nothing in `h`, read from `path`, when it is a region test (`thesis`, `stewart`) and the
+/// file holds no regions (built with `--no-regions`).
+pub fn warn_if_no_regions(path: &Path, h: &cull::Hierarchy, method: CullMethod, out: Output) {
+    if matches!(method, CullMethod::Thesis | CullMethod::Stewart) && !h.has_regions() {
+        out.warn(format!(
+            "{} holds no regions (built with --no-regions?): `{method}` culls nothing in it",
+            path.display()
+        ));
+    }
+}
 
 /// The horizon cullers' run-time parameters (nothing of them is stored in the `.tch`): `--columns` for both `safe`
 /// and `lloyd-egbert`, the others for `safe` alone.

@@ -155,6 +155,13 @@ pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     if let Some(w) = tin::validate::small_terrain_warning(tin.positions()) {
         out.warn(format!("{}: {w}", args.hierarchy.display()));
     }
+    // The region test scored is the grouping's own: `stewart` over a quadtree, `thesis` over crystals.
+    let region_test = if h.build.grouping.is_quadtree() {
+        cull::CullMethod::Stewart
+    } else {
+        cull::CullMethod::Thesis
+    };
+    super::culling_args::warn_if_no_regions(&args.hierarchy, &h, region_test, out);
     let opts = EvalOptions {
         viewpoints: args.viewpoints,
         classes: args.classes.clone(),

@@ -78,6 +78,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     args.method
         .check(&h)
         .with_context(|| format!("{}: --method {}", args.hierarchy.display(), args.method))?;
+    super::culling_args::warn_if_no_regions(&args.hierarchy, &h, args.method, out);
     let tin = super::mesh_input::hierarchy_tin_of(&h, &args.hierarchy)?;
     ensure!(
         tin.num_triangles() > 0,

@@ -245,6 +245,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     }
     if culls {
         args.safe.check_method(args.method)?;
+        if let Some(h) = &terrain.hierarchy {
+            super::culling_args::warn_if_no_regions(&args.input, h, args.method, out);
+        }
     } else if args.cull_fov.is_some() {
         bail!(
             "--cull-fov: this render culls nothing (culling needs a hierarchy, and --eye with --view eye or orbit, or \

@@ -93,6 +93,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         args.method
             .check(&h)
             .with_context(|| format!("{}", args.input.display()))?;
+        super::culling_args::warn_if_no_regions(&args.input, &h, args.method, out);
         if let Some(eye) = args.eye {
             super::culling_args::Eyes::given(eye).check_not_below_ground(&h, false)?;
         }
