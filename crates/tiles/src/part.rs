@@ -71,6 +71,14 @@ pub fn mesh_parts(tin: &Tin, tile: f64, beyond: Option<Beyond>) -> Vec<(usize, u
         let (r, col) = (cell(b.max.y - c.y, 0.0, kr), cell(c.x, b.min.x, kc));
         members[r * kc + col].push(t as u32);
     }
+    // The vertices by the same squares, for the halo's look-up (by vertex index within each square).
+    let square_of = |p: glam::DVec3| cell(b.max.y - p.y, 0.0, kr) * kc + cell(p.x, b.min.x, kc);
+    let mut by_square: Vec<Vec<u32>> = vec![Vec::new(); if beyond.is_some() { kr * kc } else { 0 }];
+    if beyond.is_some() {
+        for v in 0..tin.num_vertices() as u32 {
+            by_square[square_of(tin.position(v))].push(v);
+        }
+    }
     // The far field: per square of `far_block` metres, its lowest vertex (the first in vertex order on ties), and
     // the min-pyramid of these squares.
     let z = |v: u32| tin.position(v).z;
@@ -120,10 +128,20 @@ pub fn mesh_parts(tin: &Tin, tile: f64, beyond: Option<Beyond>) -> Vec<(usize, u
             let tile_box = (lo, hi);
             let (lo, hi) = (lo - beyond.halo, hi + beyond.halo);
             let near = |p: glam::DVec3| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y;
-            part.halo = (0..tin.num_vertices() as u32)
-                .filter(|&v| local[v as usize] == u32::MAX && near(tin.position(v)))
-                .map(|v| tin.position(v).to_array())
-                .collect();
+            // The squares that meet the halo's box (`cell` is monotone, so they hold every vertex in it).
+            let mut halo = Vec::new();
+            for r in cell(b.max.y - hi.y, 0.0, kr)..=cell(b.max.y - lo.y, 0.0, kr) {
+                for c in cell(lo.x, b.min.x, kc)..=cell(hi.x, b.min.x, kc) {
+                    let square = &by_square[r * kc + c];
+                    halo.extend(
+                        square
+                            .iter()
+                            .filter(|&&v| local[v as usize] == u32::MAX && near(tin.position(v))),
+                    );
+                }
+            }
+            halo.sort_unstable();
+            part.halo = halo.iter().map(|&v| tin.position(v).to_array()).collect();
             part.far = far_vertices(
                 pyramid,
                 beyond.far_block,
@@ -184,4 +202,45 @@ fn far_vertices(
             Choice::Split
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The halo looked up square by square is every vertex of the mesh outside the tile and within `halo` of its
+    /// vertices' bounding box, in vertex order, whatever the halo's width against the tile's.
+    #[test]
+    fn the_halo_is_every_other_vertex_near_the_tile() {
+        let tin = tin::synth_tin(&tin::SynthOptions::new(1500, 4)).expect("synth");
+        let side = tin.bbox().size().x;
+        for (per_side, halo) in [(3.0, side / 20.0), (5.0, side / 3.0), (1.5, 0.0), (4.0, 2.0 * side)] {
+            let beyond = Beyond {
+                halo,
+                far_block: side / 10.0,
+                far_ratio: 2,
+            };
+            let parts = mesh_parts(&tin, side / per_side, Some(beyond));
+            assert!(parts.len() > 1);
+            for (_, _, part) in &parts {
+                let bits = |p: &[f64; 3]| p.map(f64::to_bits);
+                let own: std::collections::HashSet<[u64; 3]> = part.positions.iter().map(bits).collect();
+                let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+                for p in &part.positions {
+                    for k in 0..2 {
+                        lo[k] = lo[k].min(p[k]);
+                        hi[k] = hi[k].max(p[k]);
+                    }
+                }
+                let near = |p: &[f64; 3]| (0..2).all(|k| p[k] >= lo[k] - halo && p[k] <= hi[k] + halo);
+                let expect: Vec<[f64; 3]> = tin
+                    .positions()
+                    .iter()
+                    .map(|p| p.to_array())
+                    .filter(|p| !own.contains(&bits(p)) && near(p))
+                    .collect();
+                assert_eq!(part.halo, expect, "tiles of 1/{per_side}, halo {halo}");
+            }
+        }
+    }
 }
