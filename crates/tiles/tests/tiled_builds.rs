@@ -673,21 +673,37 @@ fn canonical(tin_positions: &[[f64; 3]], t: [u32; 3]) -> [[u64; 3]; 3] {
 /// Plans `tin` in `dir` in tiles of `1 / per_side` of its width (crystal grouping), writes the plan and its parts
 /// (each with a halo and a far field), and returns the plan, its path and the parts.
 fn plan_mesh(dir: &Path, tin: &Tin, per_side: f64) -> (Plan, PathBuf, Vec<tiles::part::MeshPart>) {
+    plan_mesh_with(dir, tin, per_side, false)
+}
+
+/// [`plan_mesh`], or without regions (quadtree grouping, parts with no halo and no far field).
+fn plan_mesh_with(
+    dir: &Path,
+    tin: &Tin,
+    per_side: f64,
+    no_regions: bool,
+) -> (Plan, PathBuf, Vec<tiles::part::MeshPart>) {
     let mut params = BuildParams {
         sectors: 8,
         subsectors: 2,
         ..BuildParams::default()
     };
     params.crystal.min_group = 4;
+    if no_regions {
+        params = BuildParams {
+            grouping: pipeline::Grouping::Quadtree(pipeline::QuadtreeParams::default()),
+            ..BuildParams::default()
+        };
+    }
     let side = tin.bbox().size().x;
     let options = PlanOptions {
         tile: (side / per_side) as usize,
-        halo: (side / 20.0) as usize,
+        halo: if no_regions { 0 } else { (side / 20.0) as usize },
         far_block: (side / 30.0) as usize,
         far_ratio: 2,
         max_error: 0.0,
         params,
-        no_regions: false,
+        no_regions,
     };
     let (plan, parts) =
         tiles::make_mesh_plan(tin, Path::new("t.obj"), options, Path::new("plan.tiles")).expect("mesh plan");
@@ -695,7 +711,7 @@ fn plan_mesh(dir: &Path, tin: &Tin, per_side: f64) -> (Plan, PathBuf, Vec<tiles:
     for (t, part) in plan.tiles.iter().zip(&parts) {
         let path = dir.join(t.part.as_ref().expect("part"));
         std::fs::write(path, part.to_bytes().expect("bytes")).expect("write part");
-        assert!(!part.halo.is_empty() && !part.far.is_empty());
+        assert_eq!(part.halo.is_empty() && part.far.is_empty(), no_regions);
     }
     let path = dir.join("plan.json");
     std::fs::write(&path, plan.to_json().expect("json")).expect("plan");
@@ -831,19 +847,38 @@ fn replace_scalar(v: &mut serde_json::Value, n: &mut usize, with: &serde_json::V
         .find_map(|(key, child)| replace_scalar(child, n, with).map(|at| format!("/{key}{at}")))
 }
 
-/// A plan of a small DEM or mesh, planned and written once: the plan's JSON and the directory of its files.
+/// A plan of a small DEM or mesh, with regions or without, planned and written once: the plan's JSON and the
+/// directory of its files.
 fn damageable_plan(mesh: bool) -> &'static (serde_json::Value, tempfile::TempDir) {
-    static PLANS: [std::sync::OnceLock<(serde_json::Value, tempfile::TempDir)>; 2] =
-        [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
-    PLANS[usize::from(mesh)].get_or_init(|| {
+    damageable(mesh, false)
+}
+
+/// [`damageable_plan`], or without regions.
+fn damageable(mesh: bool, no_regions: bool) -> &'static (serde_json::Value, tempfile::TempDir) {
+    static PLANS: [std::sync::OnceLock<(serde_json::Value, tempfile::TempDir)>; 4] = [
+        std::sync::OnceLock::new(),
+        std::sync::OnceLock::new(),
+        std::sync::OnceLock::new(),
+        std::sync::OnceLock::new(),
+    ];
+    PLANS[usize::from(mesh) + 2 * usize::from(no_regions)].get_or_init(|| {
         let dir = tempfile::tempdir().expect("tempdir");
         let plan = if mesh {
-            plan_mesh(
+            plan_mesh_with(
                 dir.path(),
                 &tin::synth_tin(&SynthOptions::new(400, 3)).expect("synth"),
                 1.9,
+                no_regions,
             )
             .0
+        } else if no_regions {
+            let quadtree = pipeline::Grouping::Quadtree(pipeline::QuadtreeParams::default());
+            let (plan, _) = plan_grid_grouped(dir.path(), &synth(33 * 33, 5), 16, 0, 0.5, quadtree);
+            let options = PlanOptions {
+                no_regions: true,
+                ..plan.options
+            };
+            write_plan(dir.path(), &dir.path().join("terrain.npy"), options).0
         } else {
             plan_grid(dir.path(), &synth(33 * 33, 5), 16, 4, 0.5).0
         };
@@ -869,12 +904,13 @@ fn run_plan(doc: &serde_json::Value, path: &Path) -> Result<Hierarchy, tiles::Ti
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
-    /// A plan (of a DEM or of a mesh) with any one value replaced, as a hand edit or a damaged copy may leave it, is
+    /// A plan (of a DEM or of a mesh, with regions or without) with any one value replaced, as a hand edit or a damaged copy may leave it, is
     /// refused when loaded, or its tiles are built and merged or refused with an error; never a panic. (Its JSON is
     /// not checksummed: the files it names are, and a window of the DEM by its digest.)
     #[test]
     fn a_plan_with_any_value_replaced_is_run_or_refused(
         mesh in any::<bool>(),
+        no_regions in any::<bool>(),
         which in 0usize..1_000_000,
         value in prop_oneof![
             any::<i64>().prop_map(serde_json::Value::from),
@@ -885,9 +921,10 @@ proptest! {
             Just(serde_json::Value::Null),
             "[a-z./]{0,6}".prop_map(serde_json::Value::from),
             Just(serde_json::json!([1, 2])),
+            any::<bool>().prop_map(serde_json::Value::from),
         ],
     ) {
-        let (doc, dir) = damageable_plan(mesh);
+        let (doc, dir) = damageable(mesh, no_regions);
         let mut damaged = doc.clone();
         let at = replace_scalar(&mut damaged, &mut (which % scalars(doc)), &value).expect("a scalar");
         // Each case its own plan file beside the shared tile files.
