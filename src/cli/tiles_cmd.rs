@@ -168,7 +168,8 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
         ];
         if let Some((flag, _)) = given.iter().find(|(_, g)| *g) {
             bail!(
-                "{flag}: a plan without regions (--no-regions) computes no horizons, so its tiles read no halo or far field"
+                "{flag}: a plan without regions (--no-regions) computes no horizons, so its tiles read no halo or \
+                 far field"
             );
         }
     }

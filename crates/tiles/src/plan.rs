@@ -189,7 +189,8 @@ impl PlanOptions {
             }
             if self.halo != 0 {
                 return bad(format!(
-                    "--halo {}: the tiles of a plan without regions (--no-regions) compute no horizons and read no halo",
+                    "--halo {}: the tiles of a plan without regions (--no-regions) compute no horizons and read no \
+                     halo",
                     self.halo
                 ));
             }
