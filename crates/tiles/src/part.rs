@@ -7,7 +7,7 @@
 //! beyond the tile: every other vertex within `halo` metres of the tile's vertices' bounding box, and the far
 //! field outside that: per square of `far_block` metres its lowest vertex, the squares growing with distance as a
 //! DEM's blocks do ([`crate::far_field`]). These are vertices of the mesh itself,
-//! so they lie on the terrain.
+//! so they lie on the terrain. The parts of a plan without regions, whose tiles sweep no horizons, carry neither.
 
 use serde::{Deserialize, Serialize};
 use tin::Tin;
