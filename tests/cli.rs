@@ -1647,7 +1647,8 @@ fn demo_refuses_dash_as_its_out_dir() {
 
 /// `view` checks what it would write and the method before a window opens: a screenshot over the input (which once
 /// replaced the hierarchy by a PNG), of another format or into a missing folder, `--screenshot-after` alone, and a
-/// method the hierarchy's grouping cannot take (as `render` refuses it) are errors, and nothing is written.
+/// method the hierarchy's grouping cannot take (as `render` refuses it) and `--no-regions` where `build` would refuse
+/// it are errors, and nothing is written.
 #[test]
 fn view_checks_its_screenshot_and_method_before_opening_a_window() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -1669,6 +1670,22 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         "needs a quadtree hierarchy",
     );
     fails_with(&["view", s(&tch), "--pvs-cell-size", "0"], "at least 1 m");
+    // Without regions a rebuild can only make a quadtree, and takes no horizon parameters.
+    let no_regions = "--no-regions needs --grouping quadtree";
+    fails_with(&["view", s(&tch), "--no-regions"], no_regions);
+    fails_with(&["view", s(&mesh("jacksboro-2k.obj")), "--no-regions"], no_regions);
+    fails_with(
+        &[
+            "view",
+            s(&tch),
+            "--no-regions",
+            "--grouping",
+            "quadtree",
+            "--sectors",
+            "8",
+        ],
+        "--no-regions computes no horizons",
+    );
     fails_with(
         &["view", s(&mesh("jacksboro-2k.obj")), "--truth"],
         "a mesh has no culler until it is built: add --rebuild",

@@ -19,15 +19,13 @@ fn skip(why: &str) {
     eprintln!("SKIP: {why}; viewer test not run (set TINCULL_REQUIRE_GPU=1 to make this an error)");
 }
 
-#[test]
-fn view_rebuilds_an_obj_and_shows_ground_truth() {
+/// Runs `tincull view INPUT ARGS --screenshot SHOT` under `xvfb-run`; its standard output, or `None` after the
+/// SKIP notice when there is no display or GPU.
+fn view(input: &std::path::Path, args: &[&str], shot: &std::path::Path) -> Option<String> {
     let Some(xvfb_run) = find_program("xvfb-run") else {
-        return skip("xvfb-run is not installed");
+        skip("xvfb-run is not installed");
+        return None;
     };
-    let dir = tempfile::tempdir().unwrap();
-    // The view where the truth once counted what lies behind the camera as false culls (59 of them).
-    let obj = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/jacksboro-2k.obj");
-    let shot = dir.path().join("shot.png");
     let out = Command::new(xvfb_run)
         .args([
             "-a",
@@ -36,9 +34,10 @@ fn view_rebuilds_an_obj_and_shows_ground_truth() {
             env!("CARGO_BIN_EXE_tincull"),
             "view",
         ])
-        .arg(&obj)
-        .args(["--rebuild", "--truth", "--size", "1000x700", "--screenshot"])
-        .arg(&shot)
+        .arg(input)
+        .args(args)
+        .arg("--screenshot")
+        .arg(shot)
         .env_remove("WAYLAND_DISPLAY")
         .output()
         .unwrap();
@@ -47,14 +46,34 @@ fn view_rebuilds_an_obj_and_shows_ground_truth() {
     if !out.status.success() {
         // Only a missing display or GPU is a reason to skip; any other failure is a failure.
         if stderr.contains("viewer window") || stderr.contains("no GPU adapter") || stderr.contains("xvfb-run") {
-            return skip(&format!(
+            skip(&format!(
                 "the viewer could not open a window ({}): {stderr}",
                 out.status
             ));
+            return None;
         }
         panic!("tincull view failed ({}):\n{stdout}\n{stderr}", out.status);
     }
+    Some(stdout.into_owned())
+}
+
+fn bundled(name: &str) -> PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("meshes")
+        .join(name)
+}
+
+#[test]
+fn view_rebuilds_an_obj_and_shows_ground_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    // The view where the truth once counted what lies behind the camera as false culls (59 of them).
+    let obj = bundled("jacksboro-2k.obj");
+    let shot = dir.path().join("shot.png");
+    let Some(stdout) = view(&obj, &["--rebuild", "--truth", "--size", "1000x700"], &shot) else {
+        return;
+    };
     assert!(stdout.contains("built the hierarchy 1 time;"), "{stdout}");
+    assert!(!stdout.contains("without regions"), "{stdout}");
     assert!(stdout.contains("ground truth:"), "{stdout}");
     // The default culler is safe, and the truth of the default 90° view counts only what lies in it: what the view
     // leaves out is not a false cull (it once counted those behind the camera).
@@ -66,4 +85,54 @@ fn view_rebuilds_an_obj_and_shows_ground_truth() {
     colours.sort_unstable();
     colours.dedup();
     assert!(colours.len() > 50, "{} colours", colours.len());
+}
+
+/// A rebuild keeps what the hierarchy shown is: a quadtree without regions is rebuilt without them (not with the
+/// default crystal grouping, nor with regions), one with regions with them; `--no-regions` builds a mesh's quadtree
+/// without them.
+#[test]
+fn view_rebuilds_a_quadtree_as_it_was_built() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = bundled("jacksboro-2k.obj");
+    let build = |name: &str, extra: &[&str]| {
+        let tch = dir.path().join(name);
+        let out = Command::new(env!("CARGO_BIN_EXE_tincull"))
+            .arg("build")
+            .arg(&obj)
+            .args(["--grouping", "quadtree", "--depth", "3", "-q", "-o"])
+            .arg(&tch)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        tch
+    };
+    let bare = build("bare.tch", &["--no-regions"]);
+    let full = build("full.tch", &[]);
+    let shot = dir.path().join("shot.png");
+    let cases: [(&std::path::Path, &[&str], bool); 3] = [
+        (&bare, &["--rebuild"], false),
+        (&full, &["--rebuild"], true),
+        (
+            &obj,
+            &["--rebuild", "--grouping", "quadtree", "--depth", "3", "--no-regions"],
+            false,
+        ),
+    ];
+    for (input, args, regions) in cases {
+        let Some(stdout) = view(input, args, &shot) else {
+            return;
+        };
+        // Depth 3: 64 cells, all holding triangles on this terrain.
+        assert!(
+            stdout.contains("built the hierarchy 1 time; the last has 64 groups"),
+            "{stdout}"
+        );
+        assert_eq!(
+            stdout.contains("without regions"),
+            !regions,
+            "{}: {stdout}",
+            input.display()
+        );
+    }
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use viewer::app::{ScreenshotRequest, Source, Startup, ViewerOptions};
+use viewer::app::{RebuildParams, ScreenshotRequest, Source, Startup, ViewerOptions};
 
 use super::Output;
 use super::build_cmd::ParamArgs;
@@ -32,9 +32,15 @@ pub struct ViewArgs {
     /// How to import a mesh input.
     #[command(flatten)]
     pub import: super::mesh_input::ImportArgs,
-    /// Initial build parameters of the side panel (the hierarchy's own, when it records them).
+    /// Initial build parameters of the side panel (the hierarchy's own, when it records them: its grouping too,
+    /// unless --grouping is given).
     #[command(flatten)]
     pub params: ParamArgs,
+    /// With a quadtree (--grouping quadtree, or a quadtree hierarchy): Rebuild computes no horizons and no regions,
+    /// as `build --no-regions` does (the cells alone, for the `safe` and `lloyd-egbert` cullers). A hierarchy without
+    /// regions is rebuilt so without it; the side panel switches it too.
+    #[arg(long)]
+    pub no_regions: bool,
     /// Build the hierarchy with the panel's parameters right away, in the background (as the Rebuild button does).
     #[arg(long)]
     pub rebuild: bool,
@@ -87,6 +93,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         );
     }
     let mut params = args.params.resolve(None)?;
+    let mut without_regions = args.no_regions;
     let source = if is_tch {
         args.import.mesh(&args.input).refuse_for_hierarchy()?;
         let h = super::mesh_input::load_hierarchy(&args.input)?;
@@ -110,6 +117,18 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             c.rng_seed = p.rng_seed.unwrap_or(b.rng_seed);
             params.undersampling = p.fixed.undersampling.or(b.undersampling);
         }
+        if p.fixed.grouping.is_none() {
+            // Rebuilt as it was built: a quadtree at its depth (a byte budget it was built with is not recorded),
+            // without regions if it has none.
+            if let cull::Grouping::Quadtree { built_depth, .. } = b.grouping {
+                params.grouping = pipeline::Grouping::Quadtree(pipeline::QuadtreeParams {
+                    depth: Some(built_depth),
+                    ..Default::default()
+                });
+                without_regions |= !h.has_regions();
+            }
+        }
+        check_no_regions(args, &params.grouping)?;
         Source::Hierarchy(h)
     } else {
         // The hierarchy comes from the panel's parameters (Rebuild): the method must fit their grouping.
@@ -123,6 +142,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         args.method
             .check_grouping(grouping)
             .with_context(|| format!("{}", args.input.display()))?;
+        check_no_regions(args, &params.grouping)?;
         let (tin, _) = args.import.mesh(&args.input).load(out)?;
         if let Some(eye) = args.eye {
             super::culling_args::Eyes::given(eye).check_not_below_mesh(&tin, false)?;
@@ -139,7 +159,10 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     let summary = viewer::app::run(ViewerOptions {
         title,
         source,
-        params,
+        params: RebuildParams {
+            build: params,
+            without_regions,
+        },
         rebuild: None,
         // Exports go beside the input under another name (`NAME-view.tch`): never over the terrain shown.
         export_stem: args.input.with_file_name(format!(
@@ -170,15 +193,28 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
     }
     if summary.rebuilds > 0 {
         out.say(format!(
-            "built the hierarchy {}; the last has {}",
+            "built the hierarchy {}; the last has {}{}",
             count(summary.rebuilds as usize, "time"),
-            count(summary.groups, "group")
+            count(summary.groups, "group"),
+            if summary.regions { "" } else { ", without regions" }
         ));
     }
     if let Some((visible, false_culls)) = summary.truth {
         out.say(format!(
             "ground truth: {visible} visible triangles, {false_culls} false culls"
         ));
+    }
+    Ok(())
+}
+
+/// Refuses `--no-regions` where `build --no-regions` would ([`super::build_cmd::check_no_regions`]): with `grouping`
+/// (the one the side panel starts with: given, or the hierarchy's) and the options given on the command line, not
+/// the values read from a hierarchy.
+fn check_no_regions(args: &ViewArgs, grouping: &pipeline::Grouping) -> Result<()> {
+    if args.no_regions {
+        let mut given = args.params.resolve(None)?;
+        given.grouping = grouping.clone();
+        super::build_cmd::check_no_regions(&given)?;
     }
     Ok(())
 }

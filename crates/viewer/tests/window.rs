@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use std::sync::Arc;
 
-use viewer::app::{BuildParams, Progress, RebuildFn, ScreenshotRequest, Source, Startup, ViewerOptions};
+use viewer::app::{Progress, RebuildFn, RebuildParams, ScreenshotRequest, Source, Startup, ViewerOptions};
 use viewer::{RgbaImage, gpu_required};
 
 const CHILD_ENV: &str = "TINCULL_VIEWER_TEST_CHILD";
@@ -76,7 +76,7 @@ fn child(out: &Path) {
     // A slow stand-in for the pipeline: reports progress for about a second, then returns the fixture again.
     let rebuild: RebuildFn = Arc::new(|tin, params, progress: Progress| {
         assert_eq!(tin.num_triangles(), 32, "the rebuild gets the shown terrain");
-        assert_eq!(params.sectors, 16);
+        assert_eq!((params.build.sectors, params.without_regions), (16, false));
         for step in 0..=10 {
             progress("grouping", step, 10);
             std::thread::sleep(Duration::from_millis(100));
@@ -86,7 +86,7 @@ fn child(out: &Path) {
     let result = viewer::app::run(ViewerOptions {
         title: "tincull viewer test".into(),
         source: Source::Hierarchy(h),
-        params: BuildParams::default(),
+        params: RebuildParams::default(),
         rebuild: Some(rebuild),
         export_stem: std::env::temp_dir().join("tincull-viewer-test"),
         inputs: Vec::new(),

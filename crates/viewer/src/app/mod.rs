@@ -5,8 +5,8 @@
 //!
 //! The 3-D view is rendered by [`crate::render::Renderer`] into its own texture (depth-tested, reversed Z) on the
 //! window's wgpu device and shown with egui's `register_native_texture`. Rebuilds run the `pipeline` crate
-//! ([`pipeline::build`]; a test may pass a stand-in, [`RebuildFn`]); the exports use `cull` (`.tch`) and
-//! [`pipeline::export`] (JSON, grouped OBJ).
+//! ([`pipeline::build`], or [`pipeline::build_without_regions`] for a quadtree without regions; a test may pass a
+//! stand-in, [`RebuildFn`]); the exports use `cull` (`.tch`) and [`pipeline::export`] (JSON, grouped OBJ).
 //!
 //! Controls: drag in the view to look around (eye) or rotate (orbit); W/S/A/D move the viewpoint, R/F raise and
 //! lower it; the scroll wheel zooms the orbit or moves the eye forward; click on the map to place the viewpoint.
@@ -45,11 +45,29 @@ pub type Progress = pipeline::BuildProgress;
 /// Builds a hierarchy for a terrain with the given parameters, reporting progress: [`pipeline_rebuild`] or a
 /// stand-in (tests use a slow fake to check that the window stays responsive).
 pub type RebuildFn =
-    Arc<dyn Fn(&Tin, &BuildParams, Progress) -> std::result::Result<Hierarchy, DynError> + Send + Sync>;
+    Arc<dyn Fn(&Tin, &RebuildParams, Progress) -> std::result::Result<Hierarchy, DynError> + Send + Sync>;
 
-/// The rebuild of the side panel: the whole pipeline ([`pipeline::build`]) with the panel's parameters.
+/// What the side panel's Rebuild builds.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RebuildParams {
+    /// The pipeline's parameters: grouping, sectors, subsectors and the crystal grouping's.
+    pub build: BuildParams,
+    /// Whether to compute the horizons and regions (`tincull build` without `--no-regions`). Without them only a
+    /// quadtree can be built ([`pipeline::build_without_regions`]), for the run-time cullers.
+    pub without_regions: bool,
+}
+
+/// The rebuild of the side panel: the whole pipeline ([`pipeline::build`]) with the panel's parameters, or the
+/// quadtree's cells alone ([`pipeline::build_without_regions`]) when they ask for no regions.
 pub fn pipeline_rebuild() -> RebuildFn {
-    Arc::new(|tin, params, progress| Ok(pipeline::build(tin, params, Some(progress))?.hierarchy))
+    Arc::new(|tin, params, progress| {
+        let build = if params.without_regions {
+            pipeline::build_without_regions(tin, &params.build, Some(progress))?
+        } else {
+            pipeline::build(tin, &params.build, Some(progress))?
+        };
+        Ok(build.hierarchy)
+    })
 }
 
 /// What the viewer shows first.
@@ -95,6 +113,9 @@ pub struct RunSummary {
     pub triangles: usize,
     /// Leaf groups of the hierarchy shown last.
     pub groups: usize,
+    /// Whether the hierarchy shown last has regions (none for a quadtree built without them; `false` for a plain
+    /// mesh).
+    pub regions: bool,
     /// The last ground truth: `(visible triangles, false culls)`.
     pub truth: Option<(usize, usize)>,
     /// The screenshot asked for: `None` when none was taken (the window closed first), else whether it was written
@@ -109,7 +130,7 @@ pub struct ViewerOptions {
     /// The terrain.
     pub source: Source,
     /// Initial build parameters (shown in the side panel; the undersampling radius is kept as given).
-    pub params: BuildParams,
+    pub params: RebuildParams,
     /// A stand-in for the pipeline; `None` rebuilds with [`pipeline_rebuild`].
     pub rebuild: Option<RebuildFn>,
     /// Path stem of exports (`STEM.tch`, `STEM.json`, `STEM.obj`).
@@ -273,7 +294,7 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
 
 struct Setup {
     model: Model,
-    params: BuildParams,
+    params: RebuildParams,
     rebuild: RebuildFn,
     export_stem: PathBuf,
     inputs: Vec<PathBuf>,
@@ -343,7 +364,7 @@ struct ViewerApp {
     main: View,
     map: View,
     map_view: MapView,
-    params: BuildParams,
+    params: RebuildParams,
     rebuild: RebuildFn,
     export_stem: String,
     /// Files the exports never write over.
@@ -866,6 +887,12 @@ impl eframe::App for ViewerApp {
             s.frames_during_rebuild += u64::from(self.rebuild_job.is_some());
             s.triangles = self.model.terrain.num_triangles();
             s.groups = self.model.terrain.groups;
+            s.regions = self
+                .model
+                .terrain
+                .hierarchy
+                .as_ref()
+                .is_some_and(Hierarchy::has_regions);
         }
         let ready = self.startup_step(&ctx);
         self.screenshot_step(&ctx, ready);
@@ -986,6 +1013,44 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The panel's rebuild runs the pipeline the parameters name: with regions (`pipeline::build`), or for a quadtree
+    /// without them the cells alone (`pipeline::build_without_regions`), the same hierarchy either way but its
+    /// regions; a crystal grouping without regions is an error, not a build with them.
+    #[test]
+    fn the_rebuild_builds_with_or_without_regions_as_asked() {
+        let (tin, _) = bundled();
+        let rebuild = super::pipeline_rebuild();
+        let progress: super::Progress = std::sync::Arc::new(|_: &str, _, _| {});
+        let quadtree = pipeline::BuildParams {
+            grouping: pipeline::Grouping::Quadtree(pipeline::QuadtreeParams {
+                depth: Some(3),
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let rebuilt = |build: &pipeline::BuildParams, without_regions| {
+            let params = super::RebuildParams {
+                build: build.clone(),
+                without_regions,
+            };
+            rebuild(&tin, &params, progress.clone())
+        };
+        let with = rebuilt(&quadtree, false).expect("with regions");
+        let without = rebuilt(&quadtree, true).expect("without regions");
+        assert!(with.has_regions() && !without.has_regions());
+        assert_eq!(
+            without,
+            pipeline::build_without_regions(&tin, &quadtree, None)
+                .expect("build")
+                .hierarchy
+        );
+        assert_eq!(with.mesh, without.mesh);
+        assert_eq!(with.nodes.len(), without.nodes.len());
+        let crystal = pipeline::BuildParams::default();
+        assert!(rebuilt(&crystal, false).expect("crystal").has_regions());
+        assert!(rebuilt(&crystal, true).is_err());
     }
 
     /// Ground at height 100 on x in [0, 10], none beyond.

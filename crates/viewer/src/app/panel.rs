@@ -8,8 +8,9 @@ use cull::{AnyCuller, CullMethod};
 use eframe::egui;
 use glam::{Vec2, Vec3};
 use pipeline::export::{mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
+use pipeline::{Grouping, QuadtreeParams};
 
-use super::{ViewMode, ViewerApp};
+use super::{RebuildParams, ViewMode, ViewerApp};
 use crate::scene::ColourMode;
 
 impl ViewerApp {
@@ -297,36 +298,74 @@ impl ViewerApp {
 
     pub(super) fn rebuild_ui(&mut self, ui: &mut egui::Ui) {
         ui.label("Build parameters");
-        let p = &mut self.params;
+        let RebuildParams {
+            build: p,
+            without_regions,
+        } = &mut self.params;
         egui::Grid::new("params").num_columns(2).show(ui, |ui| {
-            ui.label("sectors");
-            ui.add(egui::DragValue::new(&mut p.sectors).range(1..=1024));
+            ui.label("grouping");
+            let mut quadtree = matches!(p.grouping, Grouping::Quadtree(_));
+            ui.horizontal(|ui| {
+                ui.radio_value(&mut quadtree, false, "crystal");
+                ui.radio_value(&mut quadtree, true, "quadtree");
+            });
             ui.end_row();
-            ui.label("subsectors");
-            ui.add(egui::DragValue::new(&mut p.subsectors).range(1..=64));
-            ui.end_row();
-            ui.label("seeds (0 = default)");
-            let mut seeds = p.crystal.seeds.unwrap_or(0);
-            if ui.add(egui::DragValue::new(&mut seeds).range(0..=1_000_000)).changed() {
-                p.crystal.seeds = (seeds > 0).then_some(seeds);
+            match (&p.grouping, quadtree) {
+                (Grouping::Crystal, true) => p.grouping = Grouping::Quadtree(QuadtreeParams::default()),
+                (Grouping::Quadtree(_), false) => {
+                    // Crystal groups grow from the regions.
+                    p.grouping = Grouping::Crystal;
+                    *without_regions = false;
+                }
+                _ => {}
             }
-            ui.end_row();
-            ui.label("orphan passes");
-            ui.add(egui::DragValue::new(&mut p.crystal.orphan_passes).range(0..=100));
-            ui.end_row();
-            ui.label("min group");
-            ui.add(egui::DragValue::new(&mut p.crystal.min_group).range(1..=100_000));
-            ui.end_row();
-            ui.label("max expanse");
-            ui.add(
-                egui::DragValue::new(&mut p.crystal.max_expanse)
-                    .range(0.001..=1.0)
-                    .speed(0.005),
-            );
-            ui.end_row();
-            ui.label("rng seed");
-            ui.add(egui::DragValue::new(&mut p.crystal.rng_seed));
-            ui.end_row();
+            if let Grouping::Quadtree(q) = &mut p.grouping {
+                ui.label("finest depth (0 = auto)");
+                let mut depth = q.depth.unwrap_or(0);
+                if ui.add(egui::DragValue::new(&mut depth).range(0..=16)).changed() {
+                    q.depth = (depth > 0).then_some(depth);
+                    q.cell = None;
+                }
+                ui.end_row();
+                ui.label("regions");
+                let mut regions = !*without_regions;
+                ui.checkbox(&mut regions, "horizons and regions")
+                    .on_hover_text("off: the cells alone, for the safe and lloyd-egbert cullers (much faster)");
+                *without_regions = !regions;
+                ui.end_row();
+            }
+            if !*without_regions {
+                ui.label("sectors");
+                ui.add(egui::DragValue::new(&mut p.sectors).range(4..=1024));
+                ui.end_row();
+                ui.label("subsectors");
+                ui.add(egui::DragValue::new(&mut p.subsectors).range(1..=64));
+                ui.end_row();
+            }
+            if matches!(p.grouping, Grouping::Crystal) {
+                ui.label("seeds (0 = default)");
+                let mut seeds = p.crystal.seeds.unwrap_or(0);
+                if ui.add(egui::DragValue::new(&mut seeds).range(0..=1_000_000)).changed() {
+                    p.crystal.seeds = (seeds > 0).then_some(seeds);
+                }
+                ui.end_row();
+                ui.label("orphan passes");
+                ui.add(egui::DragValue::new(&mut p.crystal.orphan_passes).range(0..=100));
+                ui.end_row();
+                ui.label("min group");
+                ui.add(egui::DragValue::new(&mut p.crystal.min_group).range(1..=100_000));
+                ui.end_row();
+                ui.label("max expanse");
+                ui.add(
+                    egui::DragValue::new(&mut p.crystal.max_expanse)
+                        .range(0.001..=1.0)
+                        .speed(0.005),
+                );
+                ui.end_row();
+                ui.label("rng seed");
+                ui.add(egui::DragValue::new(&mut p.crystal.rng_seed));
+                ui.end_row();
+            }
         });
         match &self.rebuild_job {
             Some(job) => {
