@@ -88,8 +88,8 @@ fn view_rebuilds_an_obj_and_shows_ground_truth() {
 }
 
 /// A rebuild keeps what the hierarchy shown is: a quadtree without regions is rebuilt without them (not with the
-/// default crystal grouping, nor with regions), one with regions with them; `--no-regions` builds a mesh's quadtree
-/// without them.
+/// default crystal grouping, nor with regions), one with regions with them; `--no-regions` rebuilds either, or a
+/// mesh's quadtree, without them.
 #[test]
 fn view_rebuilds_a_quadtree_as_it_was_built() {
     let dir = tempfile::tempdir().unwrap();
@@ -110,9 +110,10 @@ fn view_rebuilds_a_quadtree_as_it_was_built() {
     let bare = build("bare.tch", &["--no-regions"]);
     let full = build("full.tch", &[]);
     let shot = dir.path().join("shot.png");
-    let cases: [(&std::path::Path, &[&str], bool); 3] = [
+    let cases: [(&std::path::Path, &[&str], bool); 4] = [
         (&bare, &["--rebuild"], false),
         (&full, &["--rebuild"], true),
+        (&full, &["--rebuild", "--no-regions"], false),
         (
             &obj,
             &["--rebuild", "--grouping", "quadtree", "--depth", "3", "--no-regions"],
