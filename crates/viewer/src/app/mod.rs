@@ -52,8 +52,8 @@ pub type RebuildFn =
 pub struct RebuildParams {
     /// The pipeline's parameters: grouping, sectors, subsectors and the crystal grouping's.
     pub build: BuildParams,
-    /// Whether to compute the horizons and regions (`tincull build` without `--no-regions`). Without them only a
-    /// quadtree can be built ([`pipeline::build_without_regions`]), for the run-time cullers.
+    /// Whether to build without horizons and regions (`tincull build --no-regions`): only a quadtree can be built so
+    /// ([`pipeline::build_without_regions`]), for the run-time cullers.
     pub without_regions: bool,
 }
 

@@ -327,6 +327,12 @@ impl ViewerApp {
                     q.cell = None;
                 }
                 ui.end_row();
+                if let Some(cell) = q.cell {
+                    // From --cell-size: it sets the finest level until a depth is chosen.
+                    ui.label("finest cell");
+                    ui.label(format!("{} m", tin::compact_number(cell)));
+                    ui.end_row();
+                }
                 ui.label("regions");
                 let mut regions = !*without_regions;
                 ui.checkbox(&mut regions, "horizons and regions")
