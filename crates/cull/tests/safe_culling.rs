@@ -740,6 +740,28 @@ proptest! {
         assert_safe("random", &tin, &eyes);
     }
 
+    /// Eyes far beyond the footprint (a camera flying towards a tile, or culling a neighbouring one): from 1.5 to
+    /// 2,000 times the 500 m footprint away, at heights from below the lowest vertex to far above the highest, and
+    /// level with the highest vertex, where every sight line grazes the crests.
+    #[test]
+    fn eyes_far_outside_the_footprint_have_no_false_culls(
+        seed in any::<u64>(),
+        n in 20usize..120,
+        rough in 0.0f64..3.0,
+    ) {
+        let mut next = splitmix(seed);
+        let Some(tin) = random_tin(&mut next, n, rough) else { return Ok(()) };
+        let b = tin.bbox();
+        let c = (b.min + b.max) * 0.5;
+        let mut eyes = Vec::new();
+        for (k, dist) in [750.0, 1_500.0, 5_000.0, 50_000.0, 1.0e6].into_iter().enumerate() {
+            let a = TAU * next();
+            let z = [b.max.z, b.min.z - 5.0, b.max.z + 1.0, b.max.z + 0.25 * dist, (b.min.z + b.max.z) * 0.5][k];
+            eyes.push(DVec3::new(c.x + dist * a.cos(), c.y + dist * a.sin(), z));
+        }
+        assert_safe("far eyes", &tin, &eyes);
+    }
+
     /// Degenerate terrains: an exact grid (every cell's four corners co-circular, so the Delaunay diagonals are
     /// ties) with heights on a few terraces (plateaus, and one-cell steps between them), some samples missing; eyes
     /// on vertices at their exact height (on a plateau, so sight lines graze it), just above, and off the terrain.
