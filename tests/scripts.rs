@@ -61,6 +61,7 @@ fn every_script_has_help_and_refuses_arguments_it_does_not_take() {
         ("fuzz", "Runs the libFuzzer targets of fuzz/", true),
         ("scale", "Scale measurement", true),
         ("hunt", "False-cull hunt", true),
+        ("soak", "Soak test of the safe cullers", true),
         ("tiles-safety", "Safety of tiled builds on real terrain", true),
     ];
     for (name, description, takes_arguments) in scripts {
