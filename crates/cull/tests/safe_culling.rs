@@ -9,7 +9,7 @@ use std::f64::consts::TAU;
 
 mod common;
 
-use common::{grid_tin, hierarchy_of, notch, random_tin, splitmix};
+use common::{grid_tin, hierarchy_of, notch, random_tin, random_tin_at, splitmix};
 use cull::{AnyCuller, Camera, Grouping, LloydEgbertCuller, SafeCuller, SafeParams};
 use glam::DVec3;
 use proptest::prelude::*;
@@ -738,6 +738,31 @@ proptest! {
             eyes.push(DVec3::new(xy.x, xy.y, ground + [0.0, 0.5, 2.0, 10.0, 60.0, -3.0][k]));
         }
         assert_safe("random", &tin, &eyes);
+    }
+
+    /// The same random TINs at UTM-sized coordinates (up to 900 km east, 10,000 km north) and altitudes from below sea
+    /// level to 8,000 m, where a coordinate's rounding is a nanometre and the margins must still cover it; eyes as in
+    /// `random_tins_have_no_false_culls`, relative to the moved terrain.
+    #[test]
+    fn random_tins_far_from_the_origin_have_no_false_culls(
+        seed in any::<u64>(),
+        n in 20usize..120,
+        rough in 0.0f64..3.0,
+        east in 1.0e5f64..9.0e5,
+        north in 1.0e6f64..1.0e7,
+        up in prop_oneof![Just(-430.0f64), Just(2_500.0), Just(8_000.0)],
+    ) {
+        let mut next = splitmix(seed);
+        let offset = DVec3::new(east, north, up);
+        let Some(tin) = random_tin_at(&mut next, n, rough, offset) else { return Ok(()) };
+        let loc = truth::Locator::new(&tin);
+        let mut eyes = Vec::new();
+        for k in 0..6 {
+            let xy = glam::DVec2::new(east + next() * 600.0 - 50.0, north + next() * 600.0 - 50.0);
+            let ground = loc.ground_height(&tin, xy).unwrap_or(up);
+            eyes.push(DVec3::new(xy.x, xy.y, ground + [0.0, 0.5, 2.0, 10.0, 60.0, -3.0][k]));
+        }
+        assert_safe("random, far from the origin", &tin, &eyes);
     }
 
     /// Eyes far beyond the footprint (a camera flying towards a tile, or culling a neighbouring one): from 1.5 to

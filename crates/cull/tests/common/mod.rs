@@ -147,10 +147,16 @@ pub fn splitmix(seed: u64) -> impl FnMut() -> f64 {
 /// A random TIN of `n` points over 500 m × 500 m: rolling hills plus `rough` × 15 m of noise; `None` when the points
 /// do not triangulate.
 pub fn random_tin(next: &mut impl FnMut() -> f64, n: usize, rough: f64) -> Option<Tin> {
+    random_tin_at(next, n, rough, DVec3::ZERO)
+}
+
+/// [`random_tin`] moved by `offset` (the points are generated first, then moved, so the same draws give the same
+/// terrain at another place).
+pub fn random_tin_at(next: &mut impl FnMut() -> f64, n: usize, rough: f64, offset: DVec3) -> Option<Tin> {
     let pts: Vec<DVec3> = (0..n)
         .map(|_| {
             let (x, y) = (next() * 500.0, next() * 500.0);
-            DVec3::new(x, y, 20.0 * (x / 60.0).sin() * (y / 80.0).cos() + rough * 15.0 * next())
+            DVec3::new(x, y, 20.0 * (x / 60.0).sin() * (y / 80.0).cos() + rough * 15.0 * next()) + offset
         })
         .collect();
     triangulate(&pts, DedupePolicy::Reject).ok().map(|(tin, _)| tin)
