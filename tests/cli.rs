@@ -1281,8 +1281,8 @@ fn contradictory_or_empty_options_are_errors() {
         "j2k.tch: a binary file, not a text file of eye positions",
     );
 
-    // Eyes from which nothing is hidden (10,000 km up, the exact checker's reach): no mean of the occlusion captured (it
-    // printed the empty sum's "-0.000").
+    // Eyes from which nothing is hidden (10,000 km up, the exact checker's reach): no mean of the occlusion captured
+    // (it printed the empty sum's "-0.000").
     let png = dir.path().join("high.png");
     let o = ok(&[
         "failmap",

@@ -1,6 +1,7 @@
 //! The bodies of the fuzz targets: each takes arbitrary bytes and must never panic (errors are fine).
 //!
-//! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies (the second with y up).
+//! - `obj_import`: [`tin::parse_obj`] in both modes (re-triangulate, keep faces) and both duplicate policies (the
+//!   second with y up).
 //! - `dem_readers`: the `.npy`, `.asc`, `.hgt`, `.png` and GeoTIFF parsers of `tin::dem`.
 //! - `geotiff`: [`tin::dem::geotiff::parse_geotiff`] alone (TIFF structure, GeoKeys, decompression, predictors),
 //!   with no band and with band 2 chosen; a grid that loads is simplified a little.

@@ -43,9 +43,9 @@ pub struct SafeArgs {
     /// stands, largest first, split at most ⌈N/8⌉ more times, and those left are tested once more, nearest first,
     /// behind the terrain's profiles along the grid-cell edges around the ones drawn before them (at most ⌈N/8⌉
     /// segments) and otherwise drawn whole: the cost of a cull is bounded whatever the view, at the price of drawing
-    /// more in views that see much terrain (never of culling a visible triangle). The default caps views that see most of a
-    /// 1M-vertex terrain (from the sky) and is not reached by smaller or less open views; smaller budgets make culls
-    /// of a 1M-vertex terrain cheaper, drawing much more [default: 200000].
+    /// more in views that see much terrain (never of culling a visible triangle). The default caps views that see most
+    /// of a 1M-vertex terrain (from the sky) and is not reached by smaller or less open views; smaller budgets make
+    /// culls of a 1M-vertex terrain cheaper, drawing much more [default: 200000].
     #[arg(long, value_name = "N")]
     pub work_budget: Option<usize>,
     /// Safe culler: a visible node whose circle spans fewer than N horizon columns is drawn whole instead of being

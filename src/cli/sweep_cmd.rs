@@ -64,8 +64,8 @@ pub struct SweepArgs {
     #[arg(long)]
     pub no_per_triangle: bool,
     /// The CSV file of results; combinations already in it are skipped (it must have been written with the same mesh,
-    /// build options, the grouping among them, and evaluation options, else it is refused; `--viewpoints` is part of each line's key, as the
-    /// swept values are, so a run with another count adds its own lines beside the others).
+    /// build options, the grouping among them, and evaluation options, else it is refused; `--viewpoints` is part of
+    /// each line's key, as the swept values are, so a run with another count adds its own lines beside the others).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Output flags.

@@ -30,8 +30,8 @@
 //!   when the largest crystal started in an orphan pass is smaller than `min_group` (the size rule is not applied to
 //!   the first pass, whose seeds were not cast over orphans).
 //! - **Small groups**: sweeping groups in id order, a group under `min_group` merges with the small group (also under
-//!   `min_group`) it collided with most (ties to the smaller id); the merged group keeps the smaller id, the sum of both
-//!   collision records without their mutual collisions, and the members of the kept group followed by the other's.
+//!   `min_group`) it collided with most (ties to the smaller id); the merged group keeps the smaller id, the sum of
+//!   both collision records without their mutual collisions, and the members of the kept group followed by the other's.
 //!   A group keeps merging while it is small and has a small partner; sweeps repeat until nothing merges. Groups still
 //!   small are freed into the always-visible set and their collisions forgotten. Merged groups stay edge-connected,
 //!   because collisions only happen across edges.

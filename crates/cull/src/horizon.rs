@@ -40,23 +40,24 @@
 //! terrain; every point of it is `μ` below the terrain at its x,y). It is written into face `k` only when all three
 //! vertices have `f > 0`; by (P1) its image is the triangle of the projected vertices. For a fixed `u` inside the
 //! image's span `[u_A, u_C]`, the image's vertical section has the top value `top(u)`, the larger value at `u` of
-//! the two image edges that span `u` (the long edge `AC` and `AB` or `BC`); it is a point of the occluder. `top` is concave on `[u_A, u_C]` (the
-//! upper boundary of a triangle), so its minimum over an interval is at one of the interval's ends.
+//! the two image edges that span `u` (the long edge `AC` and `AB` or `BC`); it is a point of the occluder. `top` is
+//! concave on `[u_A, u_C]` (the upper boundary of a triangle), so its minimum over an interval is at one of the
+//! interval's ends.
 //!
 //! A TIN edge lowered by `μ` is an occluder too (the terrain along an edge is exactly the segment between its end
 //! vertices): a degenerate triangle `A C` whose image is the segment of its projected ends, with `top` that segment
 //! (linear, so concave) and no middle vertex (`Horizon::write_segment`). Everything below holds for it unchanged.
 //!
 //! A *chain* of lowered TIN edges is an occluder too, taken as a whole (`Horizon::write_flat`): a set `C` of edges
-//! that is connected (as a graph over their end vertices) and whose vertices all have `f > 0` in face `k`. Every point of
-//! `C` then has `f > 0` (the half-space is convex), `u` is continuous on `C`, and `C` is connected, so the `u` of its
-//! points fill the interval `[u_min, u_max]` spanned by its vertices; and every point of an edge has, by (P1), a `v` at
-//! least the lower of its two ends'. Hence every `u` in `[u_min, u_max]` has a point `q` of `C` on its half-plane with
-//! `v(q) ≥ b`, `b` the least lowered `v` of `C`'s vertices: the chain is written as the constant `top(u) = b` over
-//! `[u_min, u_max]` (a segment of slope 0 from the vertex at `u_min` to the vertex at `u_max`, which also names the end
-//! vertices of its partial covers). Edge by edge, a chain crossing a column in several edges shorter than the column
-//! covers it nowhere (only its first and last edge reach a column boundary, and their covers end at different
-//! vertices); as a whole it covers it at `b`.
+//! that is connected (as a graph over their end vertices) and whose vertices all have `f > 0` in face `k`. Every point
+//! of `C` then has `f > 0` (the half-space is convex), `u` is continuous on `C`, and `C` is connected, so the `u` of
+//! its points fill the interval `[u_min, u_max]` spanned by its vertices; and every point of an edge has, by (P1), a
+//! `v` at least the lower of its two ends'. Hence every `u` in `[u_min, u_max]` has a point `q` of `C` on its
+//! half-plane with `v(q) ≥ b`, `b` the least lowered `v` of `C`'s vertices: the chain is written as the constant
+//! `top(u) = b` over `[u_min, u_max]` (a segment of slope 0 from the vertex at `u_min` to the vertex at `u_max`, which
+//! also names the end vertices of its partial covers). Edge by edge, a chain crossing a column in several edges shorter
+//! than the column covers it nowhere (only its first and last edge reach a column boundary, and their covers end at
+//! different vertices); as a whole it covers it at `b`.
 //!
 //! - *Full columns*: for a column with `[a_j, a_{j+1}] ⊆ [u_A, u_C]`, `H_j ← max(H_j, min(top(a_j), top(a_{j+1})))`.
 //! - *Partial columns*: the column containing `u_A` is covered by the occluder on `[u_A, a_{j+1}]` with the lower
@@ -108,8 +109,9 @@
 //!   turned into columns; column boundaries `a_j` are exact dyadic numbers; a span's ends are turned into column
 //!   indices by a floor or ceiling that saturates (a vertex almost beside the camera, `f` near 0, has `|u|` up to
 //!   `1e300`: a larger `|u|` or `|v|` leaves that face out of the vertex's, see below) and then clamped to the
-//!   face, so a span always covers every column its `u` interval meets; the partial column left of a cover's first full column is found by a saturating subtraction too (it is then outside
-//!   the face, never wrapped into it), so no index arithmetic can overflow;
+//!   face, so a span always covers every column its `u` interval meets; the partial column left of a cover's first full
+//!   column is found by a saturating subtraction too (it is then outside the face, never wrapped into it), so no index
+//!   arithmetic can overflow;
 //! - the vertex bound compares the vertices' raised values `hi` themselves (each above the exact `v` of the raised
 //!   vertex, see above) with `H_j`: no further arithmetic;
 //! - values beyond f64: a vertex gets face `k` only when its `|u|`, `|lo|` and `|hi|` there are at most `1e300`
@@ -642,9 +644,9 @@ impl Horizon {
 
     /// Writes a flat cover into face `k`: every `u` of `[a.0, b.0]` has, on its vertical half-plane, a point of the
     /// occluders with lowered `v` at least `bound` (a connected set of lowered TIN edges whose vertices all lie in
-    /// front of the camera in face `k`, spanning the `u` of its vertices from `a` to `b`, with `bound` the least lowered
-    /// `v` of its vertices; see the module documentation). `a` and `b` (in either order) carry the mesh vertices at
-    /// the ends.
+    /// front of the camera in face `k`, spanning the `u` of its vertices from `a` to `b`, with `bound` the least
+    /// lowered `v` of its vertices; see the module documentation). `a` and `b` (in either order) carry the mesh
+    /// vertices at the ends.
     pub(crate) fn write_flat(&mut self, k: usize, a: (f64, u32), b: (f64, u32), bound: f64) {
         let (a, b) = if b.0 < a.0 { (b, a) } else { (a, b) };
         let Some([j0, j1]) = self.columns(a.0, b.0) else {
@@ -1118,9 +1120,9 @@ mod tests {
     }
 
     /// Regression: a vertex almost exactly beside the camera (forward distance `f` of 1e-298 m in face 0, so its
-    /// `u` is about −2e299, within [`PROJ_MAX`]) once made `⌊column⌋` overflow to the last column, so the span of columns checked in
-    /// face 0 was empty and the patch was called hidden there without any test: the visible vertices in face 0 were
-    /// culled. Every face's span must reach from the first column.
+    /// `u` is about −2e299, within [`PROJ_MAX`]) once made `⌊column⌋` overflow to the last column, so the span of
+    /// columns checked in face 0 was empty and the patch was called hidden there without any test: the visible vertices
+    /// in face 0 were culled. Every face's span must reach from the first column.
     #[test]
     fn a_vertex_almost_beside_the_camera_keeps_its_columns() {
         let mu = 1e-6;

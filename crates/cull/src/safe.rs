@@ -75,14 +75,14 @@
 //!
 //! Refining costs what the view sees: every visible patch is projected, tested and written. [`SafeParams::work_budget`]
 //! bounds it by a count (not a time: culls stay byte-identical across runs and machines) of *work units*: one per node
-//! tested while refining, one per occluder edge written, one per chain or crest written. Each unit is checked before it is
-//! spent, so a cull spends at most `B` of them. Once they are spent:
+//! tested while refining, one per occluder edge written, one per chain or crest written. Each unit is checked before it
+//! is spent, so a cull spends at most `B` of them. Once they are spent:
 //!
 //! - no node is refined any more, and no patch edge, chain or crest is written. Every node still queued (and each
 //!   descendant taken below) is at least as far as every node tested so far (its points are at least at its queue key
-//!   `d_min`, the keys of its queued ancestors, and the queue pops keys in order), so every occluder in the horizon lies
-//!   nearer than every one of its points, as when that occluder was written: the theorem applies to them against the
-//!   horizon as it stands;
+//!   `d_min`, the keys of its queued ancestors, and the queue pops keys in order), so every occluder in the horizon
+//!   lies nearer than every one of its points, as when that occluder was written: the theorem applies to them against
+//!   the horizon as it stands;
 //! - the queued nodes are taken largest first (by triangles): each is culled if its cylinder is hidden (the same test
 //!   as above, `H` only), else split into its children while fewer than `⌈B / 8⌉` nodes were split this way, else kept
 //!   to be drawn whole. Drawing a node whole draws a superset of what refining it would have drawn. The splits get an
@@ -151,9 +151,9 @@ pub struct SafeParams {
     /// Largest patch (triangles) below the hierarchy's leaves: clamped to 1 ..= 64.
     pub patch: usize,
     /// Most occluder edges written into the horizon per cull, nearest first (fewer occluders only cull less, never
-    /// wrongly); the cell-edge segments written after a spent work budget count too. It bounds the writing, not the cost: with few occluders every visible node is refined and tested
-    /// ([`SafeParams::work_budget`] bounds the cost). `usize::MAX`: unlimited (`null` when serialized, which JSON
-    /// readers hold exactly).
+    /// wrongly); the cell-edge segments written after a spent work budget count too. It bounds the writing, not the
+    /// cost: with few occluders every visible node is refined and tested ([`SafeParams::work_budget`] bounds the cost).
+    /// `usize::MAX`: unlimited (`null` when serialized, which JSON readers hold exactly).
     #[serde(with = "unlimited")]
     pub occluder_budget: usize,
     /// Most work units per cull: nodes tested while refining, occluder edges and chains written. Once spent, the
@@ -646,8 +646,8 @@ impl SafeCuller {
         self.halving_subtree(h, range).0
     }
 
-    /// [`SafeCuller::halving_tree`], also returning the extent of `range` (its halves' together, bottom-up). A node's id
-    /// comes before its children's.
+    /// [`SafeCuller::halving_tree`], also returning the extent of `range` (its halves' together, bottom-up). A node's
+    /// id comes before its children's.
     fn halving_subtree(&mut self, h: &Hierarchy, range: [u32; 2]) -> (u32, Extent) {
         let id = self.nodes.len() as u32;
         let [s, e] = range;

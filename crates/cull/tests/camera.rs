@@ -140,9 +140,9 @@ fn yaws_a_turn_apart_are_the_same_view() {
     }
 }
 
-/// A camera built field by field with a yaw of many turns (radians) once hid what lies straight ahead, for every culler:
-/// the view test subtracted the node's direction from the yaw itself, and at `|yaw| ≈ 1e17` that difference keeps no
-/// digit (found by an audit). [`Camera::frustum`] now reduces such a yaw through its sine and cosine.
+/// A camera built field by field with a yaw of many turns (radians) once hid what lies straight ahead, for every
+/// culler: the view test subtracted the node's direction from the yaw itself, and at `|yaw| ≈ 1e17` that difference
+/// keeps no digit (found by an audit). [`Camera::frustum`] now reduces such a yaw through its sine and cosine.
 #[test]
 fn a_yaw_of_many_turns_built_field_by_field_still_shows_what_lies_ahead() {
     let tin = grid_tin(21, 200.0, DVec3::ZERO, |_, _| 0.0);

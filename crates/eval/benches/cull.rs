@@ -1,10 +1,10 @@
 //! Run-time culling cost per viewpoint, per method, on the bundled default terrain.
 //!
-//! `cargo bench -p eval --bench cull`. Builds `meshes/jacksboro-10k.obj` with default parameters (16 × 4 sectors), draws 20
-//! `ground` and 20 `high` viewpoints (seed 1), and times one cull per viewpoint (cycling over the 40, 360° view) for
-//! the safe culler (the default), the thesis' region test over the hierarchy and the per-triangle method; the safe
-//! culler also on the ground and the high viewpoints apart. With `TINCULL_BENCH_MESH=path.obj` another mesh is used
-//! instead (its build uses 500 seeds when it has more than 50,000 vertices, like the thesis' 100k set).
+//! `cargo bench -p eval --bench cull`. Builds `meshes/jacksboro-10k.obj` with default parameters (16 × 4 sectors),
+//! draws 20 `ground` and 20 `high` viewpoints (seed 1), and times one cull per viewpoint (cycling over the 40, 360°
+//! view) for the safe culler (the default), the thesis' region test over the hierarchy and the per-triangle method; the
+//! safe culler also on the ground and the high viewpoints apart. With `TINCULL_BENCH_MESH=path.obj` another mesh is
+//! used instead (its build uses 500 seeds when it has more than 50,000 vertices, like the thesis' 100k set).
 //!
 //! Before timing the safe culler, its draw lists from the 40 viewpoints are checked against ground truth: not one
 //! visible triangle may be culled; its mean nodes tested, work units and occluder edges written per view are printed

@@ -8,9 +8,9 @@
 //!
 //! A `CONFIG` is `default` or comma-separated `key=value` over [`SafeParams::default`]: `columns`, `patch`,
 //! `occluders` (occluder budget), `work` (work budget; `0` for unlimited) and `coarse`
-//! (coarse columns; `0` refines every visible node). Viewpoints: `VIEWPOINTS` per class, `--view-seed 1` (as `tincull eval`), 360° view.
-//! Set `TRUTH=0` to skip the ground truth (timings and drawn fractions only), `REPS=N` to time each cull `N` times
-//! (default 7; more for a profiler).
+//! (coarse columns; `0` refines every visible node). Viewpoints: `VIEWPOINTS` per class, `--view-seed 1` (as
+//! `tincull eval`), 360° view. Set `TRUTH=0` to skip the ground truth (timings and drawn fractions only), `REPS=N` to
+//! time each cull `N` times (default 7; more for a profiler).
 //!
 //! Prints CSV on stdout, one line per (config, class): the median over the viewpoints of the cull time (ns; each the
 //! median of 7 culls with warm working memory, under whatever load the machine has), the means of the drawn fraction,

@@ -425,10 +425,10 @@ pub fn brute_force(tin: &Tin, config: &SectorConfig, opts: &HorizonOptions) -> R
     ))
 }
 
-/// The point `o` of every projection `t = r · (x − o)` ([`crate::sector::Wedge::project`]) of a TIN: the lower-left corner of its
-/// bounding box in x,y. Unlike [`Tin::origin`] (rounded to whole kilometres) it moves exactly with the terrain under
-/// any exactly representable translation, so `x − o`, and with it every rounding decision, is the same for a
-/// translated copy.
+/// The point `o` of every projection `t = r · (x − o)` ([`crate::sector::Wedge::project`]) of a TIN: the lower-left
+/// corner of its bounding box in x,y. Unlike [`Tin::origin`] (rounded to whole kilometres) it moves exactly with the
+/// terrain under any exactly representable translation, so `x − o`, and with it every rounding decision, is the same
+/// for a translated copy.
 pub fn projection_origin(tin: &Tin) -> DVec2 {
     tin.bbox().min.truncate()
 }

@@ -3,10 +3,10 @@
 //!
 //! A path given as an input is read whole, so what it names must end: a regular file, a pipe (`<(gen)`,
 //! `/dev/stdin` fed by a pipe or a file) or a terminal (typed input, to Ctrl-D). Any other character or block device
-//! (`/dev/zero`, `/dev/urandom`, a disk), a socket or a directory is refused with an error of kind [`std::io::ErrorKind::InvalidInput`] that
-//! says what it is: read whole, `/dev/zero` would grow a buffer until the machine runs out of memory. The kind is
-//! taken from the opened file itself (`fstat`), not from the path, so a link or a rename between the check and the
-//! read changes nothing. The callers name the path in their own errors.
+//! (`/dev/zero`, `/dev/urandom`, a disk), a socket or a directory is refused with an error of kind
+//! [`std::io::ErrorKind::InvalidInput`] that says what it is: read whole, `/dev/zero` would grow a buffer until the
+//! machine runs out of memory. The kind is taken from the opened file itself (`fstat`), not from the path, so a link or
+//! a rename between the check and the read changes nothing. The callers name the path in their own errors.
 //!
 //! A pipe or a terminal gives its bytes once, yet a command may look at an input's first bytes (to tell a hierarchy
 //! from a mesh) before its reader reads it, and look again to word an error. So the first [`read`] or [`peek`] of a

@@ -26,10 +26,10 @@
 //! r_i · m + d` and `z_c < min_{v ∈ vertices(N)} (z_v + σ' (t_c − t_v))` is hidden from every point `p` of `N` whose
 //! direction to `c` is in sector `i`. *Proof.* The right-hand side is affine in `p` over each triangle, so the
 //! inequality holds for every `p ∈ N`: `z_c − z_p < σ' r_i · (c − p)`. With `φ` the angle between `c − p` and `r_i`
-//! (`|φ| ≤ w`), `r_i · (c − p) = |c − p| cos φ`, so `σ' r_i · (c − p) ≤ σ_d |c − p|` in both signs of `σ_d`. The segment
-//! from `p` (`t_p ≤ r_i · m + r < T_d`) to `c` (`t_c > T_d`) stays in `W` and crosses the line of `S_d` once, at a point
-//! `q` of `S_d`, with `|q − p| < |c − p|`. There the sight line is at `z_p + (z_c − z_p) |q − p| / |c − p| <
-//! z_p + σ_d |q − p| ≤ z_q`, at least `μ` below the terrain. ∎
+//! (`|φ| ≤ w`), `r_i · (c − p) = |c − p| cos φ`, so `σ' r_i · (c − p) ≤ σ_d |c − p|` in both signs of `σ_d`. The
+//! segment from `p` (`t_p ≤ r_i · m + r < T_d`) to `c` (`t_c > T_d`) stays in `W` and crosses the line of `S_d` once,
+//! at a point `q` of `S_d`, with `|q − p| < |c − p|`. There the sight line is at
+//! `z_p + (z_c − z_p) |q − p| / |c − p| < z_p + σ_d |q − p| ≤ z_q`, at least `μ` below the terrain. ∎
 //!
 //! Every barrier `d` of a ladder `d_k = r · (1.25, 2, 3, 5, 8, 13, …)` (up to the footprint's size) gives one such
 //! half-plane `{t > T_k, z < σ'_k t + b_k}`; the node's region in the sector is their union, stored as a polyline below

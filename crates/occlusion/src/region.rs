@@ -2,11 +2,11 @@
 //!
 //! Everything about sector `i` lives in its vertical plane, with coordinates `(t, z)` where `t = r_i · (xy − o)` is the
 //! position along the sector's centre direction, relative to a fixed origin `o` shared by all regions that are
-//! intersected or tested together (see [`crate::RegionTable`]; [`Region`] itself only sees `t`). The region of a vertex `p` in sector `i` is the set of camera
-//! positions `c` with `t_c ≥ t0` and `z_c ≤ z_p + m·(t_c − t_p)`: a wedge bounded on the left by `t0 = t_p + d` and
-//! above by the line through `p` with the sector's minimum horizon slope `m`. Intersections of such wedges (the
-//! regions of triangles and groups) are convex: a left bound and a concave, piecewise-linear upper boundary that ends
-//! in a ray. [`Region`] stores that boundary as a short vertex chain.
+//! intersected or tested together (see [`crate::RegionTable`]; [`Region`] itself only sees `t`). The region of a vertex
+//! `p` in sector `i` is the set of camera positions `c` with `t_c ≥ t0` and `z_c ≤ z_p + m·(t_c − t_p)`: a wedge
+//! bounded on the left by `t0 = t_p + d` and above by the line through `p` with the sector's minimum horizon slope `m`.
+//! Intersections of such wedges (the regions of triangles and groups) are convex: a left bound and a concave,
+//! piecewise-linear upper boundary that ends in a ray. [`Region`] stores that boundary as a short vertex chain.
 //!
 //! Choices where the thesis is vague:
 //! - The region is unbounded to the right (`t → ∞`) and below (`z → −∞`), so the intersection of two non-empty

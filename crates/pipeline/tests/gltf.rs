@@ -368,7 +368,8 @@ mod damaged {
             cut in prop_oneof![Just(0usize), 0usize..64],
         ) {
             let (h, doc, bin, pointers) = damageable();
-            // Half the cases damage the scene's own fields (counts, origin, roots, ranges, build), the others any value.
+            // Half the cases damage the scene's own fields (counts, origin, roots, ranges, build), the others any
+            // value.
             let scene: Vec<&String> = pointers.iter().filter(|p| p.starts_with("/scenes/")).collect();
             let pointer = if scene_field { scene[which % scene.len()] } else { &pointers[which % pointers.len()] };
             let mut d = doc.clone();

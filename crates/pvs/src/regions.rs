@@ -11,12 +11,13 @@
 //! its vertices (not concave: a union of half-planes joins a falling line to a later rising one, a V), its least value
 //! on the interval is at an end or at a vertex inside it. So the four top corners and every region vertex with `t`
 //! strictly between `t_lo` and `t_hi` are tested, with the strict [`cull::StoredRegion::contains`] (which evaluates
-//! `h` in f64 from the stored f32 points, the same value at a vertex as on either side of it). For `p` in `N`'s bounding circle `(m, r)` and `c` in the cell's circle
-//! `(m_c, r_c)` (`c − p` then lies in the disc of radius `r + r_c` around `m_c − m`), the direction of `c − p` is within
-//! `asin((r + r_c) / |m_c − m|)` of the azimuth of `m_c − m`; the culler's own interval test ([`cull::for_each_sector_in`],
-//! closed interval, widened by a relative 1e-12) visits every sector it may fall in. A cell whose circle meets the
-//! node's is visible. Coordinates are relative to the hierarchy's origin, as the stored regions and circles are; the
-//! cell's circle radius is widened by `1e-9 (1 + |m_c|)` for the rounding of its corners' shift.
+//! `h` in f64 from the stored f32 points, the same value at a vertex as on either side of it). For `p` in `N`'s
+//! bounding circle `(m, r)` and `c` in the cell's circle `(m_c, r_c)` (`c − p` then lies in the disc of radius
+//! `r + r_c` around `m_c − m`), the direction of `c − p` is within `asin((r + r_c) / |m_c − m|)` of the azimuth of
+//! `m_c − m`; the culler's own interval test ([`cull::for_each_sector_in`], closed interval, widened by a relative
+//! 1e-12) visits every sector it may fall in. A cell whose circle meets the node's is visible. Coordinates are relative
+//! to the hierarchy's origin, as the stored regions and circles are; the cell's circle radius is widened by
+//! `1e-9 (1 + |m_c|)` for the rounding of its corners' shift.
 
 // Comparisons are written so that a NaN answers "visible", on purpose.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -8,8 +8,8 @@
 //! - [`job`]: `tincull tiles build plan.json --tile I` builds one tile: its TIN (sides simplified identically by
 //!   both neighbours, [`boundary`]), its vertices' horizons over the tile, a full-resolution halo and the far field
 //!   (all on or below the terrain), and its partial hierarchy, written as a `.tch`.
-//! - [`merge`](mod@merge): `tincull tiles merge plan.json -o terrain.tch` joins the tiles' meshes and hierarchies; every tile is
-//!   a node near the top.
+//! - [`merge`](mod@merge): `tincull tiles merge plan.json -o terrain.tch` joins the tiles' meshes and hierarchies;
+//!   every tile is a node near the top.
 //!
 //! A plan made with [`PlanOptions::no_regions`] (`tiles plan --no-regions --grouping quadtree`) builds tiles as
 //! `build --no-regions` does: no horizons, halo or far field, only the quadtree's cells, for the run-time cullers.

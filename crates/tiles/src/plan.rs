@@ -316,8 +316,9 @@ pub struct LeftOut {
 
 /// Reads the DEM at `source` (with `dem`) in strips of rows, computing its far field ([`FarField::read_each_strip`];
 /// memory bounded by a strip and the far field's blocks, not the grid; `progress(rows read, rows)`) and every tile's
-/// window digest, and cuts it into tiles, leaving out those with no terrain to triangulate ([`LeftOut`]). `tiles_dir` is where the jobs will write, relative to the plan's folder.
-/// Each tile's far-field file ([`TileSpec::far`]) is to be written beside the plan with [`Plan::far_file`].
+/// window digest, and cuts it into tiles, leaving out those with no terrain to triangulate ([`LeftOut`]). `tiles_dir`
+/// is where the jobs will write, relative to the plan's folder. Each tile's far-field file ([`TileSpec::far`]) is to be
+/// written beside the plan with [`Plan::far_file`].
 pub fn make_plan(
     source: &Path,
     dem: DemOptions,

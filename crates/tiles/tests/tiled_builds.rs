@@ -240,10 +240,10 @@ fn safe_culling_of_a_merged_terrain_never_culls_a_visible_triangle() {
 }
 
 /// Spikes and a notched wall, one sample wide, on a plain at UTM-sized coordinates, cut into small tiles with a thin
-/// halo (the wall runs along the side between two rows of tiles). The run-time cullers read the merged mesh and hierarchy, not the tiles'
-/// horizons: neither the safe culler nor Lloyd & Egbert's may cull a visible triangle of the merge, from random eyes
-/// and from eyes a millimetre and half a metre above the spike tips and the wall, and level with the notch on either
-/// side of the wall.
+/// halo (the wall runs along the side between two rows of tiles). The run-time cullers read the merged mesh and
+/// hierarchy, not the tiles' horizons: neither the safe culler nor Lloyd & Egbert's may cull a visible triangle of the
+/// merge, from random eyes and from eyes a millimetre and half a metre above the spike tips and the wall, and level
+/// with the notch on either side of the wall.
 #[test]
 fn tiled_spikes_and_a_notched_wall_are_culled_safely() {
     let (rows, cols) = (48, 48);
@@ -904,9 +904,9 @@ fn run_plan(doc: &serde_json::Value, path: &Path) -> Result<Hierarchy, tiles::Ti
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
-    /// A plan (of a DEM or of a mesh, with regions or without) with any one value replaced, as a hand edit or a damaged copy may leave it, is
-    /// refused when loaded, or its tiles are built and merged or refused with an error; never a panic. (Its JSON is
-    /// not checksummed: the files it names are, and a window of the DEM by its digest.)
+    /// A plan (of a DEM or of a mesh, with regions or without) with any one value replaced, as a hand edit or a damaged
+    /// copy may leave it, is refused when loaded, or its tiles are built and merged or refused with an error; never a
+    /// panic. (Its JSON is not checksummed: the files it names are, and a window of the DEM by its digest.)
     #[test]
     fn a_plan_with_any_value_replaced_is_run_or_refused(
         mesh in any::<bool>(),

@@ -7,8 +7,8 @@
 //! shuffled by a seeded `ChaCha8Rng`. Octaves are rotated by the exact rotation `(0.6, 0.8)` and scaled by 2, so no
 //! grid direction dominates; the input position is first displaced by a small gradient-noise domain warp (0.2 of the
 //! coarsest wavelength) so ridge lines meander instead of following the noise's circular arcs. A low-frequency
-//! gradient-noise swell modulates the ridges, and the result is raised to the power 1.5 to widen the valleys. Heights are then scaled to span exactly `[0, relief]` over the generated
-//! points.
+//! gradient-noise swell modulates the ridges, and the result is raised to the power 1.5 to widen the valleys. Heights
+//! are then scaled to span exactly `[0, relief]` over the generated points.
 //!
 //! Choices:
 //! - Everything is computed with `+ - * /`, `floor` and `sqrt` only (all exactly rounded in IEEE 754), and random

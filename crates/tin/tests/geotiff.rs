@@ -4,9 +4,12 @@
 //! small one damaged: read into a grid that simplifies, or refused, never a panic).
 #![cfg(feature = "geotiff")]
 
+mod common;
+
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
+use common::ifd_entry;
 use glam::DVec2;
 use tiff::encoder::{Compression, Predictor, TiffEncoder, colortype};
 use tiff::tags::Tag;
@@ -410,15 +413,6 @@ fn zstd_chunks(mut bytes: Vec<u8>) -> Vec<u8> {
         bytes[c..c + 4].copy_from_slice(&u32::try_from(packed.len()).expect("small").to_le_bytes());
     }
     bytes
-}
-
-/// Where the entry of `tag` starts in the first IFD of a little-endian classic TIFF.
-fn ifd_entry(b: &[u8], tag: u16) -> Option<usize> {
-    assert_eq!(&b[..4], b"II*\0", "a little-endian classic TIFF");
-    let ifd = u32::from_le_bytes(b[4..8].try_into().expect("4 bytes")) as usize;
-    (0..usize::from(u16::from_le_bytes([b[ifd], b[ifd + 1]])))
-        .map(|i| ifd + 2 + 12 * i)
-        .find(|&e| u16::from_le_bytes([b[e], b[e + 1]]) == tag)
 }
 
 /// Rewrites the Compression tag (a SHORT held in its entry) of a little-endian classic TIFF.

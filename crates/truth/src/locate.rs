@@ -2,8 +2,8 @@
 //!
 //! A uniform grid over the TIN's x,y bounding box (about one cell per two triangles) lists in each cell the
 //! triangles whose bounding box meets it. [`Locator::locate`] tests the triangles of one cell with Shewchuk's exact
-//! orientation predicate ([`tin::orient2d`], through the `robust` crate), so a point on a shared edge or vertex is found deterministically
-//! (always the same one of the triangles that contain it, boundary included).
+//! orientation predicate ([`tin::orient2d`], through the `robust` crate), so a point on a shared edge or vertex is
+//! found deterministically (always the same one of the triangles that contain it, boundary included).
 //!
 //! For speed the walk ([`crate::walk`]) does not read the [`Tin`] directly: the locator keeps a copy of the triangles
 //! in Morton order of their centroids, one record per triangle with corners, vertex ids and neighbours, so that a

@@ -18,10 +18,11 @@
 //!   stores them: builds of one mesh store its triangles in different orders (the grouping decides it), and they
 //!   get the same eyes.
 //! - A local minimum (maximum) is a vertex strictly lower (higher) than every vertex it shares a triangle with.
-//!   Vertices that belong to no triangle are ignored everywhere. Vertices on the footprint boundary are left out: their neighbourhood is cut off by the edge of the data, so they are not
-//!   known to be extrema. When no interior vertex qualifies, the candidates are all vertices, lowest (highest) first.
-//!   `n` viewpoints are drawn from the candidates without replacement (a seeded shuffle) while candidates last, then
-//!   with replacement. With the fallback, the first `n` lowest (highest) vertices are used in order instead.
+//!   Vertices that belong to no triangle are ignored everywhere. Vertices on the footprint boundary are left out: their
+//!   neighbourhood is cut off by the edge of the data, so they are not known to be extrema. When no interior vertex
+//!   qualifies, the candidates are all vertices, lowest (highest) first. `n` viewpoints are drawn from the candidates
+//!   without replacement (a seeded shuffle) while candidates last, then with replacement. With the fallback, the first
+//!   `n` lowest (highest) vertices are used in order instead.
 //! - On a flat terrain the relief is 0, so `sky` viewpoints lie on the surface (where everything is grazing).
 //! - The random generator is `ChaCha8Rng::seed_from_u64(seed)`, so the same TIN, class, count and seed give the same
 //!   points on every platform.

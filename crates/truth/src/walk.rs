@@ -8,10 +8,11 @@
 //!
 //! Choices (the design notes leave them open):
 //!
-//! - **Exact topology.** Every side-of-line decision uses Shewchuk's adaptive orientation predicate ([`tin::orient2d`]), so
-//!   the walk is consistent when the segment passes exactly through vertices or runs along edges. At a vertex the
-//!   walk continues in the incident triangle whose corner wedge strictly contains the segment's direction, or along
-//!   the incident edge that points exactly in that direction. Only heights and crossing parameters are rounded.
+//! - **Exact topology.** Every side-of-line decision uses Shewchuk's adaptive orientation predicate
+//!   ([`tin::orient2d`]), so the walk is consistent when the segment passes exactly through vertices or runs along
+//!   edges. At a vertex the walk continues in the incident triangle whose corner wedge strictly contains the segment's
+//!   direction, or along the incident edge that points exactly in that direction. Only heights and crossing parameters
+//!   are rounded.
 //! - **Tolerance.** A point counts as below the terrain only if it is lower by more than
 //!   `EPS_REL * (1 + |eye - target| + max(|eye.z|, |target.z|))` metres ([`EPS_REL`] = 1e-9, so about 1e-6 m for a
 //!   1 km segment at 1 km altitude). A segment that only touches the terrain (grazing a ridge vertex, running along

@@ -256,8 +256,8 @@ impl Default for Values {
 }
 
 /// The height of the value `word` at index `k` of the grid (row-major, `cols` wide) on line `n`, in metres: NaN for a
-/// void (the nodata value, or NaN); an error naming the line and the 1-based row and column for anything else that is not a
-/// finite number.
+/// void (the nodata value, or NaN); an error naming the line and the 1-based row and column for anything else that is
+/// not a finite number.
 fn sample(word: &str, n: usize, k: usize, cols: usize, values: Values, path: &Path) -> Result<f64> {
     match word.parse::<f64>() {
         Ok(v) if values.nodata == Some(v) || v.is_nan() => Ok(f64::NAN),

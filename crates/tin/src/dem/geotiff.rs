@@ -6,8 +6,10 @@
 //!   float64, in strips or tiles, uncompressed, LZW, Deflate, PackBits or ZSTD (GDAL's `COMPRESS=ZSTD`), with no
 //!   predictor, the horizontal predictor (2) or the floating-point predictor (3): whatever the `tiff` crate decodes.
 //!   Strips and tiles are decoded one by one at their full padded width (see `decode_window`); a whole-file read
-//!   decodes at most [`MAX_DECODED_BYTES`], and a file that ends before the data its tags point at is named as
-//!   truncated;
+//!   decodes at most [`MAX_DECODED_BYTES`] and [`MAX_SAMPLES`] samples, a file that ends before the data its tags
+//!   point at is named as truncated, an uncompressed strip or tile whose byte count is too small for its samples is
+//!   refused, and the heights are allocated only once the first strip or tile has decoded (a small file whose tags
+//!   claim a huge image is refused without allocating it);
 //! - one band: a single-band image, or band [`DemOptions::band`] (1-based, like GDAL) of an interleaved multi-band
 //!   image; a multi-band image without a chosen band is an error;
 //! - `GDAL_NODATA` (tag 42113): samples equal to it become voids, as do NaN samples; for float32 samples, also those
@@ -55,7 +57,7 @@ use glam::DVec2;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-use super::{DemOptions, GridShape, check_window, finish, open, read_bytes};
+use super::{DemOptions, GridShape, MAX_SAMPLES, check_window, finish, open, read_bytes};
 use super::{degrees, tiff_mask};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
@@ -194,6 +196,12 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
             MAX_DECODED_BYTES >> 20
         )));
     }
+    if (rows as u64).saturating_mul(cols as u64) > MAX_SAMPLES {
+        return Err(err(format!(
+            "{cols} x {rows} samples are more than the {MAX_SAMPLES} a whole-file read holds; \
+             `tincull tiles plan` reads a DEM this large in windows"
+        )));
+    }
     if rows == 0 || cols == 0 {
         return Err(err(format!("the image has {cols} x {rows} samples")));
     }
@@ -264,6 +272,10 @@ pub(super) fn read_geotiff_window(
 /// name. Only the strips or tiles (of the first plane) that meet the window are decoded. `file_len` (bytes) names a
 /// truncated file as such.
 ///
+/// Memory follows the data, not the header: a window of more than [`MAX_SAMPLES`] is refused, and the window's heights
+/// are allocated only once its first strip or tile has decoded, so a small file whose tags claim a huge image made of
+/// data it does not hold is refused without allocating the image.
+///
 /// A strip or tile is decoded with its full padded width as the row stride: the `tiff` crate (0.11) fails on an LZW
 /// tile at the right edge of an image that its tiles do not divide when asked for the unpadded width (it skips the
 /// padding of the last row past the end of the LZW stream), and GDAL writes such files by default.
@@ -284,7 +296,14 @@ fn decode_window<R: Read + Seek>(
     }
     let across = shape.cols.div_ceil(cw);
     let nc = cols[1] - cols[0] + 1;
-    let mut z = vec![0.0; (rows[1] - rows[0] + 1) * nc];
+    let samples = (rows[1] - rows[0] + 1) as u64 * nc as u64;
+    if samples > MAX_SAMPLES {
+        return Err(err(format!(
+            "a window of {nc} x {} samples is more than the {MAX_SAMPLES} read at once",
+            rows[1] - rows[0] + 1
+        )));
+    }
+    let mut z = Vec::new();
     let mut sample_type = "";
     let stride = meta.stride;
     for ty in rows[0] / ch..=rows[1] / ch {
@@ -294,6 +313,18 @@ fn decode_window<R: Read + Seek>(
             let (dw, dh) = (dw as usize, dh as usize);
             if dw == 0 || dh == 0 {
                 return Err(err(format!("strip or tile {index} has {dw} x {dh} samples")));
+            }
+            // Uncompressed samples are read from the chunk's offset on, whatever its byte count says: a count too small
+            // for its rows is refused, or the samples would be read from the bytes that follow it.
+            if let (Some(row_bytes), Some(&(_, count))) = (meta.uncompressed_row_bytes, meta.chunks.get(index as usize))
+            {
+                let needed = row_bytes.saturating_mul(dh as u64);
+                if count < needed {
+                    return Err(err(format!(
+                        "strip or tile {index} holds {count} bytes, but its {dw} x {dh} uncompressed samples \
+                         take {needed}"
+                    )));
+                }
             }
             // Whole bytes per sample: decoded at the padded width (see above); else as the crate lays it out.
             let (chunk, row) = if meta.sample_bytes > 0 {
@@ -314,6 +345,9 @@ fn decode_window<R: Read + Seek>(
                     values.len(),
                 )));
             }
+            if z.is_empty() {
+                z = vec![0.0; samples as usize];
+            }
             // The chunk's samples inside the window, in whole-grid rows and columns.
             let (y0, x0) = (ty * ch, tx * cw);
             for r in rows[0].max(y0)..=rows[1].min(y0 + dh - 1) {
@@ -332,7 +366,10 @@ fn decode_window<R: Read + Seek>(
 fn chunk_error(meta: &Meta, index: u32, file_len: u64, e: tiff::TiffError, path: &Path) -> TinError {
     let what = format!("cannot decode strip or tile {index} ({})", meta.info.compression);
     let short = matches!(&e, tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
-    let end = meta.chunk_ends.get(index as usize).copied();
+    let end = meta
+        .chunks
+        .get(index as usize)
+        .map(|&(offset, count)| offset.saturating_add(count));
     match end {
         Some(end) if short && end > file_len => TinError::format(
             path,
@@ -350,8 +387,10 @@ struct Meta {
     stride: usize,
     /// Bytes per sample (0 when samples are not whole bytes).
     sample_bytes: usize,
-    /// Per strip or tile, the end of its data in the file (offset plus byte count), where the tags say.
-    chunk_ends: Vec<u64>,
+    /// Per strip or tile, its offset in the file and its byte count, where the tags say.
+    chunks: Vec<(u64, u64)>,
+    /// Bytes of one stored row of a strip or tile (of one plane) when the samples are not compressed.
+    uncompressed_row_bytes: Option<u64>,
     /// GDAL's scale and offset of the band read.
     scale_offset: Option<(f64, f64)>,
     /// Metres per unit of the heights (1 unless the file's units are feet).
@@ -539,10 +578,14 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
     } else {
         (Tag::StripOffsets, Tag::StripByteCounts)
     };
-    let chunk_ends = match (dec.get_tag_u64_vec(offsets), dec.get_tag_u64_vec(counts)) {
-        (Ok(o), Ok(c)) => o.iter().zip(&c).map(|(o, c)| o.saturating_add(*c)).collect(),
+    let chunks = match (dec.get_tag_u64_vec(offsets), dec.get_tag_u64_vec(counts)) {
+        (Ok(o), Ok(c)) => o.into_iter().zip(c).collect(),
         _ => Vec::new(),
     };
+    let uncompressed_row_bytes = (compression == "none").then(|| {
+        let cw = u64::from(dec.chunk_dimensions().0);
+        (cw.saturating_mul(stride as u64).saturating_mul(bits)).div_ceil(8)
+    });
     // The georeference: native coordinates of the centre of sample (0, 0) and the native spacing.
     let c = match georef.raster_type {
         RasterType::PixelIsArea => 0.5,
@@ -625,7 +668,8 @@ fn open_tiff<R: Read + Seek>(reader: R, path: &Path, opts: &DemOptions) -> Resul
         band: usize::from(band),
         stride,
         sample_bytes,
-        chunk_ends,
+        chunks,
+        uncompressed_row_bytes,
         scale_offset,
         height_unit: height_unit.0,
         nodata,

@@ -163,9 +163,10 @@ fn height(b: &[u8]) -> f64 {
 /// Heights an SRTM sample can take (m): below the Dead Sea shore and above Everest there is no terrain on Earth.
 const PLAUSIBLE: std::ops::RangeInclusive<f64> = -1000.0..=9000.0;
 
-/// Refuses samples `z` (read big-endian, `cols` per row, the first at `row0`, `col0` of the tile) that look written little-endian: more than 1% of the
-/// heights outside [`PLAUSIBLE`], but under 1% once their bytes are swapped. A tile of real terrain read with the
-/// wrong byte order is mostly thousands of metres off, so this never refuses a sound tile.
+/// Refuses samples `z` (read big-endian, `cols` per row, the first at `row0`, `col0` of the tile) that look written
+/// little-endian: more than 1% of the heights outside [`PLAUSIBLE`], but under 1% once their bytes are swapped. A tile
+/// of real terrain read with the wrong byte order is mostly thousands of metres off, so this never refuses a sound
+/// tile.
 fn check_byte_order(z: &[f64], cols: usize, [row0, col0]: [usize; 2], path: &Path) -> Result<()> {
     let (mut valid, mut bad, mut bad_swapped, mut first_bad) = (0usize, 0usize, 0usize, None);
     for (k, &h) in z.iter().enumerate() {

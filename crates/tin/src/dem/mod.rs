@@ -44,6 +44,11 @@ use glam::DVec2;
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
+/// The most samples a compressed DEM (PNG, GeoTIFF) read whole, or a window of one, may have: 16384 x 16384, 2 GiB of
+/// heights in f64. Its samples are decoded from data that may be far smaller than they are, so the count its header
+/// claims is checked before the heights are allocated; larger DEMs are read in windows (`tincull tiles plan`).
+pub const MAX_SAMPLES: u64 = 1 << 28;
+
 /// How to read a DEM.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DemOptions {
@@ -350,9 +355,9 @@ fn unsupported(path: &Path, ext: &str) -> TinError {
 /// `ε (|c · dx| + |x₀ + c · dx|)` of the exact `x₀ + c · dx` (`ε = 2⁻⁵²`, two roundings of at most `ε/2` each, the
 /// second of a sum at most `|x₀| + |c · dx|` in magnitude). With `|c · dx| ≤ |x₀| + |x|` (`x` the exact coordinate, at
 /// most the larger of the window's corners' in magnitude, up to the same rounding), the error is below
-/// `2 ε (|x₀| + M)` where `M` bounds the corners' magnitudes; neighbouring samples, `dx` apart exactly, keep distinct and
-/// ordered coordinates when `dx` exceeds twice that, `4 ε (|x₀| + M)`. The check asks for `8 ε (|x₀| + |x_a| + |x_b|)`
-/// (`x_a`, `x_b` the corners), twice as much: below a nanometre for coordinates of 10⁶ m.
+/// `2 ε (|x₀| + M)` where `M` bounds the corners' magnitudes; neighbouring samples, `dx` apart exactly, keep distinct
+/// and ordered coordinates when `dx` exceeds twice that, `4 ε (|x₀| + M)`. The check asks for
+/// `8 ε (|x₀| + |x_a| + |x_b|)` (`x_a`, `x_b` the corners), twice as much: below a nanometre for coordinates of 10⁶ m.
 fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &Path) -> Result<()> {
     for (r, c) in [(rows[0], cols[0]), (rows[1], cols[1])] {
         let p = shape.at(r, c);

@@ -9,9 +9,9 @@
 //! `spacing_x_m`, `spacing_y_m` (metres), optional `nodata` (null or a number: samples equal to it become voids),
 //! optional `rows`/`cols` (checked against the array), optional `easting_min` and `northing_max` (or `northing_min`)
 //! giving the world position of the western column and northern (southern) row of sample centres (both northings
-//! must agree with the rows and the sidecar's y spacing, to 1% of a row). Other keys are ignored. [`DemOptions::spacing`] wins
-//! over the sidecar's spacing; with neither, reading fails. Without an easting the western column is at x = 0,
-//! without a northing the southern row at y = 0.
+//! must agree with the rows and the sidecar's y spacing, to 1% of a row). Other keys are ignored.
+//! [`DemOptions::spacing`] wins over the sidecar's spacing; with neither, reading fails. Without an easting the western
+//! column is at x = 0, without a northing the southern row at y = 0.
 
 use std::path::{Path, PathBuf};
 

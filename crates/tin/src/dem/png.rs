@@ -14,12 +14,9 @@ use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, GridShape, finish, open, read_bytes};
+use super::{DemOptions, GridShape, MAX_SAMPLES, finish, open, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
-
-/// Largest image (in samples) read: 16384 x 16384.
-pub const MAX_SAMPLES: u64 = 1 << 28;
 
 /// Reads a PNG height map (see the module documentation).
 pub fn read_png(path: &Path, opts: &DemOptions) -> Result<Grid> {

@@ -1,4 +1,5 @@
-//! Helpers shared by the DEM reader tests.
+//! Helpers shared by the DEM reader tests (each test binary uses some of them).
+#![allow(dead_code)]
 
 use std::path::Path;
 
@@ -25,4 +26,13 @@ pub fn write_npy(path: &Path, version: u8, descr: &str, fortran: bool, shape: &s
     bytes.extend(header);
     bytes.extend(data);
     std::fs::write(path, bytes).expect("write npy");
+}
+
+/// Where the entry of `tag` starts in the first IFD of a little-endian classic TIFF.
+pub fn ifd_entry(b: &[u8], tag: u16) -> Option<usize> {
+    assert_eq!(&b[..4], b"II*\0", "a little-endian classic TIFF");
+    let ifd = u32::from_le_bytes(b[4..8].try_into().expect("4 bytes")) as usize;
+    (0..usize::from(u16::from_le_bytes([b[ifd], b[ifd + 1]])))
+        .map(|i| ifd + 2 + 12 * i)
+        .find(|&e| u16::from_le_bytes([b[e], b[e + 1]]) == tag)
 }
