@@ -1,8 +1,8 @@
-//! A compressed DEM's header may claim far more samples than its data holds: the GeoTIFF reader must refuse such a
-//! file without allocating the image it claims (found by `scripts/fuzz`: a 298-byte file made the reader allocate
-//! 4 GB of heights before its first strip failed to decode). The allocations of the reading thread are watched by a
-//! global allocator that records the largest one.
-#![cfg(feature = "geotiff")]
+//! A compressed DEM's header may claim far more samples than its data holds: the GeoTIFF and PNG readers must refuse
+//! such a file without allocating the image it claims (found by `scripts/fuzz`: a 298-byte GeoTIFF made the reader
+//! allocate 4 GB of heights before its first strip failed to decode). The allocations of the reading thread are
+//! watched by a global allocator that records the largest one.
+#![cfg(all(feature = "png", feature = "geotiff"))]
 
 mod common;
 
@@ -15,6 +15,7 @@ use common::ifd_entry;
 use tiff::encoder::{Compression, TiffEncoder, colortype};
 use tin::dem::MAX_SAMPLES;
 use tin::dem::geotiff::parse_geotiff;
+use tin::dem::png::parse_png;
 use tin::{DemOptions, TinError};
 
 /// The system allocator, recording per thread the largest allocation asked for.
@@ -152,4 +153,76 @@ fn the_claim_decides_and_beyond_the_limit_the_tiles_are_named() {
         "{message}"
     );
     assert!(largest < 16 << 20, "an allocation of {largest} bytes");
+}
+
+/// A 16-bit greyscale PNG of one row of `width` samples whose IHDR is then rewritten to claim `rows` rows (its CRC
+/// recomputed, so only the missing rows give the file away).
+fn png_claiming(width: u32, rows: u32) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut bytes, width, 1);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        let mut w = enc.write_header().expect("header");
+        w.write_image_data(&vec![7u8; 2 * width as usize]).expect("data");
+    }
+    // Signature (8), then the IHDR chunk: length (4), type (4), width (4), height (4), 5 more bytes, CRC (4).
+    assert_eq!(&bytes[12..16], b"IHDR");
+    bytes[20..24].copy_from_slice(&rows.to_be_bytes());
+    let crc = crc32(&bytes[12..29]);
+    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    bytes
+}
+
+/// CRC-32 (ISO-HDLC, as PNG chunks use), bit by bit.
+fn crc32(data: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in data {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// A PNG of one row claiming 16,384 x 16,384 samples (the most read, 2 GiB of heights and 512 MiB of 16-bit samples)
+/// is refused, naming the missing rows, without allocating either; the same file claiming its one row reads.
+#[test]
+fn a_small_png_claiming_a_huge_image_is_refused_without_allocating_it() {
+    let good = png_claiming(16_384, 1);
+    let grid = parse_png(&good, Path::new("row.png"), &plain());
+    assert!(
+        matches!(&grid, Err(TinError::Format { message, .. }) if message.contains("at least 2 x 2")),
+        "one row is no grid: {grid:?}"
+    );
+    let two = png_claiming(16_384, 2);
+    let (largest, result) = largest_allocation(|| parse_png(&two, Path::new("claims.png"), &plain()));
+    match result {
+        Err(TinError::Format { path, message }) => {
+            assert_eq!(path, Path::new("claims.png"));
+            assert!(message.contains("PNG"), "{message}");
+        }
+        Err(e) => panic!("expected a format error, got {e}"),
+        Ok(g) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
+    }
+    assert!(largest < 16 << 20, "an allocation of {largest} bytes");
+
+    let huge = png_claiming(16_384, 16_384);
+    assert!(huge.len() < 4096, "{} bytes", huge.len());
+    let (largest, result) = largest_allocation(|| parse_png(&huge, Path::new("claims.png"), &plain()));
+    match result {
+        Err(TinError::Format { message, .. }) => assert!(message.contains("truncated"), "{message}"),
+        Err(e) => panic!("expected a format error, got {e}"),
+        Ok(g) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
+    }
+    assert!(
+        largest < 16 << 20,
+        "an allocation of {largest} bytes for a file of {} bytes",
+        huge.len()
+    );
 }

@@ -7,7 +7,9 @@
 //!
 //! A window ([`super::read_dem_window`]) is cut from the whole image: PNG is one compressed stream, so the whole
 //! image is decoded. [`read_png_header`] reads the header only. Strips ([`super::read_dem_strips`]) decode the rows
-//! once, in order, holding one strip (an interlaced image, whose rows come in passes, is decoded whole first).
+//! once, in order, holding one strip (an interlaced image, whose rows come in passes, is decoded whole first). A whole
+//! read decodes the rows in order too, its heights growing with the rows decoded, so a small file whose header claims
+//! a huge image is refused, at its first missing row, without allocating that image.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -94,18 +96,33 @@ pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
     let info = reader.info();
     check_info(info, path)?;
-    let depth = info.bit_depth;
-    let size = reader
-        .output_buffer_size()
-        .ok_or_else(|| err("image too large".into()))?;
-    let mut buf = vec![0u8; size];
-    let frame = reader
-        .next_frame(&mut buf)
-        .map_err(|e| err(format!("truncated or corrupt PNG: {e}")))?;
-    let (cols, rows) = (frame.width as usize, frame.height as usize);
-    let mut z = Vec::with_capacity(rows * cols);
-    for r in 0..rows {
-        push_row(&mut z, &buf[r * frame.line_size..], cols, depth);
+    let (cols, rows, depth) = (info.width as usize, info.height as usize, info.bit_depth);
+    let mut z = Vec::new();
+    if info.interlaced {
+        // Seven passes over the image: decoded whole.
+        let size = reader
+            .output_buffer_size()
+            .ok_or_else(|| err("image too large".into()))?;
+        let mut buf = vec![0u8; size];
+        let frame = reader
+            .next_frame(&mut buf)
+            .map_err(|e| err(format!("truncated or corrupt PNG: {e}")))?;
+        z.reserve_exact(rows * cols);
+        for r in 0..rows {
+            push_row(&mut z, &buf[r * frame.line_size..], cols, depth);
+        }
+    } else {
+        // Row by row, with room for at most twice the rows decoded so far (and never more than the image): memory
+        // grows with the data the file holds, so a small file whose header claims a huge image is refused without
+        // allocating it.
+        each_row(&mut reader, path, |_, row| {
+            if z.len() + row.len() > z.capacity() {
+                let room = (2 * z.len()).max(z.len() + row.len()).min(rows * cols);
+                z.reserve_exact(room - z.len());
+            }
+            z.append(row);
+            Ok(())
+        })?;
     }
     let origin = DVec2::new(0.0, (rows as f64 - 1.0) * spacing.1);
     finish(path, rows, cols, spacing, origin, z, opts)
@@ -146,20 +163,38 @@ pub(super) fn read_png_strips(
         }
         return Ok(());
     }
-    let (cols, rows, depth) = (info.width as usize, info.height as usize, info.bit_depth);
+    let (cols, rows) = (info.width as usize, info.height as usize);
     let mut z = Vec::with_capacity(strip_rows.min(rows) * cols);
     let mut first = 0;
-    for r in 0..rows {
-        let row = reader
-            .next_row()
-            .map_err(|e| err(format!("truncated or corrupt PNG: {e}")))?
-            .ok_or_else(|| err(format!("truncated PNG: {r} of its {rows} rows")))?;
-        push_row(&mut z, row.data(), cols, depth);
+    each_row(&mut reader, path, |r, row| {
+        z.append(row);
         if z.len() == strip_rows * cols || r + 1 == rows {
             each(first, &mut z)?;
             first += strip_rows;
             z.clear();
         }
+        Ok(())
+    })
+}
+
+/// Decodes the rows of a non-interlaced PNG in order, handing each one's values (not scaled) to `f(row, values)`,
+/// which may take them.
+fn each_row<R: std::io::BufRead + std::io::Seek>(
+    reader: &mut png::Reader<R>,
+    path: &Path,
+    mut f: impl FnMut(usize, &mut Vec<f64>) -> Result<()>,
+) -> Result<()> {
+    let info = reader.info();
+    let (cols, rows, depth) = (info.width as usize, info.height as usize, info.bit_depth);
+    let mut values = Vec::with_capacity(cols);
+    for r in 0..rows {
+        let row = reader
+            .next_row()
+            .map_err(|e| TinError::format(path, format!("truncated or corrupt PNG: {e}")))?
+            .ok_or_else(|| TinError::format(path, format!("truncated PNG: {r} of its {rows} rows")))?;
+        values.clear();
+        push_row(&mut values, row.data(), cols, depth);
+        f(r, &mut values)?;
     }
     Ok(())
 }
