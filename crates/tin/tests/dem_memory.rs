@@ -158,6 +158,11 @@ fn the_claim_decides_and_beyond_the_limit_the_tiles_are_named() {
 /// A 16-bit greyscale PNG of one row of `width` samples whose IHDR is then rewritten to claim `rows` rows (its CRC
 /// recomputed, so only the missing rows give the file away).
 fn png_claiming(width: u32, rows: u32) -> Vec<u8> {
+    png_claiming_as(width, rows, false)
+}
+
+/// [`png_claiming`], the IHDR also saying that the image is interlaced (Adam7) when `interlaced`.
+fn png_claiming_as(width: u32, rows: u32, interlaced: bool) -> Vec<u8> {
     let mut bytes = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut bytes, width, 1);
@@ -169,6 +174,7 @@ fn png_claiming(width: u32, rows: u32) -> Vec<u8> {
     // Signature (8), then the IHDR chunk: length (4), type (4), width (4), height (4), 5 more bytes, CRC (4).
     assert_eq!(&bytes[12..16], b"IHDR");
     bytes[20..24].copy_from_slice(&rows.to_be_bytes());
+    bytes[28] = u8::from(interlaced);
     let crc = crc32(&bytes[12..29]);
     bytes[29..33].copy_from_slice(&crc.to_be_bytes());
     bytes
@@ -225,4 +231,140 @@ fn a_small_png_claiming_a_huge_image_is_refused_without_allocating_it() {
         "an allocation of {largest} bytes for a file of {} bytes",
         huge.len()
     );
+}
+
+/// A little-endian uncompressed uint16 TIFF of `width` x `height` samples, in strips of one row or in tiles of
+/// `tile` x `tile`, whose first strip or tile holds its samples (all 7). With `all`, every other strip or tile points
+/// at the same samples; without, past the end of the file, which is then read up to its second strip or tile.
+fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, all: bool) -> Vec<u8> {
+    let (cw, ch) = tile.map_or((width, 1), |t| (t, t));
+    let chunks = width.div_ceil(cw) * height.div_ceil(ch);
+    let chunk_bytes = cw * ch * 2;
+    // Header, the IFD (a count, its entries, the next IFD's offset), the offsets, the byte counts, the first chunk.
+    let ifd = 8u32;
+    let offsets = ifd + 2 + if tile.is_some() { 11 } else { 10 } * 12 + 4;
+    let counts = offsets + 4 * chunks;
+    let data = counts + 4 * chunks;
+    let (offsets_tag, counts_tag) = if tile.is_some() { (324, 325) } else { (273, 279) };
+    let mut entries: Vec<(u16, u16, u32, u32)> = vec![
+        (256, 4, 1, width),
+        (257, 4, 1, height),
+        (258, 3, 1, 16),
+        (259, 3, 1, 1),
+        (262, 3, 1, 1),
+        (277, 3, 1, 1),
+        (339, 3, 1, 1),
+        (offsets_tag, 4, chunks, offsets),
+        (counts_tag, 4, chunks, counts),
+    ];
+    entries.extend(match tile {
+        Some(t) => vec![(322, 4, 1, t), (323, 4, 1, t)],
+        None => vec![(278, 4, 1, 1)],
+    });
+    entries.sort();
+    let mut b = b"II*\0".to_vec();
+    b.extend(ifd.to_le_bytes());
+    b.extend((entries.len() as u16).to_le_bytes());
+    for &(tag, kind, count, value) in &entries {
+        b.extend(tag.to_le_bytes());
+        b.extend(kind.to_le_bytes());
+        b.extend(count.to_le_bytes());
+        match kind {
+            3 => b.extend((value as u16).to_le_bytes().into_iter().chain([0, 0])),
+            _ => b.extend(value.to_le_bytes()),
+        }
+    }
+    b.extend(0u32.to_le_bytes());
+    assert_eq!(b.len(), offsets as usize);
+    let past_end = data + chunk_bytes + 1_000_000;
+    b.extend((0..chunks).flat_map(|i| if i == 0 || all { data } else { past_end }.to_le_bytes()));
+    b.extend((0..chunks).flat_map(|_| chunk_bytes.to_le_bytes()));
+    assert_eq!(b.len(), data as usize);
+    b.extend((0..cw * ch).flat_map(|_| 7u16.to_le_bytes()));
+    b
+}
+
+/// A GeoTIFF whose first strip or tile decodes but whose next one is missing: 200M samples claimed (1.6 GB of
+/// heights), first in strips of one row of 20,000 samples, then in tiles of 256 x 256. The heights grow with the bands
+/// of strips or tiles decoded, so the file is refused at its second chunk with nothing near the claim allocated (the
+/// whole image's heights used to be allocated once the first chunk had decoded).
+#[test]
+fn a_geotiff_missing_all_but_its_first_chunk_is_refused_without_allocating_the_image() {
+    for (name, width, height, tile) in [("strips", 20_000, 10_000, None), ("tiles", 16_384, 12_288, Some(256))] {
+        assert!(u64::from(width) * u64::from(height) <= MAX_SAMPLES);
+        let bytes = uint16_tiff(width, height, tile, false);
+        let (largest, result) = largest_allocation(|| parse_geotiff(&bytes, Path::new("first.tif"), &plain()));
+        match result {
+            Err(TinError::Format { path, message }) => {
+                assert_eq!(path, Path::new("first.tif"));
+                assert!(
+                    message.contains("strip or tile 1") && message.contains("truncated"),
+                    "{name}: {message}"
+                );
+            }
+            Err(e) => panic!("{name}: expected a format error, got {e}"),
+            Ok((g, _)) => panic!("{name}: expected an error, got a {} x {} grid", g.rows, g.cols),
+        }
+        assert!(
+            largest < 16 << 20,
+            "{name}: an allocation of {largest} bytes for a file of {} bytes",
+            bytes.len()
+        );
+    }
+    // With every chunk present the same layouts read (so the test above fails for the missing chunk): strips, and
+    // tiles that overhang the image on the right and at the bottom.
+    for (width, height, tile) in [(20, 3_000, None), (40, 37, Some(16))] {
+        let bytes = uint16_tiff(width, height, tile, true);
+        let (grid, _) = parse_geotiff(&bytes, Path::new("all.tif"), &plain()).expect("reads");
+        assert_eq!((grid.cols, grid.rows), (width as usize, height as usize));
+        assert!(grid.z.iter().all(|&z| z == 7.0), "{tile:?}");
+    }
+}
+
+/// An interlaced PNG is decoded whole (its rows come in seven passes), so its header is checked against what its
+/// bytes can hold: no Deflate stream inflates to more than 1032 bytes a byte. One claiming 16,384 x 16,384 samples
+/// is refused before any decoding, saying so, with nothing near its 512 MiB of samples allocated (whole and
+/// non-interlaced alike).
+#[test]
+fn a_png_claiming_more_than_its_bytes_can_inflate_to_is_refused_at_once() {
+    for interlaced in [true, false] {
+        let huge = png_claiming_as(16_384, 16_384, interlaced);
+        let (largest, result) = largest_allocation(|| parse_png(&huge, Path::new("claims.png"), &plain()));
+        match result {
+            Err(TinError::Format { path, message }) => {
+                assert_eq!(path, Path::new("claims.png"));
+                assert!(
+                    message.contains("inflates to at most") && message.contains("truncated"),
+                    "{message}"
+                );
+            }
+            Err(e) => panic!("expected a format error, got {e}"),
+            Ok(g) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
+        }
+        assert!(
+            largest < 1 << 20,
+            "interlaced {interlaced}: an allocation of {largest} bytes"
+        );
+    }
+}
+
+/// The bound is a theorem, not a guess: the best compression the encoder has, of the most compressible image (one
+/// height everywhere), stays within it and reads.
+#[test]
+fn a_png_compressed_as_well_as_it_can_be_reads() {
+    let (width, rows) = (2_048u32, 2_048u32);
+    let mut bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut bytes, width, rows);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Sixteen);
+        enc.set_compression(png::Compression::High);
+        let mut w = enc.write_header().expect("header");
+        w.write_image_data(&vec![0u8; 2 * (width * rows) as usize])
+            .expect("data");
+    }
+    let ratio = (2 * width * rows) as f64 / bytes.len() as f64;
+    assert!(ratio > 100.0, "{} bytes, a ratio of {ratio}", bytes.len());
+    let grid = parse_png(&bytes, Path::new("flat.png"), &plain()).expect("reads");
+    assert_eq!((grid.rows, grid.cols), (rows as usize, width as usize));
 }

@@ -8,8 +8,8 @@
 //!   Strips and tiles are decoded one by one at their full padded width (see `decode_window`); a whole-file read
 //!   decodes at most [`MAX_DECODED_BYTES`] and [`MAX_SAMPLES`] samples, a file that ends before the data its tags
 //!   point at is named as truncated, an uncompressed strip or tile whose byte count is too small for its samples is
-//!   refused, and the heights are allocated only once the first strip or tile has decoded (a small file whose tags
-//!   claim a huge image is refused without allocating it);
+//!   refused, and the heights grow with the strips and tiles decoded (a small file whose tags claim a huge image is
+//!   refused without allocating it);
 //! - one band: a single-band image, or band [`DemOptions::band`] (1-based, like GDAL) of an interleaved multi-band
 //!   image; a multi-band image without a chosen band is an error;
 //! - `GDAL_NODATA` (tag 42113): samples equal to it become voids, as do NaN samples; for float32 samples, also those
@@ -57,7 +57,9 @@ use glam::DVec2;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-use super::{DemOptions, GridShape, MAX_SAMPLES, check_window, finish, open, read_bytes};
+use super::{
+    DemOptions, GridShape, MAX_SAMPLES, check_window, finish, grow_with_data, open, open_with_len, read_bytes,
+};
 use super::{degrees, tiff_mask};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
@@ -254,8 +256,7 @@ pub(super) fn read_geotiff_window(
     rows: [usize; 2],
     cols: [usize; 2],
 ) -> Result<(GridShape, Vec<f64>)> {
-    let file = open(path)?;
-    let len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let (file, len) = open_with_len(path)?;
     let (mut dec, meta) = open_tiff(std::io::BufReader::new(file), path, opts)?;
     let shape = meta.shape;
     check_window(&shape, rows, cols, path)?;
@@ -273,8 +274,9 @@ pub(super) fn read_geotiff_window(
 /// truncated file as such.
 ///
 /// Memory follows the data, not the header: a window of more than [`MAX_SAMPLES`] is refused, and the window's heights
-/// are allocated only once its first strip or tile has decoded, so a small file whose tags claim a huge image made of
-/// data it does not hold is refused without allocating the image.
+/// grow band by band (a row of strips or tiles across the window) as the bands decode, to at most twice the samples
+/// decoded, so a small file whose tags claim a huge image made of data it does not hold is refused, at the first strip
+/// or tile that is missing, without allocating the image.
 ///
 /// A strip or tile is decoded with its full padded width as the row stride: the `tiff` crate (0.11) fails on an LZW
 /// tile at the right edge of an image that its tiles do not divide when asked for the unpadded width (it skips the
@@ -307,6 +309,10 @@ fn decode_window<R: Read + Seek>(
     let mut sample_type = "";
     let stride = meta.stride;
     for ty in rows[0] / ch..=rows[1] / ch {
+        // The band of strips or tiles across the window: each one's samples inside the window, kept compactly until
+        // the band is decoded, then appended to the heights row by row.
+        let mut pieces: Vec<(usize, Vec<f64>)> = Vec::new();
+        let mut band_rows = 0;
         for tx in cols[0] / cw..=cols[1] / cw {
             let index = u32::try_from(ty * across + tx).map_err(|_| err("too many strips or tiles".into()))?;
             let (dw, dh) = dec.chunk_data_dimensions(index);
@@ -345,18 +351,42 @@ fn decode_window<R: Read + Seek>(
                     values.len(),
                 )));
             }
-            if z.is_empty() {
-                z = vec![0.0; samples as usize];
-            }
             // The chunk's samples inside the window, in whole-grid rows and columns.
             let (y0, x0) = (ty * ch, tx * cw);
-            for r in rows[0].max(y0)..=rows[1].min(y0 + dh - 1) {
-                for c in cols[0].max(x0)..=cols[1].min(x0 + dw - 1) {
-                    let v = values[((r - y0) * row + (c - x0)) * stride + meta.band - 1];
-                    z[(r - rows[0]) * nc + (c - cols[0])] = meta.height(v, sample_type);
-                }
+            let (r0, r1) = (rows[0].max(y0), rows[1].min(y0 + dh - 1));
+            let (c0, c1) = (cols[0].max(x0), cols[1].min(x0 + dw - 1));
+            if r1 < r0 || c1 < c0 || (!pieces.is_empty() && r1 - r0 + 1 != band_rows) {
+                return Err(err(format!(
+                    "strip or tile {index} ({dw} x {dh} samples) does not cover its part of rows {}..={} and \
+                     columns {}..={}",
+                    rows[0], rows[1], cols[0], cols[1]
+                )));
+            }
+            band_rows = r1 - r0 + 1;
+            let mut piece = Vec::with_capacity(band_rows * (c1 - c0 + 1));
+            for r in r0..=r1 {
+                let at = |c: usize| ((r - y0) * row + (c - x0)) * stride + meta.band - 1;
+                piece.extend((c0..=c1).map(|c| meta.height(values[at(c)], sample_type)));
+            }
+            pieces.push((c1 - c0 + 1, piece));
+        }
+        // Memory follows the data: the heights grow with the bands decoded (see `grow_with_data`).
+        grow_with_data(&mut z, band_rows * nc, samples as usize);
+        for r in 0..band_rows {
+            for (width, piece) in &pieces {
+                z.extend_from_slice(&piece[r * width..(r + 1) * width]);
             }
         }
+    }
+    if z.len() != samples as usize {
+        return Err(err(format!(
+            "strips or tiles gave {} of the {samples} samples of rows {}..={} and columns {}..={}",
+            z.len(),
+            rows[0],
+            rows[1],
+            cols[0],
+            cols[1]
+        )));
     }
     Ok((sample_type, z))
 }

@@ -49,6 +49,17 @@ use crate::grid::Grid;
 /// claims is checked before the heights are allocated; larger DEMs are read in windows (`tincull tiles plan`).
 pub const MAX_SAMPLES: u64 = 1 << 28;
 
+/// Makes room in `z` for `more` values, growing its capacity with the values it holds (to twice as many, or what
+/// `more` needs) but never past `total`: heights decoded from a compressed file take memory as the file's data gives
+/// them, not as its header claims.
+#[cfg(any(feature = "png", feature = "geotiff"))]
+pub(crate) fn grow_with_data(z: &mut Vec<f64>, more: usize, total: usize) {
+    if z.len() + more > z.capacity() {
+        let room = (2 * z.len()).max(z.len() + more).min(total.max(z.len() + more));
+        z.reserve_exact(room - z.len());
+    }
+}
+
 /// How to read a DEM.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DemOptions {
@@ -495,6 +506,14 @@ fn scale(z: &mut [f64], opts: &DemOptions) {
             *h *= opts.z_scale;
         }
     }
+}
+
+/// [`open`] (a regular file), with its length in bytes.
+#[cfg(any(feature = "png", feature = "geotiff"))]
+fn open_with_len(path: &Path) -> Result<(std::fs::File, u64)> {
+    let file = open(path)?;
+    let len = file.metadata().map_err(|e| TinError::io(path, e))?.len();
+    Ok((file, len))
 }
 
 /// Opens a file, naming it in the error. The readers that open a DEM (headers, windows, strips) read it at offsets,

@@ -16,7 +16,7 @@ use std::path::Path;
 
 use glam::DVec2;
 
-use super::{DemOptions, GridShape, MAX_SAMPLES, finish, open, read_bytes};
+use super::{DemOptions, GridShape, MAX_SAMPLES, finish, grow_with_data, open_with_len, read_bytes};
 use crate::error::{Result, TinError};
 use crate::grid::Grid;
 
@@ -31,14 +31,15 @@ pub fn read_png(path: &Path, opts: &DemOptions) -> Result<Grid> {
 pub fn read_png_header(path: &Path, opts: &DemOptions) -> Result<GridShape> {
     opts.check_one_band(path, "PNG")?;
     let spacing = spacing(path, opts)?;
-    let file = std::io::BufReader::new(open(path)?);
+    let (file, len) = open_with_len(path)?;
+    let file = std::io::BufReader::new(file);
     let mut decoder = png::Decoder::new_with_limits(file, png::Limits { bytes: 1 << 31 });
     decoder.set_transformations(png::Transformations::IDENTITY);
     let reader = decoder
         .read_info()
         .map_err(|e| TinError::format(path, format!("not a readable PNG: {e}")))?;
     let info = reader.info();
-    check_info(info, path)?;
+    check_info(info, path, len)?;
     let (cols, rows) = (info.width as usize, info.height as usize);
     Ok(GridShape {
         rows,
@@ -59,8 +60,19 @@ fn spacing(path: &Path, opts: &DemOptions) -> Result<(f64, f64)> {
     })
 }
 
-/// Refuses images too large, and other than 8- or 16-bit grayscale.
-fn check_info(info: &png::Info, path: &Path) -> Result<()> {
+/// The most bytes a Deflate stream (RFC 1951), which holds a PNG's image data, inflates to per byte of the stream.
+///
+/// A stream is blocks of symbols. A stored block gives one byte per byte it holds. In a Huffman-coded block every
+/// symbol takes at least one bit (a code of a used symbol is at least one bit long, even when it is the only one of
+/// its tree), a literal gives one byte, and a match takes a length symbol and a distance symbol, at least two bits,
+/// for at most 258 bytes. So no bit gives more than 129 bytes, and no byte of the stream more than 8 · 129 = 1032;
+/// block headers, the zlib header and checksum and the PNG's other bytes only lower the ratio. A file of `n` bytes
+/// therefore holds at most 1032 `n` bytes of image data, whatever its header claims.
+const DEFLATE_MAX_RATIO: u64 = 1032;
+
+/// Refuses images too large, other than 8- or 16-bit grayscale, or larger than a file of `file_len` bytes can hold
+/// ([`DEFLATE_MAX_RATIO`]).
+fn check_info(info: &png::Info, path: &Path, file_len: u64) -> Result<()> {
     let err = |m: String| TinError::format(path, m);
     let (color, depth) = (info.color_type, info.bit_depth);
     if u64::from(info.width) * u64::from(info.height) > MAX_SAMPLES {
@@ -82,6 +94,16 @@ fn check_info(info: &png::Info, path: &Path) -> Result<()> {
             depth as u8
         )));
     }
+    let sample_bytes = if depth == png::BitDepth::Sixteen { 2 } else { 1 };
+    let needed = u64::from(info.width) * u64::from(info.height) * sample_bytes;
+    let most = file_len.saturating_mul(DEFLATE_MAX_RATIO);
+    if needed > most {
+        return Err(err(format!(
+            "{} x {} samples of {sample_bytes} bytes take {needed} bytes, but a PNG of {file_len} bytes inflates to at \
+             most {most}: a truncated file, or a header that claims more than the file holds",
+            info.width, info.height
+        )));
+    }
     Ok(())
 }
 
@@ -95,7 +117,7 @@ pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
         .read_info()
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
     let info = reader.info();
-    check_info(info, path)?;
+    check_info(info, path, bytes.len() as u64)?;
     let (cols, rows, depth) = (info.width as usize, info.height as usize, info.bit_depth);
     let mut z = Vec::new();
     if info.interlaced {
@@ -116,10 +138,7 @@ pub fn parse_png(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<Grid> {
         // grows with the data the file holds, so a small file whose header claims a huge image is refused without
         // allocating it.
         each_row(&mut reader, path, |_, row| {
-            if z.len() + row.len() > z.capacity() {
-                let room = (2 * z.len()).max(z.len() + row.len()).min(rows * cols);
-                z.reserve_exact(room - z.len());
-            }
+            grow_with_data(&mut z, row.len(), rows * cols);
             z.append(row);
             Ok(())
         })?;
@@ -148,14 +167,15 @@ pub(super) fn read_png_strips(
 ) -> Result<()> {
     let err = |m: String| TinError::format(path, m);
     let strip_rows = strip_rows.max(1);
-    let file = std::io::BufReader::new(open(path)?);
+    let (file, len) = open_with_len(path)?;
+    let file = std::io::BufReader::new(file);
     let mut decoder = png::Decoder::new_with_limits(file, png::Limits { bytes: 1 << 31 });
     decoder.set_transformations(png::Transformations::IDENTITY);
     let mut reader = decoder
         .read_info()
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
     let info = reader.info();
-    check_info(info, path)?;
+    check_info(info, path, len)?;
     if info.interlaced {
         let grid = read_png(path, &DemOptions { z_scale: 1.0, ..*opts })?;
         for (i, strip) in grid.z.chunks(strip_rows * grid.cols).enumerate() {
