@@ -63,6 +63,22 @@ fn largest_allocation<T>(f: impl FnOnce() -> T) -> (usize, T) {
     (LARGEST.with(Cell::get), out)
 }
 
+/// Runs a read of the file `name` that must be refused: returns the error's message, after checking that it is a
+/// format error naming the file and that no allocation of `limit` bytes or more was made on the way.
+fn refused_within<T>(what: &str, name: &str, limit: usize, read: impl FnOnce(&Path) -> tin::Result<T>) -> String {
+    let (largest, result) = largest_allocation(|| read(Path::new(name)));
+    let message = match result {
+        Err(TinError::Format { path, message }) => {
+            assert_eq!(path, Path::new(name), "{what}");
+            message
+        }
+        Err(e) => panic!("{what}: expected a format error, got {e}"),
+        Ok(_) => panic!("{what}: expected an error, the file was read"),
+    };
+    assert!(largest < limit, "{what}: an allocation of {largest} bytes ({message})");
+    message
+}
+
 /// Options for a plain TIFF (no georeference): a spacing of 10 m.
 fn plain() -> DemOptions {
     DemOptions {
@@ -113,21 +129,9 @@ fn a_small_geotiff_claiming_a_huge_image_is_refused_without_allocating_it() {
     for (name, compression) in compressions {
         let bytes = two_columns_claiming(rows, width, compression);
         assert!(bytes.len() < 1 << 20, "{name}: {} bytes", bytes.len());
-        let (largest, result) = largest_allocation(|| parse_geotiff(&bytes, Path::new("claims.tif"), &plain()));
-        match result {
-            Err(TinError::Format { path, message }) => {
-                assert_eq!(path, Path::new("claims.tif"));
-                assert!(message.contains("strip or tile 0"), "{name}: {message}");
-            }
-            Err(e) => panic!("{name}: expected a format error, got {e}"),
-            Ok((g, _)) => panic!("{name}: expected an error, got a {} x {} grid", g.rows, g.cols),
-        }
         // Far below the 1.6 GB of heights (and the 400 MB of its samples): what the file holds, and a strip's buffer.
-        assert!(
-            largest < 16 << 20,
-            "{name}: an allocation of {largest} bytes for a file of {} bytes",
-            bytes.len()
-        );
+        let message = refused_within(name, "claims.tif", 16 << 20, |p| parse_geotiff(&bytes, p, &plain()));
+        assert!(message.contains("strip or tile 0"), "{name}: {message}");
     }
 }
 
@@ -139,20 +143,14 @@ fn the_claim_decides_and_beyond_the_limit_the_tiles_are_named() {
     let (grid, _) = parse_geotiff(&good, Path::new("good.tif"), &plain()).expect("reads");
     assert_eq!((grid.rows, grid.cols), (10_000, 2));
 
-    let (largest, result) = largest_allocation(|| {
-        let huge = two_columns_claiming(30_000, 10_000, Compression::Uncompressed);
-        parse_geotiff(&huge, Path::new("huge.tif"), &plain())
+    let huge = two_columns_claiming(30_000, 10_000, Compression::Uncompressed);
+    let message = refused_within("300M samples", "huge.tif", 16 << 20, |p| {
+        parse_geotiff(&huge, p, &plain())
     });
-    let message = match result {
-        Err(TinError::Format { message, .. }) => message,
-        Err(e) => panic!("expected a format error, got {e}"),
-        Ok(_) => panic!("300M samples read whole"),
-    };
     assert!(
         message.contains("10000 x 30000 samples") && message.contains("tiles plan"),
         "{message}"
     );
-    assert!(largest < 16 << 20, "an allocation of {largest} bytes");
 }
 
 /// A 16-bit greyscale PNG of one row of `width` samples whose IHDR is then rewritten to claim `rows` rows (its CRC
@@ -207,30 +205,13 @@ fn a_small_png_claiming_a_huge_image_is_refused_without_allocating_it() {
         "one row is no grid: {grid:?}"
     );
     let two = png_claiming(16_384, 2);
-    let (largest, result) = largest_allocation(|| parse_png(&two, Path::new("claims.png"), &plain()));
-    match result {
-        Err(TinError::Format { path, message }) => {
-            assert_eq!(path, Path::new("claims.png"));
-            assert!(message.contains("PNG"), "{message}");
-        }
-        Err(e) => panic!("expected a format error, got {e}"),
-        Ok(g) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
-    }
-    assert!(largest < 16 << 20, "an allocation of {largest} bytes");
+    let message = refused_within("two rows", "claims.png", 16 << 20, |p| parse_png(&two, p, &plain()));
+    assert!(message.contains("PNG"), "{message}");
 
     let huge = png_claiming(16_384, 16_384);
     assert!(huge.len() < 4096, "{} bytes", huge.len());
-    let (largest, result) = largest_allocation(|| parse_png(&huge, Path::new("claims.png"), &plain()));
-    match result {
-        Err(TinError::Format { message, .. }) => assert!(message.contains("truncated"), "{message}"),
-        Err(e) => panic!("expected a format error, got {e}"),
-        Ok(g) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
-    }
-    assert!(
-        largest < 16 << 20,
-        "an allocation of {largest} bytes for a file of {} bytes",
-        huge.len()
-    );
+    let message = refused_within("16384 rows", "claims.png", 16 << 20, |p| parse_png(&huge, p, &plain()));
+    assert!(message.contains("truncated"), "{message}");
 }
 
 /// A little-endian uncompressed uint16 TIFF of `width` x `height` samples, in strips of one row or in tiles of
@@ -293,22 +274,10 @@ fn a_geotiff_missing_all_but_its_first_chunk_is_refused_without_allocating_the_i
     for (name, width, height, tile) in [("strips", 20_000, 10_000, None), ("tiles", 16_384, 12_288, Some(256))] {
         assert!(u64::from(width) * u64::from(height) <= MAX_SAMPLES);
         let bytes = uint16_tiff(width, height, tile, false);
-        let (largest, result) = largest_allocation(|| parse_geotiff(&bytes, Path::new("first.tif"), &plain()));
-        match result {
-            Err(TinError::Format { path, message }) => {
-                assert_eq!(path, Path::new("first.tif"));
-                assert!(
-                    message.contains("strip or tile 1") && message.contains("truncated"),
-                    "{name}: {message}"
-                );
-            }
-            Err(e) => panic!("{name}: expected a format error, got {e}"),
-            Ok((g, _)) => panic!("{name}: expected an error, got a {} x {} grid", g.rows, g.cols),
-        }
+        let message = refused_within(name, "first.tif", 16 << 20, |p| parse_geotiff(&bytes, p, &plain()));
         assert!(
-            largest < 16 << 20,
-            "{name}: an allocation of {largest} bytes for a file of {} bytes",
-            bytes.len()
+            message.contains("strip or tile 1") && message.contains("truncated"),
+            "{name}: {message}"
         );
     }
     // With every chunk present the same layouts read (so the test above fails for the missing chunk): strips, and
@@ -329,21 +298,11 @@ fn a_geotiff_missing_all_but_its_first_chunk_is_refused_without_allocating_the_i
 fn a_png_claiming_more_than_its_bytes_can_inflate_to_is_refused_at_once() {
     for interlaced in [true, false] {
         let huge = png_claiming_as(16_384, 16_384, interlaced);
-        let (largest, result) = largest_allocation(|| parse_png(&huge, Path::new("claims.png"), &plain()));
-        match result {
-            Err(TinError::Format { path, message }) => {
-                assert_eq!(path, Path::new("claims.png"));
-                assert!(
-                    message.contains("inflates to at most") && message.contains("truncated"),
-                    "{message}"
-                );
-            }
-            Err(e) => panic!("expected a format error, got {e}"),
-            Ok(g) => panic!("expected an error, got a {} x {} grid", g.rows, g.cols),
-        }
+        let what = format!("interlaced {interlaced}");
+        let message = refused_within(&what, "claims.png", 1 << 20, |p| parse_png(&huge, p, &plain()));
         assert!(
-            largest < 1 << 20,
-            "interlaced {interlaced}: an allocation of {largest} bytes"
+            message.contains("inflates to at most") && message.contains("truncated"),
+            "{message}"
         );
     }
 }
