@@ -227,6 +227,44 @@ fn an_output_never_overwrites_an_input() {
     assert_eq!(fs::read(&obj).expect("read"), original);
 }
 
+/// The files a DEM is read with are inputs too: a `.npy` grid's JSON sidecar (which `--export-json` or a demo in the
+/// grid's folder would have replaced) and an `.asc` grid's `.prj`.
+#[test]
+fn an_output_never_overwrites_the_files_a_dem_is_read_with() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("g.npy");
+    ok(&["synth", "-o", p(&npy), "--vertices", "400", "--rng-seed", "1", "-q"]);
+    let sidecar = dir.path().join("g.json");
+    let original = fs::read(&sidecar).expect("the grid's sidecar");
+    let tch = dir.path().join("g.tch");
+    let refused = ["g.json", "the same file as the input"];
+    fails_with(
+        &["build", p(&npy), "-o", p(&tch), "--export-json", p(&sidecar)],
+        &refused,
+    );
+    fails_with(&["horizon", p(&npy), "--export-json", p(&sidecar)], &refused);
+    fails_with(
+        &["demo", p(&npy), "--out-dir", p(dir.path()), "--viewpoints", "1"],
+        &refused,
+    );
+    assert_eq!(fs::read(&sidecar).expect("read"), original);
+    assert_eq!(names(dir.path()), ["g.json", "g.npy"], "nothing written");
+
+    let asc = dir.path().join("h.asc");
+    fs::write(
+        &asc,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("asc");
+    let prj = dir.path().join("h.prj");
+    fs::write(&prj, "LOCAL_CS[\"metres\"]").expect("prj");
+    fails_with(
+        &["tin", p(&asc), "--keep-grid", "-o", p(&prj)],
+        &["h.prj", "the same file as the input"],
+    );
+    assert_eq!(fs::read_to_string(&prj).expect("read"), "LOCAL_CS[\"metres\"]");
+}
+
 #[test]
 fn a_reader_that_goes_away_ends_the_command_quietly() {
     use std::io::Read;

@@ -28,9 +28,15 @@ impl Outputs {
         Outputs::default()
     }
 
-    /// Declares a file the command reads: no output may be that file (checked whichever is declared first).
+    /// Declares a file the command reads: no output may be that file (checked whichever is declared first), nor a
+    /// file that its reader may read beside it when it is a DEM (a `.npy` grid's JSON sidecar, an `.asc` grid's
+    /// `.prj`, a GeoTIFF's `.msk`: [`tin::dem::companion_files`]).
     pub fn input(&mut self, path: &Path) -> Result<()> {
-        Ok(self.batch.input(path)?)
+        self.batch.input(path)?;
+        for companion in tin::dem::companion_files(path) {
+            self.batch.input(&companion)?;
+        }
+        Ok(())
     }
 
     /// Checks a file output (before the work).

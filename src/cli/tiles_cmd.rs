@@ -152,7 +152,7 @@ pub fn run(args: &TilesArgs) -> Result<()> {
 
 fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
-    dem_inputs(&mut files, &args.dem)?;
+    files.input(&args.dem)?;
     if let Some(config) = &args.config {
         files.input(config)?;
     }
@@ -335,16 +335,6 @@ fn parse_whole(s: &str) -> Result<usize, String> {
         .map_err(|_| format!("{s:?} is not a whole number (0 or more): samples of a DEM, or whole metres of a mesh"))
 }
 
-/// Declares the terrain file `dem` an input of `files`, with the JSON sidecar that a `.npy` grid is read with (`tiles
-/// plan t.npy -o t.json` would replace it).
-fn dem_inputs(files: &mut Outputs, dem: &Path) -> Result<()> {
-    files.input(dem)?;
-    if dem.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy")) {
-        files.input(&tin::dem::npy::sidecar_path(dem))?;
-    }
-    Ok(())
-}
-
 /// Creates the folder `dir` of a plan's tile files, then runs `work`, which writes into it: when `work` fails or is
 /// interrupted (Ctrl-C) and the folder was new, it is removed again (it is then empty, the files being all or
 /// nothing), so a failed plan leaves nothing behind.
@@ -466,7 +456,7 @@ fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: boo
     // What the job reads is never its output (a plan edited by hand could name the DEM or a far-field file).
     let mut files = Outputs::new();
     files.input(plan_path)?;
-    dem_inputs(&mut files, &Plan::resolve(plan_path, &plan.source))?;
+    files.input(&Plan::resolve(plan_path, &plan.source))?;
     for read in spec.far.iter().chain(&spec.part) {
         files.input(&Plan::resolve(plan_path, read))?;
     }

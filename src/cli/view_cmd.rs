@@ -169,7 +169,9 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             "{}-view",
             args.input.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default()
         )),
-        inputs: vec![args.input.clone()],
+        inputs: std::iter::once(args.input.clone())
+            .chain(tin::dem::companion_files(&args.input))
+            .collect(),
         eye: args.eye,
         screenshot: args.screenshot.as_ref().map(|path| ScreenshotRequest {
             path: path.clone(),

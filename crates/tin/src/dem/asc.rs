@@ -546,12 +546,14 @@ impl Header {
     }
 }
 
-/// The `.prj` beside `grid` (same stem, extension `prj` in lower or upper case), if there is one.
+/// Where a `.prj` beside `grid` may be: same stem, extension `prj` in lower or upper case.
+pub(crate) fn prj_candidates(grid: &Path) -> [std::path::PathBuf; 2] {
+    ["prj", "PRJ"].map(|e| grid.with_extension(e))
+}
+
+/// The `.prj` beside `grid` ([`prj_candidates`]), if there is one.
 fn prj_of(grid: &Path) -> Option<std::path::PathBuf> {
-    ["prj", "PRJ"]
-        .into_iter()
-        .map(|e| grid.with_extension(e))
-        .find(|p| p.is_file())
+    prj_candidates(grid).into_iter().find(|p| p.is_file())
 }
 
 /// The root keyword of a CRS text, in upper case (`PROJCS`, `GEOGCRS`, `COMPD_CS`, `PROJECTION`, …), and the text

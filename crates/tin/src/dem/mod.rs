@@ -37,7 +37,7 @@ pub mod png;
 #[cfg(feature = "geotiff")]
 pub mod tiff_mask;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec2;
 
@@ -331,6 +331,27 @@ fn cut(z: &[f64], width: usize, rows: [usize; 2], cols: [usize; 2]) -> Vec<f64> 
         out.extend_from_slice(&z[r * width + cols[0]..=r * width + cols[1]]);
     }
     out
+}
+
+/// The files beside the DEM `path` that its reader may read too (whether or not they exist): a `.npy` grid's JSON
+/// sidecar, an `.asc` grid's `.prj` (either case), a GeoTIFF's GDAL mask (`.tif.msk`). A command that reads the DEM
+/// must not write over them.
+pub fn companion_files(path: &Path) -> Vec<PathBuf> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "npy" => vec![npy::sidecar_path(path)],
+        "asc" => asc::prj_candidates(path).to_vec(),
+        "tif" | "tiff" => vec![gdal_mask_path(path)],
+        _ => Vec::new(),
+    }
+}
+
+/// The external nodata mask file GDAL would read beside the GeoTIFF `path` (`dem.tif.msk`).
+pub(crate) fn gdal_mask_path(path: &Path) -> PathBuf {
+    PathBuf::from(format!("{}.msk", path.display()))
 }
 
 /// The lower-case extension of `path`, or the error for a file without one the readers know.

@@ -42,11 +42,6 @@ impl MaskSource {
     }
 }
 
-/// The `.msk` file GDAL would read beside `path`.
-fn external(path: &Path) -> PathBuf {
-    PathBuf::from(format!("{}.msk", path.display()))
-}
-
 /// The nodata mask of the GeoTIFF at `path`, whose bytes `reader` reads: the first full-resolution mask image among
 /// its first 64, else a `.msk` file beside it (GDAL's order). None when there is neither; a file whose images cannot
 /// be listed is looked at no further (the reader of its samples names that error).
@@ -62,7 +57,7 @@ pub fn find_mask<R: Read + Seek>(path: &Path, reader: R) -> Option<MaskSource> {
             }
         }
     }
-    let msk = external(path);
+    let msk = super::gdal_mask_path(path);
     msk.is_file().then_some(MaskSource::External(msk))
 }
 

@@ -135,7 +135,8 @@ pub struct ViewerOptions {
     pub rebuild: Option<RebuildFn>,
     /// Path stem of exports (`STEM.tch`, `STEM.json`, `STEM.obj`).
     pub export_stem: PathBuf,
-    /// Files the exports never write over (the terrain shown): an export to one of them is refused.
+    /// Files the exports never write over (the terrain shown, and the files its reader read beside it:
+    /// [`tin::dem::companion_files`]): an export to one of them is refused.
     pub inputs: Vec<PathBuf>,
     /// Initial viewpoint (world); default: the terrain's centre, 20 m above the ground.
     pub eye: Option<[f64; 3]>,

@@ -400,31 +400,23 @@ impl ViewerApp {
         };
         let stem = PathBuf::from(&self.export_stem);
         let mut result: Option<std::result::Result<PathBuf, String>> = None;
-        // The terrain shown is never written over.
-        let free = |path: &std::path::Path| match self.inputs.iter().find(|i| same_file(i, path)) {
-            Some(_) => Err(format!(
-                "{} is the terrain this viewer shows; give the export another path",
-                path.display()
-            )),
-            None => Ok(()),
-        };
+        let inputs = &self.inputs;
         ui.horizontal(|ui| {
             if ui.button(".tch").clicked() {
                 let path = stem.with_extension("tch");
-                let written = free(&path).and_then(|()| h.to_bytes().map_err(|e| e.to_string()));
-                let written = written.and_then(|b| outfile::write_bytes(&path, &b).map_err(|e| e.to_string()));
+                let written = h.to_bytes().map_err(|e| e.to_string());
+                let written = written.and_then(|b| write_export(inputs, &path, |w| w.write_all(&b)));
                 result = Some(written.map(|_| path));
             }
             if ui.button("JSON").clicked() {
                 let path = stem.with_extension("json");
-                let written = free(&path).and_then(|()| to_json(h).map_err(|e| format!("{e:#}")));
-                let written =
-                    written.and_then(|t| outfile::write_bytes(&path, t.as_bytes()).map_err(|e| e.to_string()));
+                let written = to_json(h).map_err(|e| format!("{e:#}"));
+                let written = written.and_then(|t| write_export(inputs, &path, |w| w.write_all(t.as_bytes())));
                 result = Some(written.map(|_| path));
             }
             if ui.button("grouped OBJ").clicked() {
                 let path = stem.with_extension("obj");
-                let written = free(&path).and_then(|()| write_grouped_obj(h, &path));
+                let written = write_grouped_obj(inputs, h, &path);
                 result = Some(written.map(|_| path));
             }
         });
@@ -436,15 +428,34 @@ impl ViewerApp {
     }
 }
 
-/// Whether `a` and `b` name the same existing file (after following links and `..`).
-fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
-    matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+/// A batch of export files that may replace none of `inputs` (the terrain shown and the files read beside it).
+fn export_batch(inputs: &[PathBuf]) -> std::result::Result<outfile::Batch, String> {
+    let mut batch = outfile::Batch::new();
+    for input in inputs {
+        batch.input(input).map_err(|e| e.to_string())?;
+    }
+    Ok(batch)
 }
 
-/// Writes the grouped OBJ of `h` and its `.mtl` beside it, both or neither.
-fn write_grouped_obj(h: &cull::Hierarchy, obj: &std::path::Path) -> std::result::Result<(), String> {
+/// Writes one export file, `write` giving its content, unless it is one of `inputs`.
+fn write_export(
+    inputs: &[PathBuf],
+    path: &std::path::Path,
+    write: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> std::result::Result<(), String> {
+    let mut batch = export_batch(inputs)?;
+    batch.add(path, write).map_err(|e| e.to_string())?;
+    batch.commit().map_err(|e| e.to_string())
+}
+
+/// Writes the grouped OBJ of `h` and its `.mtl` beside it, both or neither, unless one is one of `inputs`.
+fn write_grouped_obj(
+    inputs: &[PathBuf],
+    h: &cull::Hierarchy,
+    obj: &std::path::Path,
+) -> std::result::Result<(), String> {
     let (mtl, name) = mtl_path(obj).map_err(|e| format!("{e:#}"))?;
-    let mut batch = outfile::Batch::new();
+    let mut batch = export_batch(inputs)?;
     batch.add(&mtl, |w| write_mtl_to(h, w)).map_err(|e| e.to_string())?;
     batch
         .add(obj, |w| write_grouped_obj_to(h, &name, w))
