@@ -214,10 +214,20 @@ fn a_small_png_claiming_a_huge_image_is_refused_without_allocating_it() {
     assert!(message.contains("truncated"), "{message}");
 }
 
+/// Which strips or tiles of [`uint16_tiff`] have samples.
+#[derive(Clone, Copy, PartialEq)]
+enum Chunks {
+    /// Every one (all the same samples).
+    All,
+    /// The first; the others point past the end of the file.
+    First,
+    /// None: every one points past the end of the file.
+    None,
+}
+
 /// A little-endian uncompressed uint16 TIFF of `width` x `height` samples, in strips of one row or in tiles of
-/// `tile` x `tile`, whose first strip or tile holds its samples (all 7). With `all`, every other strip or tile points
-/// at the same samples; without, past the end of the file, which is then read up to its second strip or tile.
-fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, all: bool) -> Vec<u8> {
+/// `tile` x `tile`, whose strips or tiles hold samples (all 7) as `present` says.
+fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, present: Chunks) -> Vec<u8> {
     let (cw, ch) = tile.map_or((width, 1), |t| (t, t));
     let chunks = width.div_ceil(cw) * height.div_ceil(ch);
     let chunk_bytes = cw * ch * 2;
@@ -227,6 +237,13 @@ fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, all: bool) -> Vec<u8>
     let counts = offsets + 4 * chunks;
     let data = counts + 4 * chunks;
     let (offsets_tag, counts_tag) = if tile.is_some() { (324, 325) } else { (273, 279) };
+    let past_end = data + chunk_bytes + 1_000_000;
+    let has_data = |i: u32| present == Chunks::All || (i == 0 && present == Chunks::First);
+    // One offset and one count are held in their entries; more in the tables the entries point at.
+    let (offsets_value, counts_value) = match chunks {
+        1 => (if has_data(0) { data } else { past_end }, chunk_bytes),
+        _ => (offsets, counts),
+    };
     let mut entries: Vec<(u16, u16, u32, u32)> = vec![
         (256, 4, 1, width),
         (257, 4, 1, height),
@@ -235,8 +252,8 @@ fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, all: bool) -> Vec<u8>
         (262, 3, 1, 1),
         (277, 3, 1, 1),
         (339, 3, 1, 1),
-        (offsets_tag, 4, chunks, offsets),
-        (counts_tag, 4, chunks, counts),
+        (offsets_tag, 4, chunks, offsets_value),
+        (counts_tag, 4, chunks, counts_value),
     ];
     entries.extend(match tile {
         Some(t) => vec![(322, 4, 1, t), (323, 4, 1, t)],
@@ -257,11 +274,12 @@ fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, all: bool) -> Vec<u8>
     }
     b.extend(0u32.to_le_bytes());
     assert_eq!(b.len(), offsets as usize);
-    let past_end = data + chunk_bytes + 1_000_000;
-    b.extend((0..chunks).flat_map(|i| if i == 0 || all { data } else { past_end }.to_le_bytes()));
+    b.extend((0..chunks).flat_map(|i| if has_data(i) { data } else { past_end }.to_le_bytes()));
     b.extend((0..chunks).flat_map(|_| chunk_bytes.to_le_bytes()));
     assert_eq!(b.len(), data as usize);
-    b.extend((0..cw * ch).flat_map(|_| 7u16.to_le_bytes()));
+    if present != Chunks::None {
+        b.extend((0..cw * ch).flat_map(|_| 7u16.to_le_bytes()));
+    }
     b
 }
 
@@ -273,7 +291,7 @@ fn uint16_tiff(width: u32, height: u32, tile: Option<u32>, all: bool) -> Vec<u8>
 fn a_geotiff_missing_all_but_its_first_chunk_is_refused_without_allocating_the_image() {
     for (name, width, height, tile) in [("strips", 20_000, 10_000, None), ("tiles", 16_384, 12_288, Some(256))] {
         assert!(u64::from(width) * u64::from(height) <= MAX_SAMPLES);
-        let bytes = uint16_tiff(width, height, tile, false);
+        let bytes = uint16_tiff(width, height, tile, Chunks::First);
         let message = refused_within(name, "first.tif", 16 << 20, |p| parse_geotiff(&bytes, p, &plain()));
         assert!(
             message.contains("strip or tile 1") && message.contains("truncated"),
@@ -283,11 +301,36 @@ fn a_geotiff_missing_all_but_its_first_chunk_is_refused_without_allocating_the_i
     // With every chunk present the same layouts read (so the test above fails for the missing chunk): strips, and
     // tiles that overhang the image on the right and at the bottom.
     for (width, height, tile) in [(20, 3_000, None), (40, 37, Some(16))] {
-        let bytes = uint16_tiff(width, height, tile, true);
+        let bytes = uint16_tiff(width, height, tile, Chunks::All);
         let (grid, _) = parse_geotiff(&bytes, Path::new("all.tif"), &plain()).expect("reads");
         assert_eq!((grid.cols, grid.rows), (width as usize, height as usize));
         assert!(grid.z.iter().all(|&z| z == 7.0), "{tile:?}");
     }
+}
+
+/// A tile may be wider and taller than its image (padding), but a file whose one tile's padding would take far more
+/// than the image (found by an audit: a 1 MB GeoTIFF of 2 x 16,384 samples in a tile 65,536 wide had 1 GiB decoded,
+/// then 8 GiB asked for its conversion to f64) is refused before the tile is decoded; one within bounds is read
+/// without converting its padding.
+#[test]
+fn a_tile_far_larger_than_its_image_is_refused_and_padding_is_never_converted() {
+    let padded = uint16_tiff(16, 8192, Some(8192), Chunks::None);
+    let message = refused_within("8192 tile", "padded.tif", 1 << 20, |p| {
+        parse_geotiff(&padded, p, &plain())
+    });
+    assert!(
+        message.contains("strip or tile 0") && message.contains("padding"),
+        "{message}"
+    );
+
+    // A tile of 4096 x 4096 (32 MiB of samples) over 20 x 4096: read with nothing near the 128 MiB its f64 would
+    // take.
+    let big = uint16_tiff(20, 4096, Some(4096), Chunks::All);
+    let (largest, read) = largest_allocation(|| parse_geotiff(&big, Path::new("big.tif"), &plain()));
+    let (grid, _) = read.expect("reads");
+    assert_eq!((grid.cols, grid.rows), (20, 4096));
+    assert!(grid.z.iter().all(|&z| z == 7.0));
+    assert!(largest <= 33 << 20, "an allocation of {largest} bytes");
 }
 
 /// An interlaced PNG is decoded whole (its rows come in seven passes), so its header is checked against what its

@@ -81,6 +81,11 @@ mod key {
 /// The most decoded sample bytes a GeoTIFF may have (1 GiB); larger images are refused, not read.
 pub const MAX_DECODED_BYTES: usize = 1 << 30;
 
+/// The most bytes one strip or tile may decode to, its padding included, when that is more than the whole image
+/// (64 MiB: a tile of 4096 x 4096 float32 samples): a tile larger than its image is padding, and a file whose
+/// padding would take more is refused rather than decoded.
+const MAX_CHUNK_PADDING: u64 = 64 << 20;
+
 /// The tag of GDAL's nodata value.
 const GDAL_NODATA: u16 = 42113;
 /// The tag of GDAL's metadata (XML), which holds a band's scale and offset.
@@ -332,6 +337,18 @@ fn decode_window<R: Read + Seek>(
                     )));
                 }
             }
+            // A tile may be wider than the image (it is padded), but one whose padding alone would take more than
+            // the whole image, and more than `MAX_CHUNK_PADDING`, is no real file's: refused before it is decoded.
+            let bytes = meta.sample_bytes.max(1) * stride;
+            let padded = (if meta.sample_bytes > 0 { cw } else { dw } as u64) * dh as u64 * bytes as u64;
+            let image = shape.rows as u64 * shape.cols as u64 * bytes as u64;
+            if padded > image.max(MAX_CHUNK_PADDING) {
+                return Err(err(format!(
+                    "strip or tile {index} of {cw} x {ch} samples decodes to {padded} bytes with its padding, more \
+                     than the whole {} x {} image's {image}",
+                    shape.cols, shape.rows
+                )));
+            }
             // Whole bytes per sample: decoded at the padded width (see above); else as the crate lays it out.
             let (chunk, row) = if meta.sample_bytes > 0 {
                 let mut chunk = DecodingResult::U8(Vec::new());
@@ -342,8 +359,10 @@ fn decode_window<R: Read + Seek>(
                 dec.read_chunk(index).map(|chunk| (chunk, dw))
             }
             .map_err(|e| chunk_error(meta, index, file_len, e, path))?;
-            let (kind, values) = to_f64(chunk);
-            sample_type = kind.ok_or_else(|| err("float16 samples are not supported".into()))?;
+            let values = Samples(chunk);
+            sample_type = values
+                .kind()
+                .ok_or_else(|| err("float16 samples are not supported".into()))?;
             let needed = ((dh - 1) * row + dw) * stride;
             if values.len() < needed {
                 return Err(err(format!(
@@ -366,7 +385,7 @@ fn decode_window<R: Read + Seek>(
             let mut piece = Vec::with_capacity(band_rows * (c1 - c0 + 1));
             for r in r0..=r1 {
                 let at = |c: usize| ((r - y0) * row + (c - x0)) * stride + meta.band - 1;
-                piece.extend((c0..=c1).map(|c| meta.height(values[at(c)], sample_type)));
+                piece.extend((c0..=c1).map(|c| meta.height(values.get(at(c)), sample_type)));
             }
             pieces.push((c1 - c0 + 1, piece));
         }
@@ -718,23 +737,60 @@ fn parse_nodata(t: &str) -> Option<f64> {
     }
 }
 
-/// The samples as f64 with their type name (None for float16).
-fn to_f64(image: DecodingResult) -> (Option<&'static str>, Vec<f64>) {
-    fn conv<T: Copy>(v: Vec<T>, f: impl Fn(T) -> f64) -> Vec<f64> {
-        v.into_iter().map(f).collect()
+/// The samples of a decoded strip or tile, read one at a time as f64 (only those inside the window are: a chunk
+/// is never copied whole into f64, which takes up to eight times its bytes).
+struct Samples(DecodingResult);
+
+impl Samples {
+    /// The sample type's name, `None` for float16 (not read).
+    fn kind(&self) -> Option<&'static str> {
+        match self.0 {
+            DecodingResult::U8(_) => Some("uint8"),
+            DecodingResult::U16(_) => Some("uint16"),
+            DecodingResult::U32(_) => Some("uint32"),
+            DecodingResult::U64(_) => Some("uint64"),
+            DecodingResult::I8(_) => Some("int8"),
+            DecodingResult::I16(_) => Some("int16"),
+            DecodingResult::I32(_) => Some("int32"),
+            DecodingResult::I64(_) => Some("int64"),
+            DecodingResult::F32(_) => Some("float32"),
+            DecodingResult::F64(_) => Some("float64"),
+            DecodingResult::F16(_) => None,
+        }
     }
-    match image {
-        DecodingResult::U8(v) => (Some("uint8"), conv(v, f64::from)),
-        DecodingResult::U16(v) => (Some("uint16"), conv(v, f64::from)),
-        DecodingResult::U32(v) => (Some("uint32"), conv(v, f64::from)),
-        DecodingResult::U64(v) => (Some("uint64"), conv(v, |x| x as f64)),
-        DecodingResult::I8(v) => (Some("int8"), conv(v, f64::from)),
-        DecodingResult::I16(v) => (Some("int16"), conv(v, f64::from)),
-        DecodingResult::I32(v) => (Some("int32"), conv(v, f64::from)),
-        DecodingResult::I64(v) => (Some("int64"), conv(v, |x| x as f64)),
-        DecodingResult::F32(v) => (Some("float32"), conv(v, f64::from)),
-        DecodingResult::F64(v) => (Some("float64"), v),
-        DecodingResult::F16(_) => (None, Vec::new()),
+
+    /// How many samples were decoded.
+    fn len(&self) -> usize {
+        match &self.0 {
+            DecodingResult::U8(v) => v.len(),
+            DecodingResult::U16(v) => v.len(),
+            DecodingResult::U32(v) => v.len(),
+            DecodingResult::U64(v) => v.len(),
+            DecodingResult::I8(v) => v.len(),
+            DecodingResult::I16(v) => v.len(),
+            DecodingResult::I32(v) => v.len(),
+            DecodingResult::I64(v) => v.len(),
+            DecodingResult::F32(v) => v.len(),
+            DecodingResult::F64(v) => v.len(),
+            DecodingResult::F16(v) => v.len(),
+        }
+    }
+
+    /// Sample `i` (below [`Samples::len`]; NaN for float16, which [`Samples::kind`] refuses first).
+    fn get(&self, i: usize) -> f64 {
+        match &self.0 {
+            DecodingResult::U8(v) => f64::from(v[i]),
+            DecodingResult::U16(v) => f64::from(v[i]),
+            DecodingResult::U32(v) => f64::from(v[i]),
+            DecodingResult::U64(v) => v[i] as f64,
+            DecodingResult::I8(v) => f64::from(v[i]),
+            DecodingResult::I16(v) => f64::from(v[i]),
+            DecodingResult::I32(v) => f64::from(v[i]),
+            DecodingResult::I64(v) => v[i] as f64,
+            DecodingResult::F32(v) => f64::from(v[i]),
+            DecodingResult::F64(v) => v[i],
+            DecodingResult::F16(_) => f64::NAN,
+        }
     }
 }
 
