@@ -216,6 +216,12 @@ fn lower(a: &FarPoint, b: &FarPoint) -> bool {
 /// About how many samples [`FarField::read_each_strip`] reads at a time.
 const STRIP_SAMPLES: usize = 1 << 22;
 
+/// The most level-0 blocks a DEM's far field may have (2^26, 1.6 GB of blocks and 0.5 GB more for the levels above):
+/// the blocks are allocated from the DEM's header, before its samples are read, so a header claiming a huge grid is
+/// refused here, asking for larger blocks, rather than allocated (a 1° SRTM tile at 1" has 0.8M blocks of 4 x 4
+/// samples; 10G samples of 1 m lidar, 100 km square, 39M blocks of 16 x 16).
+pub const MAX_FAR_BLOCKS: usize = 1 << 26;
+
 /// Folds the samples `z` of the rows from `first` on (row-major, `cols` columns; `first` a multiple of `block`) into
 /// the level-0 blocks `level0` (row-major, `cols.div_ceil(block)` a row): each block keeps its lowest valid sample
 /// (the first in row-major order on ties) lowered by `max_error`. A block's rows all lie in one call, so calls over
@@ -300,7 +306,17 @@ impl FarField {
     ) -> Result<(FarField, tin::GridShape), TilesError> {
         let block = block.max(1);
         let shape = tin::read_dem_header(path, opts)?;
-        let mut level0 = vec![None; shape.rows.div_ceil(block) * shape.cols.div_ceil(block)];
+        let blocks = (shape.rows.div_ceil(block)).saturating_mul(shape.cols.div_ceil(block));
+        if blocks > MAX_FAR_BLOCKS {
+            return Err(TilesError::Parameter(format!(
+                "{}: {} x {} samples in far-field blocks of {block} x {block} samples are {blocks} blocks, more than the \
+                 {MAX_FAR_BLOCKS} a far field holds: give a larger --far-block",
+                path.display(),
+                shape.cols,
+                shape.rows
+            )));
+        }
+        let mut level0 = vec![None; blocks];
         // Strips of whole block rows, of about `strip_samples` samples.
         let strip = block * (strip_samples / (block * shape.cols).max(1)).max(1);
         let shape = tin::read_dem_strips(path, opts, strip, |first, z| {

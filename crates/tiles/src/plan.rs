@@ -314,6 +314,10 @@ pub struct LeftOut {
     pub line_samples: usize,
 }
 
+/// The most tiles a plan may have (2^20): each is a job of its own, and the plan lists them all before the DEM's
+/// samples are read, so a header claiming a huge grid is refused here rather than allocated.
+pub const MAX_TILES: usize = 1 << 20;
+
 /// Reads the DEM at `source` (with `dem`) in strips of rows, computing its far field ([`FarField::read_each_strip`];
 /// memory bounded by a strip and the far field's blocks, not the grid; `progress(rows read, rows)`) and every tile's
 /// window digest, and cuts it into tiles, leaving out those with no terrain to triangulate ([`LeftOut`]). `tiles_dir`
@@ -329,6 +333,17 @@ pub fn make_plan(
     options.validate()?;
     let header = tin::read_dem_header(source, &dem)?;
     let [kr, kc] = tile_grid([header.rows, header.cols], options.tile);
+    if kr.saturating_mul(kc) > MAX_TILES {
+        return Err(TilesError::Parameter(format!(
+            "{}: {} x {} samples in tiles of {} x {} intervals are {kr} x {kc} tiles, more than the {MAX_TILES} a plan \
+             holds: give a larger --tile",
+            source.display(),
+            header.cols,
+            header.rows,
+            options.tile,
+            options.tile
+        )));
+    }
     let (rc, cc) = (cuts(header.rows, kr), cuts(header.cols, kc));
     let mut tiles = Vec::with_capacity(kr * kc);
     for tr in 0..kr {

@@ -1033,3 +1033,54 @@ fn a_part_with_a_point_out_of_range_is_named() {
         );
     }
 }
+
+/// A plan lists its tiles and allocates its far field's blocks from the DEM's header, before any sample is read: a
+/// header claiming a huge grid (found by an audit: a 65-byte `.asc` header claiming 46,340 x 46,340 samples, planned
+/// with `--tile 2` or `--far-block 1`, asked for 107 GB and 51 GB) is refused, naming the file and the option to raise,
+/// not allocated.
+#[test]
+fn a_header_claiming_a_huge_grid_is_refused_before_the_plan_allocates_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let asc = dir.path().join("claims.asc");
+    std::fs::write(
+        &asc,
+        "ncols 46340\nnrows 46340\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n",
+    )
+    .expect("asc");
+    let options = PlanOptions {
+        tile: 2,
+        halo: 0,
+        far_block: 64,
+        far_ratio: 2,
+        max_error: 0.0,
+        params: BuildParams::default(),
+        no_regions: false,
+    };
+    let message = |options: PlanOptions| match tiles::make_plan(
+        &asc,
+        DemOptions::default(),
+        options,
+        Path::new("p.tiles"),
+        |_, _| {},
+    ) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a 6-sample file planned as 46,340 x 46,340 samples"),
+    };
+    let tiles = message(options.clone());
+    assert!(
+        tiles.contains("claims.asc") && tiles.contains("23170 x 23170 tiles") && tiles.contains("--tile"),
+        "{tiles}"
+    );
+    let far = message(PlanOptions {
+        tile: 512,
+        far_block: 1,
+        ..options.clone()
+    });
+    assert!(far.contains("claims.asc") && far.contains("--far-block"), "{far}");
+    // Within both limits the plan reads the samples, and finds them missing.
+    let read = message(PlanOptions { tile: 512, ..options });
+    assert!(
+        read.contains("claims.asc") && !read.contains("--tile") && !read.contains("--far-block"),
+        "{read}"
+    );
+}
