@@ -154,7 +154,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     super::eval_cmd::check_classes(&eval.classes)?;
     // Which combinations are valid does not depend on the mesh (only their keys' seed counts do): refuse a sweep of
     // none before any work.
-    let (valid, notes) = spec.combos(0);
+    let (valid, notes) = spec.combos(0)?;
     if valid.is_empty() {
         let reasons: Vec<String> = notes
             .iter()
@@ -191,7 +191,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
     table
         .adopt(&setup_digest(&tin, &spec.base, &eval))
         .with_context(|| args.out.display().to_string())?;
-    let (combos, notes) = spec.combos(tin.num_triangles());
+    let (combos, notes) = spec.combos(tin.num_triangles())?;
     for n in first_of(&notes, "skipped combination", " (--json lists them all)") {
         out.warn(n);
     }

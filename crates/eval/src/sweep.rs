@@ -110,10 +110,29 @@ pub struct SweepSpec {
     pub viewpoints: usize,
 }
 
+/// The most combinations a sweep may list (10,000): each is a build and an evaluation, so a sweep of more would run
+/// for weeks, and its notes on the combinations left out would fill the memory first.
+pub const MAX_COMBINATIONS: usize = 10_000;
+
 impl SweepSpec {
     /// The valid combinations for a mesh of `triangles` triangles, in key order without duplicates, and a note for
-    /// each combination left out.
-    pub fn combos(&self, triangles: usize) -> (Vec<Combo>, Vec<String>) {
+    /// each combination left out; an error when the lists make more than [`MAX_COMBINATIONS`] combinations.
+    pub fn combos(&self, triangles: usize) -> Result<(Vec<Combo>, Vec<String>)> {
+        let lists = [
+            ("--sectors", self.sectors.len()),
+            ("--subsectors", self.subsectors.len()),
+            ("--seeds", self.seeds.len()),
+            ("--rng-seeds", self.rng_seeds.len()),
+        ];
+        let count = lists.iter().fold(1usize, |n, (_, len)| n.saturating_mul(*len));
+        if count > MAX_COMBINATIONS {
+            let sizes: Vec<String> = lists.iter().map(|(flag, len)| format!("{flag} {len}")).collect();
+            bail!(
+                "the lists make {count} combinations ({}), more than the {MAX_COMBINATIONS} a sweep runs (each is a \
+                 build and an evaluation): sweep fewer values",
+                sizes.join(" x ")
+            );
+        }
         let mut combos = BTreeMap::new();
         let mut notes = Vec::new();
         for &s in &self.sectors {
@@ -148,7 +167,7 @@ impl SweepSpec {
                 }
             }
         }
-        (combos.into_values().collect(), notes)
+        Ok((combos.into_values().collect(), notes))
     }
 }
 
@@ -556,7 +575,7 @@ mod tests {
             base: BuildParams::default(),
             viewpoints: 3,
         };
-        let (combos, notes) = spec.combos(4000);
+        let (combos, notes) = spec.combos(4000).expect("combinations");
         let keys: Vec<SweepKey> = combos.iter().map(|c| c.key).collect();
         let mut sorted = keys.clone();
         sorted.sort();
@@ -575,6 +594,32 @@ mod tests {
             assert_eq!(c.params.crystal.first_seeds(4000), c.key.seeds);
             assert_eq!(c.params.crystal.rng_seed, c.key.rng_seed);
         }
+    }
+
+    /// Lists whose product is more than a sweep runs are refused, naming each list's length, before any combination
+    /// or note is made (found by an audit: `--sectors 4..99999 --subsectors 1..99999` filled 3.6 GB with notes).
+    #[test]
+    fn too_many_combinations_are_refused_before_they_are_listed() {
+        let spec = SweepSpec {
+            sectors: (1..=99_999).collect(),
+            subsectors: (1..=99_999).collect(),
+            seeds: vec![None],
+            rng_seeds: vec![1, 2],
+            base: BuildParams::default(),
+            viewpoints: 3,
+        };
+        let message = format!("{:#}", spec.combos(4000).expect_err("too many"));
+        assert!(
+            message.contains("19999600002 combinations") && message.contains("--sectors 99999 x --subsectors 99999"),
+            "{message}"
+        );
+        let at_most = SweepSpec {
+            sectors: (1..=100).collect(),
+            subsectors: (1..=50).collect(),
+            ..spec
+        };
+        assert_eq!(at_most.sectors.len() * at_most.subsectors.len() * 2, MAX_COMBINATIONS);
+        at_most.combos(4000).expect("as many as a sweep runs");
     }
 
     /// The combination of [`line`].
