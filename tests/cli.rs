@@ -1507,7 +1507,10 @@ fn messages_and_help_read_well() {
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(!o.status.success() && stderr.contains("got 1e308"), "{stderr}");
     assert!(stderr.len() < 200, "{stderr}");
-    fails_with(&["cull", "x.tch", "--eye", "1,2,3", "--fov", "1e300"], "got 1e300");
+    fails_with(
+        &["cull", "x.tch", "--eye", "1,2,3", "--fov", "1e300"],
+        "--fov 1e300: the field of view",
+    );
     fails_with(
         &["synth", "-o", s(&out), "--vertices", "3"],
         "'3' for '--vertices <VERTICES>': \"3\": a synthetic terrain has 4 to 2^31 vertices",

@@ -97,7 +97,7 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
     );
     fails_with(
         &["build", s(&m), "-o", "-", "--export-json", "-"],
-        "only one output can go to standard output",
+        "-o - and --export-json - both write to standard output",
     );
     // `eval --export-json -` and `--csv -`: the evaluation on stdout instead of the table; one of them only.
     let args = |extra: &[&'static str]| {
@@ -129,9 +129,18 @@ fn json_is_a_flag_everywhere_and_files_are_export_json() {
     );
     fails_with(
         &args(&["--csv", "-", "--export-json", "-"]),
-        "only one output can go to standard output",
+        "--export-json - and --csv - both write to standard output",
     );
-    fails_with(&args(&["--csv", "-", "--json"]), "standard output");
+    fails_with(
+        &args(&["--csv", "-", "--json"]),
+        "--csv - and --json both write to standard output",
+    );
+    // A flag's bad value names the flag; a run with no result says what would give one.
+    fails_with(&args(&["--fov", "0"]), "--fov 0: the field of view");
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "-q"],
+        "-q hides the report, this run's only result; give --json",
+    );
 }
 
 #[test]

@@ -378,10 +378,10 @@ pub fn run(args: &BuildArgs, out: Output) -> Result<()> {
     if let Some(config) = &args.config {
         files.input(config)?;
     }
-    files.check_binary_or_stdout(&args.out, &mut out)?;
+    files.check_binary_or_stdout(&args.out, "-o", &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     if let Some(path) = &args.export_json {
-        files.check_or_stdout(path, &mut out)?;
+        files.check_or_stdout(path, "--export-json", &mut out)?;
         super::files::refuse_other_format(path, "a hierarchy's JSON", "json")?;
     }
     if let Some(path) = &args.export_obj {

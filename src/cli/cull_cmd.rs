@@ -76,9 +76,7 @@ pub fn parse_method(s: &str) -> Result<CullMethod, String> {
 
 /// Runs `tincull cull`.
 pub fn run(args: &CullArgs, out: Output) -> Result<()> {
-    if !(args.fov > 0.0 && args.fov <= 360.0) {
-        bail!("--fov must be in (0, 360], got {}", tin::compact_number(args.fov));
-    }
+    super::eval_cmd::check_fov(args.fov)?;
     let yaw = args.yaw.unwrap_or(0.0);
     if !yaw.is_finite() {
         bail!("--yaw must be finite, got {}", tin::compact_number(yaw));

@@ -78,12 +78,12 @@ pub fn check_outputs(
     csv: Option<&std::path::Path>,
     out: &mut Output,
 ) -> Result<()> {
-    for (path, what, own) in json
-        .map(|p| (p, "the evaluation as JSON", "json"))
+    for (path, flag, what, own) in json
+        .map(|p| (p, "--export-json", "the evaluation as JSON", "json"))
         .into_iter()
-        .chain(csv.map(|p| (p, "the evaluation as CSV", "csv")))
+        .chain(csv.map(|p| (p, "--csv", "the evaluation as CSV", "csv")))
     {
-        files.check_or_stdout(path, out)?;
+        files.check_or_stdout(path, flag, out)?;
         super::files::refuse_other_format(path, what, own)?;
     }
     Ok(())
@@ -106,6 +106,16 @@ pub fn add_outputs(
 }
 
 /// Checks `--viewpoints` (of `eval`, `sweep` and `demo`): at least 1, at most [`MAX_VIEWPOINTS`].
+/// Refuses a field of view (`--fov`, degrees) outside (0, 360], naming the flag (`cull`, `eval` and `sweep`).
+pub(crate) fn check_fov(fov: f64) -> Result<()> {
+    ensure!(
+        fov > 0.0 && fov <= 360.0,
+        "--fov {}: the field of view must be in (0, 360] degrees",
+        tin::compact_number(fov)
+    );
+    Ok(())
+}
+
 pub(crate) fn check_viewpoints(n: usize) -> Result<()> {
     ensure!(n > 0, "--viewpoints must be at least 1");
     ensure!(
@@ -119,6 +129,7 @@ pub(crate) fn check_viewpoints(n: usize) -> Result<()> {
 pub fn run(args: &EvalArgs, out: Output) -> Result<()> {
     let mut out = out;
     check_viewpoints(args.viewpoints)?;
+    check_fov(args.fov)?;
     check_classes(&args.classes)?;
     let safe = args.safe.params()?;
     ensure!(

@@ -37,7 +37,7 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.export_json {
-        files.check_or_stdout(path, &mut out)?;
+        files.check_or_stdout(path, "--export-json", &mut out)?;
         refuse_other_format(path, "a hierarchy's JSON", "json")?;
     }
     if let Some(path) = &args.export_obj {

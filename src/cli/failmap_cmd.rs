@@ -71,7 +71,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
         super::files::refuse_other_format(path, "a PNG image", "png")?;
     }
     if let Some(path) = &args.csv {
-        files.check_or_stdout(path, &mut out)?;
+        files.check_or_stdout(path, "--csv", &mut out)?;
         super::files::refuse_other_format(path, "the map as CSV", "csv")?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;

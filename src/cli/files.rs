@@ -19,7 +19,8 @@ use super::Output;
 pub struct Outputs {
     batch: outfile::Batch,
     stdout: Option<Vec<u8>>,
-    stdout_checked: bool,
+    /// The flag whose output goes to standard output (`-`), once one does.
+    stdout_flag: Option<String>,
 }
 
 impl Outputs {
@@ -55,30 +56,31 @@ impl Outputs {
 
     /// Checks an output that may be `-` (standard output). With `-`, `out` stops printing text and `--json` is
     /// refused (both would go to standard output).
-    pub fn check_or_stdout(&mut self, path: &Path, out: &mut Output) -> Result<()> {
+    pub fn check_or_stdout(&mut self, path: &Path, flag: &str, out: &mut Output) -> Result<()> {
         if path != Path::new("-") {
             return self.check(path);
         }
         if out.json {
-            bail!("`-` (standard output) and --json both write to standard output; give a file to one of them");
+            bail!("{flag} - and --json both write to standard output; give a file to one of them");
         }
-        if self.stdout_checked {
-            bail!("only one output can go to standard output (-)");
+        if let Some(first) = &self.stdout_flag {
+            bail!("{first} - and {flag} - both write to standard output; give a file to one of them");
         }
-        self.stdout_checked = true;
+        self.stdout_flag = Some(flag.to_string());
         out.quiet_text = true;
         Ok(())
     }
 
     /// [`Outputs::check_or_stdout`] for a binary output (a `.tch`): `-` is refused when standard output is a
     /// terminal, which binary bytes would garble.
-    pub fn check_binary_or_stdout(&mut self, path: &Path, out: &mut Output) -> Result<()> {
+    pub fn check_binary_or_stdout(&mut self, path: &Path, flag: &str, out: &mut Output) -> Result<()> {
         if path == Path::new("-") && io::stdout().is_terminal() {
             bail!(
-                "-: a hierarchy is binary and standard output is a terminal; redirect it (`-o - > FILE`) or give a file"
+                "{flag} -: a hierarchy is binary and standard output is a terminal; redirect it (`{flag} - > FILE`) or \
+                 give a file"
             );
         }
-        self.check_or_stdout(path, out)
+        self.check_or_stdout(path, flag, out)
     }
 
     /// Checks a grouped OBJ output (given with `flag`) and its `.mtl` (refused when the OBJ is named like its
@@ -124,7 +126,7 @@ impl Outputs {
 
     /// Writes the content of a checked output to its temporary file (or keeps it for standard output).
     pub fn add(&mut self, path: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
-        if path == Path::new("-") && self.stdout_checked {
+        if path == Path::new("-") && self.stdout_flag.is_some() {
             let mut bytes = Vec::new();
             write(&mut bytes)?;
             self.stdout = Some(bytes);

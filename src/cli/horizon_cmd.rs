@@ -82,7 +82,7 @@ pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
     let mut out = out;
     files.input(&args.mesh.mesh)?;
     if let Some(path) = &args.export_json {
-        files.check_or_stdout(path, &mut out)?;
+        files.check_or_stdout(path, "--export-json", &mut out)?;
         super::files::refuse_other_format(path, "horizons as JSON", "json")?;
     }
     let (tin, _) = args.mesh.load(out)?;

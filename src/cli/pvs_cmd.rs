@@ -139,7 +139,13 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
     } else {
         "--above-ground"
     })?;
-    out.require_a_result(args.out.is_some(), "give -o FILE.pvs or --json")?;
+    // A check's result is its report: `-o` does not go with `--check`.
+    let hint = if args.check.is_some() {
+        "give --json"
+    } else {
+        "give -o FILE.pvs or --json"
+    };
+    out.require_a_result(args.out.is_some(), hint)?;
     if args.method == Some(Method::Regions) {
         for (flag, given) in [
             ("--resolution", !args.resolution.is_empty()),

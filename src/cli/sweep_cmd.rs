@@ -145,11 +145,7 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
         safe_regions: false,
         eyes: None,
     };
-    anyhow::ensure!(
-        eval.fov_deg > 0.0 && eval.fov_deg <= 360.0,
-        "--fov must be in (0, 360] degrees, got {}",
-        tin::compact_number(eval.fov_deg)
-    );
+    super::eval_cmd::check_fov(eval.fov_deg)?;
     anyhow::ensure!(!eval.classes.is_empty(), "--classes: no viewpoint classes");
     super::eval_cmd::check_classes(&eval.classes)?;
     // Which combinations are valid does not depend on the mesh (only their keys' seed counts do): refuse a sweep of

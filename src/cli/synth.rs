@@ -50,7 +50,7 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
         args.out.display()
     );
     let mut files = Outputs::new();
-    files.check_or_stdout(&args.out, &mut out)?;
+    files.check_or_stdout(&args.out, "-o", &mut out)?;
     let grid_out = args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
     let sidecar = tin::dem::npy::sidecar_path(&args.out);
     if grid_out {

@@ -587,7 +587,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
     for t in &plan.tiles {
         files.input(&Plan::resolve(&args.plan, &t.output))?;
     }
-    files.check_binary_or_stdout(&args.out, &mut out)?;
+    files.check_binary_or_stdout(&args.out, "-o", &mut out)?;
     super::files::refuse_other_format(&args.out, "a hierarchy", "tch")?;
     let start = Instant::now();
     // Every tile must be built before any is read; every missing one is named (the first 20 by number).

@@ -44,7 +44,7 @@ pub struct TinArgs {
 pub fn run(args: &TinArgs, mut out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.input(&args.dem)?;
-    files.check_or_stdout(&args.out, &mut out)?;
+    files.check_or_stdout(&args.out, "-o", &mut out)?;
     super::files::refuse_other_format(&args.out, "an OBJ mesh", "obj")?;
     let start = Instant::now();
     let dem_opts = args.read.options();
