@@ -300,6 +300,21 @@ fn errors_name_what_is_wrong() {
     );
 }
 
+/// Every tile's output is checked before the first tile is built (tiles 0 to 2 used to be built and written before
+/// tile 3's output was found to be a folder).
+#[test]
+fn every_tile_output_is_checked_before_any_tile_is_built() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = planned(dir.path());
+    let outputs = tile_outputs(&plan);
+    std::fs::create_dir_all(&outputs[3]).expect("a folder in tile 3's place");
+    fails_with(
+        &["tiles", "build", s(&plan), "--all", "--jobs", "1"],
+        "tile 3: its output",
+    );
+    assert!(outputs.iter().all(|p| !p.is_file()), "no tile built");
+}
+
 #[test]
 fn a_mesh_is_cut_into_parts_and_merges_back_whole() {
     let dir = tempfile::tempdir().expect("tempdir");

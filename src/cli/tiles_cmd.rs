@@ -436,8 +436,10 @@ fn plan_mesh(
     }))
 }
 
-/// Builds one tile and writes its hierarchy.
-fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: bool) -> Result<TileReport> {
+/// Checks what tile `index`'s job reads and writes, before any work: the files the plan wrote for it are there, and
+/// its output can be written and is none of its inputs. With `create`, the output's folder is made first when it is
+/// missing (else an output whose folder is missing is left to that later call). Returns the output and its check.
+fn check_tile(plan: &Plan, plan_path: &Path, index: usize, create: bool) -> Result<(PathBuf, Outputs)> {
     let spec = plan.tile(index)?;
     let target = Plan::resolve(plan_path, &spec.output);
     // The files the plan wrote for this job first: when they are gone (the tiles' folder deleted), nothing is made.
@@ -450,7 +452,8 @@ fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: boo
             );
         }
     }
-    if let Some(dir) = target.parent() {
+    let dir = target.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Some(dir) = dir.filter(|_| create) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     // What the job reads is never its output (a plan edited by hand could name the DEM or a far-field file).
@@ -460,9 +463,17 @@ fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: boo
     for read in spec.far.iter().chain(&spec.part) {
         files.input(&Plan::resolve(plan_path, read))?;
     }
-    files
-        .check(&target)
-        .with_context(|| format!("tile {index}: its output"))?;
+    if create || dir.is_none_or(Path::exists) {
+        files
+            .check(&target)
+            .with_context(|| format!("tile {index}: its output"))?;
+    }
+    Ok((target, files))
+}
+
+/// Builds one tile and writes its hierarchy.
+fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: bool) -> Result<TileReport> {
+    let (target, mut files) = check_tile(plan, plan_path, index, true)?;
     let progress = bars.then(|| stage_progress(out));
     let (h, report) = tiles::build_tile(plan, plan_path, index, progress).with_context(|| format!("tile {index}"))?;
     files.add_bytes(&target, &h.to_bytes()?)?;
@@ -481,8 +492,9 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
         given.dedup();
         given
     };
+    // Every tile's inputs and output checked before the first is built.
     for &i in &indices {
-        plan.tile(i)?;
+        check_tile(&plan, &args.plan, i, false)?;
     }
     let start = Instant::now();
     let mut builder = rayon::ThreadPoolBuilder::new();
