@@ -265,6 +265,35 @@ fn an_output_never_overwrites_the_files_a_dem_is_read_with() {
     assert_eq!(fs::read_to_string(&prj).expect("read"), "LOCAL_CS[\"metres\"]");
 }
 
+/// `demo` makes its output folder and those above it, checks its outputs there before it reads the terrain, and
+/// removes the folders it made when it fails (it left the ones above the last behind).
+#[test]
+fn demo_checks_its_outputs_first_and_leaves_no_folder_when_it_fails() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let missing = dir.path().join("missing.obj");
+    let nested = dir.path().join("a").join("b").join("out");
+    fails_with(&["demo", p(&missing), "--out-dir", p(&nested)], &["missing.obj"]);
+    assert_eq!(names(dir.path()), Vec::<String>::new(), "no folder left");
+    // An output that cannot be written is refused before the terrain is read (the terrain here is missing too).
+    let out = dir.path().join("out");
+    fs::create_dir_all(out.join("missing.tch")).expect("a folder in the hierarchy's place");
+    fails_with(
+        &["demo", p(&missing), "--out-dir", p(&out)],
+        &["missing.tch", "is a directory"],
+    );
+    // A file where a folder should be is named.
+    fs::write(dir.path().join("afile"), b"").expect("write");
+    fails_with(
+        &[
+            "demo",
+            p(&missing),
+            "--out-dir",
+            p(&dir.path().join("afile").join("sub")),
+        ],
+        &["afile is not a directory"],
+    );
+}
+
 #[test]
 fn a_reader_that_goes_away_ends_the_command_quietly() {
     use std::io::Read;

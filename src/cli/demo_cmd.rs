@@ -55,20 +55,10 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     if args.out_dir.exists() && !args.out_dir.is_dir() {
         anyhow::bail!("--out-dir {}: exists and is not a directory", args.out_dir.display());
     }
-    let (tin, _) = args.import.mesh(&mesh).load(out)?;
-    let params = BuildParams::default();
-    out.say(format!("tincull demo on {}", mesh.display()));
-    out.say(format!(
-        "build with defaults: {} sectors x {} subsectors, seeds one per 200 triangles, min group {}, {} orphan passes",
-        params.sectors, params.subsectors, params.crystal.min_group, params.crystal.orphan_passes
-    ));
-    // A folder made here is removed again if the demo fails or is interrupted (it is then empty: the outputs are all
-    // or nothing); the folders above it are made as needed.
-    if let Some(parent) = args.out_dir.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
-    }
-    let new_dir =
-        outfile::NewDir::create(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
+    // The folders made here are removed again if the demo fails or is interrupted (they are then empty: the outputs
+    // are all or nothing). Made, and the outputs checked, before the terrain is read.
+    let new_dirs = outfile::NewDir::create_all(&args.out_dir)
+        .with_context(|| format!("--out-dir {}: cannot create it", args.out_dir.display()))?;
     let stem = mesh
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -89,6 +79,14 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     // cannot take them is refused before any work as the others are.
     files.check(&path("-map.png"))?;
     files.check(&path("-culling.png"))?;
+
+    let (tin, _) = args.import.mesh(&mesh).load(out)?;
+    let params = BuildParams::default();
+    out.say(format!("tincull demo on {}", mesh.display()));
+    out.say(format!(
+        "build with defaults: {} sectors x {} subsectors, seeds one per 200 triangles, min group {}, {} orphan passes",
+        params.sectors, params.subsectors, params.crystal.min_group, params.crystal.orphan_passes
+    ));
 
     let result = build(&tin, &params, Some(stage_progress(out)))?;
     print_report(&result.report, out);
@@ -113,9 +111,7 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     out.say(e.table());
     add_outputs(&mut files, &e, Some(&path("-eval.json")), Some(&path("-eval.csv")))?;
     files.commit()?;
-    if let Some(new_dir) = new_dir {
-        new_dir.keep();
-    }
+    new_dirs.keep();
     let renders = match write_renders(h, &htin, &path("-map.png"), &path("-culling.png")) {
         Ok(eye) => format!(
             ", {stem}-map.png (groups, orphans grey) and {stem}-culling.png (valley eye at {:.0}, {:.0}, {:.0}: \

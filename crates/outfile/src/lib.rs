@@ -102,6 +102,54 @@ impl NewDir {
     pub fn keep(mut self) {
         self.keep = true;
     }
+
+    /// Creates the directory `path` and every missing one above it, each a [`NewDir`] (removed again, the deepest
+    /// first, unless kept). An error naming the first existing path above `path` when it is not a directory.
+    pub fn create_all(path: &Path) -> io::Result<NewDirs> {
+        let mut missing = Vec::new();
+        let mut at = path;
+        while !at.as_os_str().is_empty() && !at.exists() {
+            missing.push(at);
+            match at.parent() {
+                Some(parent) => at = parent,
+                None => break,
+            }
+        }
+        if !at.as_os_str().is_empty() && at.exists() && !at.is_dir() {
+            return Err(io::Error::new(
+                io::ErrorKind::NotADirectory,
+                format!("{} is not a directory", at.display()),
+            ));
+        }
+        let mut dirs = NewDirs(Vec::new());
+        for dir in missing.into_iter().rev() {
+            if let Some(new) = NewDir::create(dir)? {
+                dirs.0.push(new);
+            }
+        }
+        Ok(dirs)
+    }
+}
+
+/// The directories [`NewDir::create_all`] created, outermost first: removed again, the deepest first, when dropped
+/// without [`NewDirs::keep`] (each only if empty).
+pub struct NewDirs(Vec<NewDir>);
+
+impl NewDirs {
+    /// Keeps every directory: the command succeeded.
+    pub fn keep(mut self) {
+        for dir in self.0.drain(..) {
+            dir.keep();
+        }
+    }
+}
+
+impl Drop for NewDirs {
+    fn drop(&mut self) {
+        while let Some(dir) = self.0.pop() {
+            drop(dir);
+        }
+    }
 }
 
 impl Drop for NewDir {

@@ -7,7 +7,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use outfile::{Batch, ErrorKind, Target, check, write, write_bytes};
+use outfile::{Batch, ErrorKind, NewDir, Target, check, write, write_bytes};
 
 fn tmp() -> tempfile::TempDir {
     tempfile::tempdir().expect("temporary directory")
@@ -307,4 +307,32 @@ fn an_input_is_never_an_output() {
         .expect("add");
     batch.commit().expect("commit");
     assert_eq!(fs::read(&input).expect("read"), b"v 0 0 0\n");
+}
+
+/// `NewDir::create_all` makes every missing folder down to the one asked for; dropped, it removes them all, the
+/// deepest first (none is left above an empty one); kept, they stay; a file on the way is named.
+#[test]
+fn new_dirs_are_removed_deepest_first_unless_kept() {
+    let dir = tmp();
+    let nested = dir.path().join("a").join("b").join("c");
+    let made = NewDir::create_all(&nested).expect("create");
+    assert!(nested.is_dir());
+    drop(made);
+    assert_eq!(names(dir.path()), Vec::<String>::new());
+
+    fs::create_dir(dir.path().join("a")).expect("an existing folder");
+    let made = NewDir::create_all(&nested).expect("create");
+    drop(made);
+    assert_eq!(names(dir.path()), ["a"], "a folder that was there stays");
+    assert_eq!(names(&dir.path().join("a")), Vec::<String>::new());
+
+    NewDir::create_all(&nested).expect("create").keep();
+    assert!(nested.is_dir());
+
+    fs::write(dir.path().join("f"), b"").expect("a file");
+    let e = match NewDir::create_all(&dir.path().join("f").join("g")) {
+        Err(e) => e,
+        Ok(_) => panic!("a folder made under a file"),
+    };
+    assert!(e.to_string().contains("f is not a directory"), "{e}");
 }
