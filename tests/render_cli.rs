@@ -177,7 +177,7 @@ fn render_rejects_bad_options_with_clear_messages() {
         (&["--view", "map", "--compare"], "--compare"),
         (&["--colour", "groups"], "hierarchy"),
         // Options of another option, given without it: refused, not ignored.
-        (&["--resolution", "0"], "--pvs-cell"),
+        (&["--resolution", "32"], "--pvs-cell"),
         (&["--runs", "3"], "--compare"),
         (&["--fov", "1e300"], "got 1e300"),
     ];
@@ -370,7 +370,8 @@ fn render_paints_a_viewcell_pvs() {
     .unwrap();
     assert_eq!(v["triangles_submitted"].as_u64(), Some(in_pvs), "{v}");
     assert!(v["cull"].is_null(), "{v}");
-    // Flags that would change nothing in a PVS's image are refused.
+    // Flags that would change nothing in a PVS's image, or are out of range, are refused before the PVS is computed
+    // (which the report would name).
     for (extra, needle) in [
         (
             ["--colour", "groups"],
@@ -380,12 +381,22 @@ fn render_paints_a_viewcell_pvs() {
             ["--method", "thesis"],
             "with --pvs-cell the render shows the cell's PVS",
         ),
+        (["--pitch", "10"], "--pitch: the map view looks straight down"),
+        (
+            ["--work-budget", "5"],
+            "with --pvs-cell the render shows the cell's PVS",
+        ),
+        (["--resolution", "999"], "--resolution"),
     ] {
         let mut args = vec!["render", p(&tch), "--out", p(&map), "--pvs-cell", &cell];
         args.extend_from_slice(&extra);
         let out = tincull(&args);
         assert!(!out.status.success(), "{extra:?} should fail");
         assert!(String::from_utf8_lossy(&out.stderr).contains(needle), "{extra:?}");
+        assert!(
+            !String::from_utf8_lossy(&out.stdout).contains("PVS of cell"),
+            "{extra:?}: the PVS was computed"
+        );
     }
 }
 

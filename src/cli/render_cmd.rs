@@ -77,7 +77,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "H0,H1", value_parser = parse_pair, allow_hyphen_values = true, requires = "pvs_cell")]
     pub above_ground: Option<[f64; 2]>,
     /// With --pvs-cell: resolution R of the PVS's R × R ray-space bitmap, 1 to 256.
-    #[arg(long, default_value_t = 64, value_name = "R", requires = "pvs_cell")]
+    #[arg(long, default_value_t = 64, value_name = "R", requires = "pvs_cell",
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(pvs::MAX_RESOLUTION)))]
     pub resolution: u32,
     /// With --compare: timed repetitions of each frame (the median is reported).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..), requires = "compare")]
@@ -150,39 +151,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         files.check(&diff_path(&args.out))?;
     }
     let terrain = load_terrain(&args.input, &args.import, args.eye, out)?;
-    let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
-        Some(rect) => {
-            let h = terrain
-                .hierarchy
-                .as_ref()
-                .context("--pvs-cell needs a hierarchy (.tch), not a plain mesh")?;
-            let height = match (args.height_band, args.above_ground) {
-                (Some(z), _) => pvs::Height::Band(z),
-                (None, Some(a)) => pvs::Height::AboveGround(a),
-                (None, None) => pvs::Height::AboveGround([0.0, 2.0]),
-            };
-            let params = pvs::PvsParams {
-                method: pvs::Method::Both,
-                resolution: args.resolution,
-                patch: pvs::PvsParams::default().patch,
-            };
-            let cell = pvs::ViewCell { rect, height };
-            let pvs = pvs::Pvs::new(h, params)?;
-            pvs.check_over_terrain(&cell).context("--pvs-cell")?;
-            let result = pvs.compute(&cell).with_context(|| format!("--pvs-cell {rect:?}"))?;
-            out.say(format!(
-                "PVS of cell {rect:?}: {} of {} triangles ({:.3} s)",
-                result.triangles(),
-                h.num_triangles(),
-                result.seconds
-            ));
-            let centre = [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3]), result.ztop];
-            let summary = json!({ "cell": rect, "pvs_triangles": result.triangles(), "seconds": result.seconds });
-            (Some(result.mask(h.num_triangles())), Some(centre), Some(summary))
-        }
-        None => (None, None, None),
-    };
-    let colour = if pvs_mask.is_some() {
+    // Every flag is checked before the PVS is computed (seconds, or minutes on a large hierarchy).
+    let with_pvs = args.pvs_cell.is_some();
+    let colour = if with_pvs {
         // The PVS is painted with the visibility colours (the eye view also draws only its triangles).
         if colour.is_some_and(|c| c != ColourMode::Visibility) {
             bail!(
@@ -194,11 +165,10 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     } else {
         colour
     };
-    let eye = args.eye.or(pvs_eye);
-    let with_pvs = pvs_mask.is_some();
-    let options = RenderOptions {
+    // Checked first with a stand-in for the eye that a PVS's cell gives (its height is known once it is computed).
+    let mut options = RenderOptions {
         view,
-        eye,
+        eye: args.eye.or(args.pvs_cell.map(|_| [0.0; 3])),
         yaw_deg: args.yaw,
         pitch_deg: args.pitch,
         fov_deg: args.fov.unwrap_or(90.0),
@@ -210,14 +180,14 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         timing_runs: args.runs,
         method: args.method,
         safe: args.safe.params()?,
-        pvs: pvs_mask,
+        pvs: None,
     };
     viewer::validate(&terrain, &options)?;
     // A culling parameter that this render does not use is an error, as for `cull`, rather than ignored.
     // A PVS replaces the culling of a viewpoint.
     let culls = !with_pvs
         && terrain.hierarchy.is_some()
-        && (eye.is_some() && view != ViewKind::Map || colour == Some(ColourMode::Visibility));
+        && (args.eye.is_some() && view != ViewKind::Map || colour == Some(ColourMode::Visibility));
     // So is a view flag that changes nothing in this image.
     let view_name = &args.view;
     let unused = [
@@ -265,6 +235,42 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
             );
         }
     }
+    let (pvs_mask, pvs_eye, pvs_json) = match args.pvs_cell {
+        Some(rect) => {
+            let h = terrain
+                .hierarchy
+                .as_ref()
+                .context("--pvs-cell needs a hierarchy (.tch), not a plain mesh")?;
+            let height = match (args.height_band, args.above_ground) {
+                (Some(z), _) => pvs::Height::Band(z),
+                (None, Some(a)) => pvs::Height::AboveGround(a),
+                (None, None) => pvs::Height::AboveGround([0.0, 2.0]),
+            };
+            let params = pvs::PvsParams {
+                method: pvs::Method::Both,
+                resolution: args.resolution,
+                patch: pvs::PvsParams::default().patch,
+            };
+            let cell = pvs::ViewCell { rect, height };
+            let pvs = pvs::Pvs::new(h, params)?;
+            pvs.check_over_terrain(&cell).context("--pvs-cell")?;
+            let result = pvs.compute(&cell).with_context(|| format!("--pvs-cell {rect:?}"))?;
+            out.say(format!(
+                "PVS of cell {rect:?}: {} of {} triangles ({:.3} s)",
+                result.triangles(),
+                h.num_triangles(),
+                result.seconds
+            ));
+            let centre = [0.5 * (rect[0] + rect[2]), 0.5 * (rect[1] + rect[3]), result.ztop];
+            let summary = json!({ "cell": rect, "pvs_triangles": result.triangles(), "seconds": result.seconds });
+            (Some(result.mask(h.num_triangles())), Some(centre), Some(summary))
+        }
+        None => (None, None, None),
+    };
+    // The PVS's cell gives the eye when --eye does not.
+    options.eye = args.eye.or(pvs_eye);
+    options.pvs = pvs_mask;
+    viewer::validate(&terrain, &options)?;
     let gpu = Gpu::headless()?;
     let result = viewer::render(&gpu, &terrain, &options)?;
     let png = |image: &viewer::RgbaImage| {

@@ -236,6 +236,10 @@ impl<'a> Pvs<'a> {
     /// Prepares the PVS computation over `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded
     /// file does). With the regions test, computes the conservative regions first (seconds on 100k vertices).
     pub fn new(h: &'a Hierarchy, params: PvsParams) -> Result<Pvs<'a>, PvsError> {
+        // The parameters before the regions' seconds of work.
+        if !(1..=MAX_RESOLUTION).contains(&params.resolution) {
+            return Err(PvsError::BadResolution(params.resolution));
+        }
         let needs = matches!(params.method, Method::Regions | Method::Both);
         Pvs::with_regions(h, params, needs.then(|| Arc::new(conservative_regions(h))))
     }
