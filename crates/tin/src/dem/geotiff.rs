@@ -212,7 +212,16 @@ pub fn parse_geotiff(bytes: &[u8], path: &Path, opts: &DemOptions) -> Result<(Gr
     if rows == 0 || cols == 0 {
         return Err(err(format!("the image has {cols} x {rows} samples")));
     }
-    let (sample_type, mut z) = decode_window(&mut dec, &meta, [0, rows - 1], [0, cols - 1], bytes.len() as u64, path)?;
+    let whole = [[0, rows - 1], [0, cols - 1]];
+    let (sample_type, mut z) = decode_window(
+        &mut dec,
+        &meta,
+        whole[0],
+        whole[1],
+        bytes.len() as u64,
+        path,
+        &mut Band::default(),
+    )?;
     let nodata_mask = match tiff_mask::find_mask(path, Cursor::new(bytes)) {
         Some(mask) => {
             let shape = (rows, cols);
@@ -261,16 +270,58 @@ pub(super) fn read_geotiff_window(
     rows: [usize; 2],
     cols: [usize; 2],
 ) -> Result<(GridShape, Vec<f64>)> {
-    let (file, len) = open_with_len(path)?;
-    let (mut dec, meta) = open_tiff(std::io::BufReader::new(file), path, opts)?;
-    let shape = meta.shape;
-    check_window(&shape, rows, cols, path)?;
-    let (_, mut z) = decode_window(&mut dec, &meta, rows, cols, len, path)?;
-    if let Some(mask) = tiff_mask::find_mask(path, std::io::BufReader::new(open(path)?)) {
-        let reopen = || open(path).map(std::io::BufReader::new);
-        tiff_mask::apply_mask(&mask, reopen, path, (shape.rows, shape.cols), rows, cols, &mut z)?;
+    let mut reader = WindowReader::open(path, opts)?;
+    let z = reader.read(rows, cols)?;
+    Ok((reader.meta.shape, z))
+}
+
+/// A GeoTIFF opened once for many windows (a DEM read strip by strip): its decoder, its tags, its nodata mask and
+/// the band of strips or tiles decoded last, so that windows that share a band (strips of rows narrower than the
+/// file's strips or tiles) decode it once, not once a window.
+pub(super) struct WindowReader<'p> {
+    path: &'p Path,
+    dec: Decoder<std::io::BufReader<std::fs::File>>,
+    meta: Meta,
+    len: u64,
+    mask: Option<tiff_mask::MaskSource>,
+    band: Band,
+}
+
+impl<'p> WindowReader<'p> {
+    /// Opens the GeoTIFF at `path` and reads its tags.
+    pub(super) fn open(path: &'p Path, opts: &DemOptions) -> Result<WindowReader<'p>> {
+        let (file, len) = open_with_len(path)?;
+        let (dec, meta) = open_tiff(std::io::BufReader::new(file), path, opts)?;
+        let mask = tiff_mask::find_mask(path, std::io::BufReader::new(open(path)?));
+        Ok(WindowReader {
+            path,
+            dec,
+            meta,
+            len,
+            mask,
+            band: Band::default(),
+        })
     }
-    Ok((shape, z))
+
+    /// The samples of rows `rows[0]..=rows[1]` and columns `cols[0]..=cols[1]` (voids NaN, not scaled).
+    pub(super) fn read(&mut self, rows: [usize; 2], cols: [usize; 2]) -> Result<Vec<f64>> {
+        let (path, shape) = (self.path, self.meta.shape);
+        check_window(&shape, rows, cols, path)?;
+        let (_, mut z) = decode_window(&mut self.dec, &self.meta, rows, cols, self.len, path, &mut self.band)?;
+        if let Some(mask) = &self.mask {
+            let reopen = || open(path).map(std::io::BufReader::new);
+            tiff_mask::apply_mask(mask, reopen, path, (shape.rows, shape.cols), rows, cols, &mut z)?;
+        }
+        Ok(z)
+    }
+}
+
+/// The strips or tiles of one band (a row of them across the image) decoded last: its index and, per chunk, its
+/// index, samples and row stride.
+#[derive(Default)]
+struct Band {
+    index: Option<usize>,
+    chunks: Vec<(u32, Samples, usize)>,
 }
 
 /// Decodes the samples of rows `rows[0]..=rows[1]` and columns `cols[0]..=cols[1]` (a window inside the image) of
@@ -293,6 +344,7 @@ fn decode_window<R: Read + Seek>(
     cols: [usize; 2],
     file_len: u64,
     path: &Path,
+    band: &mut Band,
 ) -> Result<(&'static str, Vec<f64>)> {
     let err = |m: String| TinError::format(path, m);
     let shape = meta.shape;
@@ -318,6 +370,12 @@ fn decode_window<R: Read + Seek>(
         // the band is decoded, then appended to the heights row by row.
         let mut pieces: Vec<(usize, Vec<f64>)> = Vec::new();
         let mut band_rows = 0;
+        if band.index != Some(ty) {
+            *band = Band {
+                index: Some(ty),
+                chunks: Vec::new(),
+            };
+        }
         for tx in cols[0] / cw..=cols[1] / cw {
             let index = u32::try_from(ty * across + tx).map_err(|_| err("too many strips or tiles".into()))?;
             let (dw, dh) = dec.chunk_data_dimensions(index);
@@ -325,51 +383,19 @@ fn decode_window<R: Read + Seek>(
             if dw == 0 || dh == 0 {
                 return Err(err(format!("strip or tile {index} has {dw} x {dh} samples")));
             }
-            // Uncompressed samples are read from the chunk's offset on, whatever its byte count says: a count too small
-            // for its rows is refused, or the samples would be read from the bytes that follow it.
-            if let (Some(row_bytes), Some(&(_, count))) = (meta.uncompressed_row_bytes, meta.chunks.get(index as usize))
-            {
-                let needed = row_bytes.saturating_mul(dh as u64);
-                if count < needed {
-                    return Err(err(format!(
-                        "strip or tile {index} holds {count} bytes, but its {dw} x {dh} uncompressed samples \
-                         take {needed}"
-                    )));
+            let cached = match band.chunks.iter().position(|c| c.0 == index) {
+                Some(i) => i,
+                None => {
+                    let (values, row) = decode_chunk(dec, meta, index, [cw, ch], [dw, dh], file_len, path)?;
+                    band.chunks.push((index, values, row));
+                    band.chunks.len() - 1
                 }
-            }
-            // A tile may be wider than the image (it is padded), but one whose padding alone would take more than
-            // the whole image, and more than `MAX_CHUNK_PADDING`, is no real file's: refused before it is decoded.
-            let bytes = meta.sample_bytes.max(1) * stride;
-            let padded = (if meta.sample_bytes > 0 { cw } else { dw } as u64) * dh as u64 * bytes as u64;
-            let image = shape.rows as u64 * shape.cols as u64 * bytes as u64;
-            if padded > image.max(MAX_CHUNK_PADDING) {
-                return Err(err(format!(
-                    "strip or tile {index} of {cw} x {ch} samples decodes to {padded} bytes with its padding, more \
-                     than the whole {} x {} image's {image}",
-                    shape.cols, shape.rows
-                )));
-            }
-            // Whole bytes per sample: decoded at the padded width (see above); else as the crate lays it out.
-            let (chunk, row) = if meta.sample_bytes > 0 {
-                let mut chunk = DecodingResult::U8(Vec::new());
-                let row_bytes = cw * stride * meta.sample_bytes;
-                dec.read_chunk_to_buffer(&mut chunk, index, row_bytes)
-                    .map(|()| (chunk, cw))
-            } else {
-                dec.read_chunk(index).map(|chunk| (chunk, dw))
-            }
-            .map_err(|e| chunk_error(meta, index, file_len, e, path))?;
-            let values = Samples(chunk);
+            };
+            let (_, values, row) = &band.chunks[cached];
+            let row = *row;
             sample_type = values
                 .kind()
                 .ok_or_else(|| err("float16 samples are not supported".into()))?;
-            let needed = ((dh - 1) * row + dw) * stride;
-            if values.len() < needed {
-                return Err(err(format!(
-                    "strip or tile {index}: decoded {} samples, expected {needed} ({dw} x {dh} x {stride})",
-                    values.len(),
-                )));
-            }
             // The chunk's samples inside the window, in whole-grid rows and columns.
             let (y0, x0) = (ty * ch, tx * cw);
             let (r0, r1) = (rows[0].max(y0), rows[1].min(y0 + dh - 1));
@@ -408,6 +434,64 @@ fn decode_window<R: Read + Seek>(
         )));
     }
     Ok((sample_type, z))
+}
+
+/// Decodes strip or tile `index` (chunks of `cw` x `ch` samples, this one `dw` x `dh` of them data), refusing what
+/// no real file holds first (see [`decode_window`]): its samples and their row stride.
+#[allow(clippy::too_many_arguments)]
+fn decode_chunk<R: Read + Seek>(
+    dec: &mut Decoder<R>,
+    meta: &Meta,
+    index: u32,
+    [cw, ch]: [usize; 2],
+    [dw, dh]: [usize; 2],
+    file_len: u64,
+    path: &Path,
+) -> Result<(Samples, usize)> {
+    let err = |m: String| TinError::format(path, m);
+    let (shape, stride) = (meta.shape, meta.stride);
+    // Uncompressed samples are read from the chunk's offset on, whatever its byte count says: a count too small
+    // for its rows is refused, or the samples would be read from the bytes that follow it.
+    if let (Some(row_bytes), Some(&(_, count))) = (meta.uncompressed_row_bytes, meta.chunks.get(index as usize)) {
+        let needed = row_bytes.saturating_mul(dh as u64);
+        if count < needed {
+            return Err(err(format!(
+                "strip or tile {index} holds {count} bytes, but its {dw} x {dh} uncompressed samples \
+                 take {needed}"
+            )));
+        }
+    }
+    // A tile may be wider than the image (it is padded), but one whose padding alone would take more than
+    // the whole image, and more than `MAX_CHUNK_PADDING`, is no real file's: refused before it is decoded.
+    let bytes = meta.sample_bytes.max(1) * stride;
+    let padded = (if meta.sample_bytes > 0 { cw } else { dw } as u64) * dh as u64 * bytes as u64;
+    let image = shape.rows as u64 * shape.cols as u64 * bytes as u64;
+    if padded > image.max(MAX_CHUNK_PADDING) {
+        return Err(err(format!(
+            "strip or tile {index} of {cw} x {ch} samples decodes to {padded} bytes with its padding, more \
+             than the whole {} x {} image's {image}",
+            shape.cols, shape.rows
+        )));
+    }
+    // Whole bytes per sample: decoded at the padded width (see above); else as the crate lays it out.
+    let (chunk, row) = if meta.sample_bytes > 0 {
+        let mut chunk = DecodingResult::U8(Vec::new());
+        let row_bytes = cw * stride * meta.sample_bytes;
+        dec.read_chunk_to_buffer(&mut chunk, index, row_bytes)
+            .map(|()| (chunk, cw))
+    } else {
+        dec.read_chunk(index).map(|chunk| (chunk, dw))
+    }
+    .map_err(|e| chunk_error(meta, index, file_len, e, path))?;
+    let values = Samples(chunk);
+    let needed = ((dh - 1) * row + dw) * stride;
+    if values.len() < needed {
+        return Err(err(format!(
+            "strip or tile {index}: decoded {} samples, expected {needed} ({dw} x {dh} x {stride})",
+            values.len(),
+        )));
+    }
+    Ok((values, row))
 }
 
 /// The error of a strip or tile that cannot be decoded: a file that ends before the data its tags point at is

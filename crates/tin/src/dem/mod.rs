@@ -221,17 +221,30 @@ pub fn read_dem_window_heights(
 ) -> Result<(GridShape, Vec<f64>)> {
     opts.check()?;
     let (shape, mut z) = read_window_unchecked(path, opts, rows, cols)?;
-    scale(&mut z, opts);
-    check_corners(&shape, rows, cols, path)?;
-    check_heights(&z, rows[0], cols, path, opts.z_scale)?;
+    finish_window(&shape, rows, cols, &mut z, path, opts)?;
     Ok((shape, z))
+}
+
+/// Scales a window's heights read unchecked and checks its corners and heights, as [`read_dem`] checks a grid.
+fn finish_window(
+    shape: &GridShape,
+    rows: [usize; 2],
+    cols: [usize; 2],
+    z: &mut [f64],
+    path: &Path,
+    opts: &DemOptions,
+) -> Result<()> {
+    scale(z, opts);
+    check_corners(shape, rows, cols, path)?;
+    check_heights(z, rows[0], cols, path, opts.z_scale)
 }
 
 /// Reads a whole DEM strip by strip, north to south, calling `each(first_row, heights)` with the row-major samples of
 /// `strip_rows` (at least 1) consecutive rows (fewer in the last strip), all columns, exactly as [`read_dem`] reads
 /// them (voids NaN, [`DemOptions::z_scale`] applied, every height checked); returns the grid's shape. Memory: one
-/// strip for `.npy`, `.hgt` and GeoTIFF (each strip a window, [`read_dem_window_heights`]), `.asc` (the text
-/// streamed once) and PNG (the rows decoded once, in order; an interlaced PNG is decoded whole).
+/// strip for `.npy` and `.hgt` (each strip a window, [`read_dem_window_heights`]), `.asc` (the text streamed once)
+/// and PNG (the rows decoded once, in order; an interlaced PNG is decoded whole); for GeoTIFF, a strip and the band of
+/// the file's strips or tiles that it meets, each decoded once however many strips of rows it holds.
 pub fn read_dem_strips(
     path: &Path,
     opts: &DemOptions,
@@ -251,6 +264,20 @@ pub fn read_dem_strips(
                 #[cfg(feature = "png")]
                 "png" => png::read_png_strips(path, opts, strip_rows, &mut checked)?,
                 _ => asc::read_asc_strips(path, &shape, opts, strip_rows, &mut checked)?,
+            }
+            Ok(shape)
+        }
+        #[cfg(feature = "geotiff")]
+        "tif" | "tiff" => {
+            // Opened once: a strip or tile taller than a strip of rows is decoded once, not once a strip.
+            opts.check()?;
+            let shape = read_dem_header(path, opts)?;
+            let mut reader = geotiff::WindowReader::open(path, opts)?;
+            for first in (0..shape.rows).step_by(strip_rows) {
+                let (rows, cols) = ([first, (first + strip_rows).min(shape.rows) - 1], [0, shape.cols - 1]);
+                let mut z = reader.read(rows, cols)?;
+                finish_window(&shape, rows, cols, &mut z, path, opts)?;
+                each(first, &z)?;
             }
             Ok(shape)
         }
