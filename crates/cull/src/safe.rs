@@ -270,6 +270,10 @@ struct Crest {
 /// Largest node (triangles) given crests: larger ones are never small enough on screen to be drawn whole.
 const CREST_MAX: u32 = 2048;
 
+/// The most descendants of a hierarchy node looked at for its bounding circle (see
+/// [`SafeCuller::bounds_from_descendants`]): the crystal hierarchies of 10k and 100k vertices need at most 15.
+const MAX_DESCENDANT_STEPS: usize = 128;
+
 /// No crest entry: a pending patch's offset in `projected` never takes this value.
 const CRESTS: u32 = u32::MAX;
 
@@ -742,6 +746,16 @@ impl SafeCuller {
     /// (the same arithmetic as in [`farthest`]) is at most `|p − c|² (1 + 6ε)`. So when
     /// `((d + r_k)(1 + 1e-9))²`, computed, is below the largest square found so far, every vertex of `k` computes
     /// below it too, and the maximum (hence the radius) is the one a scan of every vertex gives, bit for bit.
+    ///
+    /// At most [`MAX_DESCENDANT_STEPS`] descendants are taken. When more remain, the square of the farthest reach
+    /// `b` among them also bounds the radius: `b ≥ (d + r_k)(1 + 1e-9)(1 − 3ε)` for the descendant `k` it belongs
+    /// to and every one left in the queue (the queue's largest), hence `b > |p − c| (1 + 1e-10)` for each of their
+    /// vertices `p`, and the square root of the computed `b²` (at least `b (1 − ε)`) still exceeds `|p − c|`. The
+    /// circle then holds every vertex and may be a little wider than the farthest one needs, which only culls less.
+    /// Each leaf is scanned by at most its `MAX_DESCENDANT_STEPS` nearest ancestors (an ancestor reaches a
+    /// descendant only after taking every node between them), so preparing a hierarchy costs
+    /// `O(MAX_DESCENDANT_STEPS · (nodes + triangles))`, however deep it is (a chain of 80,000 nodes took 51 s
+    /// without the limit).
     fn bounds_from_descendants(&self, h: &Hierarchy, i: usize, extent: &Extent) -> TreeNode {
         let range = h.nodes[i].triangles;
         let centre = extent.centre(range);
@@ -753,11 +767,17 @@ impl SafeCuller {
         // Farthest-reaching descendants first (non-negative f64 bits order as the values).
         let mut queue: BinaryHeap<(u64, u32)> = h.nodes[i].children.iter().map(|&k| (reach(k).to_bits(), k)).collect();
         let mut r2: f64 = 0.0;
+        let mut steps = 0;
         while let Some((bound, k)) = queue.pop() {
             let bound = f64::from_bits(bound);
             if bound * bound < r2 {
                 break;
             }
+            if steps == MAX_DESCENDANT_STEPS {
+                r2 = bound * bound;
+                break;
+            }
+            steps += 1;
             let node = &h.nodes[k as usize];
             if node.children.is_empty() {
                 r2 = r2.max(farthest(h, node.triangles, centre));
@@ -1281,6 +1301,80 @@ mod tests {
             SafeParamsError::Columns(3).to_string(),
             "the columns per face must be a power of two from 2 to 65536, got 3"
         );
+    }
+
+    /// A hierarchy as deep as it has nodes (the chain of a crafted file, which made preparing it quadratic: 80,000
+    /// nodes took 51 s): a caterpillar, each node a leaf of one triangle beside the node over the rest, under a
+    /// chain of nodes of one child each. Every vertex lies on one circle, so the search for the farthest vertex
+    /// prunes nothing. Every node's circle still holds each of its vertices, and a node whose subtree the search
+    /// takes whole has the circle of a scan of every vertex, bit for bit.
+    #[test]
+    fn circles_of_deep_hierarchies_hold_every_vertex() {
+        use crate::hierarchy::{Mesh, Node};
+        let (leaves, chain) = (600u32, 400u32);
+        let angle = |i: u32| f64::from(i) * std::f64::consts::TAU / f64::from(leaves + 1);
+        let mut positions: Vec<[f64; 3]> = (0..=leaves)
+            .map(|i| [3.0 + 100.0 * angle(i).cos(), -2.0 + 100.0 * angle(i).sin(), 1.0])
+            .collect();
+        positions.push([3.0, -2.0, 0.0]);
+        let triangles: Vec<[u32; 3]> = (0..leaves).map(|i| [i, i + 1, leaves + 1]).collect();
+        let node = |children: Vec<u32>, triangles: [u32; 2], level: u32| Node {
+            centre: [0.0; 2],
+            radius: 0.0,
+            children,
+            triangles,
+            level,
+            regions: vec![],
+        };
+        // Leaf t is node t; the caterpillar node over [t, leaves) is node leaves + t (t < leaves - 1), the last
+        // leaf standing for itself; the chain's nodes follow, the top one the root.
+        let mut nodes: Vec<Node> = (0..leaves).map(|t| node(vec![], [t, t + 1], 0)).collect();
+        let over = |t: u32| if t + 1 == leaves { t } else { leaves + t };
+        for t in 0..leaves - 1 {
+            nodes.push(node(vec![t, over(t + 1)], [t, leaves], leaves - 1 - t));
+        }
+        for k in 0..chain {
+            let below = if k == 0 { over(0) } else { nodes.len() as u32 - 1 };
+            nodes.push(node(vec![below], [0, leaves], leaves + k));
+        }
+        let h = Hierarchy {
+            sectors: 16,
+            origin: [0.0; 3],
+            roots: vec![nodes.len() as u32 - 1],
+            nodes,
+            always_visible: [leaves, leaves],
+            mesh: Mesh { positions, triangles },
+            build: Default::default(),
+        };
+        h.check_invariants().expect("a valid hierarchy");
+        let c = SafeCuller::new(&h, SafeParams::default());
+        let mut exact = 0;
+        for (i, n) in h.nodes.iter().enumerate() {
+            let got = &c.nodes[i];
+            for t in &h.mesh.triangles[n.triangles[0] as usize..n.triangles[1] as usize] {
+                for &v in t {
+                    let p = h.mesh.positions[v as usize];
+                    let d = (p[0] - got.centre[0]).hypot(p[1] - got.centre[1]);
+                    assert!(
+                        d <= got.radius,
+                        "node {i}: vertex {v} at {d} outside the circle of radius {}",
+                        got.radius
+                    );
+                }
+            }
+            let scan = c.bounds(&h, n.triangles, &Extent::of(&h, n.triangles));
+            assert_eq!(got.centre, scan.centre, "node {i}");
+            assert!(got.radius >= scan.radius, "node {i}");
+            // A caterpillar node of `k` leaves has `2k - 1` descendants, taken whole within the limit.
+            if (leaves..2 * leaves - 1).contains(&(i as u32)) && i as u32 - leaves + 64 >= leaves {
+                assert_eq!(got.radius, scan.radius, "node {i}");
+                exact += 1;
+            }
+        }
+        assert_eq!(exact, 63);
+        // The root's search stopped at the limit (one without it takes every node below every node: quadratic).
+        let root = h.roots[0] as usize;
+        assert!(c.nodes[root].radius > c.bounds(&h, [0, leaves], &Extent::of(&h, [0, leaves])).radius);
     }
 
     /// Whether the first and the last quarter of the extent along `axis` of the vertices `tris` use are joined by a
