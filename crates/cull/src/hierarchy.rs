@@ -14,6 +14,13 @@ use crate::sector::sector_direction;
 /// coordinates would not survive the f32 of exports.
 pub const COORDINATE_LIMIT: f64 = 1.267_650_600_228_229_4e30;
 
+/// Most regions a hierarchy may hold (2^28, a file of some 4 GB): the thesis' culler indexes at most eight slots per
+/// region and every region vertex with 32 bits.
+pub const MAX_REGIONS: u64 = 1 << 28;
+
+/// Most region vertices a hierarchy may hold, counting one more per region for its tail (2^31).
+pub const MAX_REGION_POINTS: u64 = 1 << 31;
+
 /// Whether `value` is 0 or a magnitude in `[1 / COORDINATE_LIMIT, COORDINATE_LIMIT]` (NaN and infinities are not).
 fn coordinate_in_range(value: f64) -> bool {
     let m = value.abs();
@@ -294,6 +301,18 @@ impl Hierarchy {
         if av0 > av1 || u64::from(av1) != nt {
             return invalid(format!(
                 "always-visible range [{av0}, {av1}) does not end the {nt} triangles"
+            ));
+        }
+        let regions: u64 = self.nodes.iter().map(|n| n.regions.len() as u64).sum();
+        let points: u64 = self
+            .nodes
+            .iter()
+            .flat_map(|n| &n.regions)
+            .map(|r| r.points.len() as u64 + 1)
+            .sum();
+        if regions >= MAX_REGIONS || points >= MAX_REGION_POINTS {
+            return invalid(format!(
+                "{regions} regions of {points} vertices and tails: the cullers hold fewer than {MAX_REGIONS} and                  {MAX_REGION_POINTS}"
             ));
         }
         let n = self.nodes.len();
