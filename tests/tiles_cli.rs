@@ -606,6 +606,36 @@ fn a_malformed_plan_is_refused_naming_the_tile() {
     fails_with(&["tiles", "build", s(&tch), "--all"], "not a tincull tile plan");
 }
 
+/// A tile's output in folders that are missing: `tiles build` makes them, and removes them again when the tile
+/// fails (they were left behind, empty, by `create_dir_all`).
+#[test]
+fn folders_made_for_a_failed_tile_are_removed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let plan = planned(dir.path());
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&plan).expect("plan")).expect("JSON");
+    // Without the digests (a plan made before they were kept) an edited output is taken as it is.
+    for t in v["tiles"].as_array_mut().expect("tiles") {
+        t.as_object_mut().expect("tile").remove("file_digest");
+    }
+    v["tiles"][0]["output"] = serde_json::json!("new/sub/t0.tch");
+    let edited = dir.path().join("edited.json");
+    std::fs::write(&edited, serde_json::to_string(&v).expect("JSON")).expect("write");
+    let far = dir.path().join(v["tiles"][0]["far"].as_str().expect("far"));
+    let far_bytes = std::fs::read(&far).expect("far field");
+    std::fs::write(&far, &far_bytes[..far_bytes.len() / 2]).expect("truncate");
+    fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "tile 0");
+    assert!(
+        !dir.path().join("new").exists(),
+        "the folders made for the tile are removed"
+    );
+    std::fs::write(&far, &far_bytes).expect("restore");
+    ok(&["tiles", "build", s(&edited), "--tile", "0", "-q"]);
+    assert!(
+        dir.path().join("new/sub/t0.tch").is_file(),
+        "built into the folders it made"
+    );
+}
+
 /// A mesh's plan keeps a list per square of its tiles and of its far field's blocks: cut into too many, it is
 /// refused before the lists are made (a 2 m tile of a 30 km mesh asked for gigabytes and aborted).
 #[test]

@@ -437,9 +437,9 @@ fn plan_mesh(
 }
 
 /// Checks what tile `index`'s job reads and writes, before any work: the files the plan wrote for it are there, and
-/// its output can be written and is none of its inputs. With `create`, the output's folder is made first when it is
-/// missing (else an output whose folder is missing is left to that later call). Returns the output and its check.
-fn check_tile(plan: &Plan, plan_path: &Path, index: usize, create: bool) -> Result<(PathBuf, Outputs)> {
+/// its output can be written and is none of its inputs (an output whose folder is missing is checked once the folder
+/// is made, with `made`). Returns the output and its check.
+fn check_tile(plan: &Plan, plan_path: &Path, index: usize, made: bool) -> Result<(PathBuf, Outputs)> {
     let spec = plan.tile(index)?;
     let target = Plan::resolve(plan_path, &spec.output);
     // The files the plan wrote for this job first: when they are gone (the tiles' folder deleted), nothing is made.
@@ -452,10 +452,7 @@ fn check_tile(plan: &Plan, plan_path: &Path, index: usize, create: bool) -> Resu
             );
         }
     }
-    let dir = target.parent().filter(|d| !d.as_os_str().is_empty());
-    if let Some(dir) = dir.filter(|_| create) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
+    let dir = output_dir(&target);
     // What the job reads is never its output (a plan edited by hand could name the DEM or a far-field file).
     let mut files = Outputs::new();
     files.input(plan_path)?;
@@ -463,7 +460,7 @@ fn check_tile(plan: &Plan, plan_path: &Path, index: usize, create: bool) -> Resu
     for read in spec.far.iter().chain(&spec.part) {
         files.input(&Plan::resolve(plan_path, read))?;
     }
-    if create || dir.is_none_or(Path::exists) {
+    if made || dir.is_none_or(Path::exists) {
         files
             .check(&target)
             .with_context(|| format!("tile {index}: its output"))?;
@@ -471,7 +468,12 @@ fn check_tile(plan: &Plan, plan_path: &Path, index: usize, create: bool) -> Resu
     Ok((target, files))
 }
 
-/// Builds one tile and writes its hierarchy.
+/// The folder of a tile's output, when its path names one.
+fn output_dir(target: &Path) -> Option<&Path> {
+    target.parent().filter(|d| !d.as_os_str().is_empty())
+}
+
+/// Builds one tile and writes its hierarchy (its output's folder made).
 fn build_one(plan: &Plan, plan_path: &Path, index: usize, out: Output, bars: bool) -> Result<TileReport> {
     let (target, mut files) = check_tile(plan, plan_path, index, true)?;
     let progress = bars.then(|| stage_progress(out));
@@ -492,9 +494,18 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
         given.dedup();
         given
     };
-    // Every tile's inputs and output checked before the first is built.
+    // Every tile's inputs and output checked before the first is built; then the outputs' missing folders are made,
+    // removed again (with the folders above them that were made) when no tile was written into them.
+    let mut dirs = Vec::new();
     for &i in &indices {
-        check_tile(&plan, &args.plan, i, false)?;
+        let (target, _) = check_tile(&plan, &args.plan, i, false)?;
+        dirs.extend(output_dir(&target).map(Path::to_path_buf));
+    }
+    dirs.sort_unstable();
+    dirs.dedup();
+    let mut made = Vec::new();
+    for dir in &dirs {
+        made.push(outfile::NewDir::create_all(dir).with_context(|| format!("cannot create {}", dir.display()))?);
     }
     let start = Instant::now();
     let mut builder = rayon::ThreadPoolBuilder::new();
@@ -540,6 +551,7 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
         bar.finish_and_clear();
         r
     };
+    made.into_iter().for_each(outfile::NewDirs::keep);
     let seconds = start.elapsed().as_secs_f64();
     for r in &reports {
         // A DEM's tile is simplified from its samples; a mesh's tile keeps its part's vertices as they are.
