@@ -241,6 +241,11 @@ pub struct Overlaps {
 /// Finds every pair of triangles whose interiors overlap in x,y, exactly. Triangles with an invalid index, a
 /// non-finite corner or zero area are skipped (they are reported elsewhere). The result does not depend on the
 /// number of threads.
+///
+/// Pairs that share a vertex are found around it ([`overlaps_around_vertices`]); the others in the cells of a grid
+/// that both triangles meet, where the triangles are grouped by their *hub* (the corner with the most triangles):
+/// a group's pairs share its hub and are not looked at there, so the spokes of a fan, which all meet its centre's
+/// cells, cost nothing there.
 pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) -> Overlaps {
     let Some(grid) = TriangleGrid::new(positions, triangles) else {
         return Overlaps::default();
@@ -248,7 +253,17 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
     if grid.tris.len() < 2 {
         return Overlaps::default();
     }
-    let tris = &grid.tris;
+    let mut degree = vec![0u32; positions.len()];
+    for u in &grid.tris {
+        u.ids.iter().for_each(|&v| degree[v as usize] += 1);
+    }
+    let hub = |u: &Usable| {
+        u.ids
+            .into_iter()
+            .max_by_key(|&v| (degree[v as usize], std::cmp::Reverse(v)))
+            .unwrap_or(0)
+    };
+    let hubs: Vec<u32> = grid.tris.iter().map(hub).collect();
     let keep_smallest = |mut v: Vec<[u32; 2]>| {
         if v.len() > limit {
             v.sort_unstable();
@@ -256,36 +271,52 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
         }
         v
     };
-    let (count, mut first) = (0..grid.nx * grid.ny)
+    let tris = &grid.tris;
+    let (count, first) = (0..grid.nx * grid.ny)
         .into_par_iter()
         .fold(
-            || (0usize, Vec::new()),
-            |(mut count, mut found), c| {
-                let here = grid.members(c);
-                for (i, &ka) in here.iter().enumerate() {
-                    let a = &tris[ka as usize];
-                    for &kb in &here[i + 1..] {
+            || (0usize, Vec::new(), Vec::new(), Vec::new(), Vec::new()),
+            |(mut count, mut found, mut here, mut cells_a, mut cells_b), c| {
+                here.clear();
+                here.extend(grid.members(c).iter().map(|&k| (hubs[k as usize], k)));
+                here.sort_unstable();
+                // Each triangle against those of the later groups only.
+                let mut group_end = 0;
+                for i in 0..here.len() {
+                    if i == group_end {
+                        group_end = here[i..].partition_point(|h| h.0 == here[i].0) + i;
+                    }
+                    let a = &tris[here[i].1 as usize];
+                    for &(_, kb) in &here[group_end..] {
                         let b = &tris[kb as usize];
-                        // Boxes must overlap with positive area, and each pair is tested only in the cell holding
-                        // the lower-left corner of the boxes' intersection.
-                        if a.2.x >= b.3.x || b.2.x >= a.3.x || a.2.y >= b.3.y || b.2.y >= a.3.y {
+                        // Boxes must overlap with positive area; pairs sharing a vertex are found around it.
+                        if a.lo.x >= b.hi.x || b.lo.x >= a.hi.x || a.lo.y >= b.hi.y || b.lo.y >= a.hi.y {
                             continue;
                         }
-                        if grid.cell_of(a.2.max(b.2)) != c || !interiors_overlap(&a.1, &b.1) {
+                        if a.ids.iter().any(|v| b.ids.contains(v)) || !interiors_overlap(&a.c, &b.c) {
+                            continue;
+                        }
+                        // Counted once: in the first cell both meet.
+                        cells_a.clear();
+                        cells_b.clear();
+                        grid.raster(a, |cell| cells_a.push(cell));
+                        grid.raster(b, |cell| cells_b.push(cell));
+                        if first_common(&cells_a, &cells_b) != Some(c) {
                             continue;
                         }
                         count += 1;
                         if limit > 0 {
-                            found.push([a.0.min(b.0), a.0.max(b.0)]);
+                            found.push([a.t.min(b.t), a.t.max(b.t)]);
                             if found.len() >= limit.saturating_mul(2) {
                                 found = keep_smallest(found);
                             }
                         }
                     }
                 }
-                (count, found)
+                (count, found, here, cells_a, cells_b)
             },
         )
+        .map(|(count, found, ..)| (count, found))
         .reduce(
             || (0, Vec::new()),
             |(ca, mut fa), (cb, fb)| {
@@ -293,9 +324,114 @@ pub fn find_overlaps(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) 
                 (ca + cb, keep_smallest(fa))
             },
         );
+    let around = overlaps_around_vertices(&grid.tris, positions.len());
+    let mut first = keep_smallest(first);
+    first.extend(around.iter().take(limit));
     first.sort_unstable();
     first.truncate(limit);
-    Overlaps { count, first }
+    Overlaps {
+        count: count + around.len(),
+        first,
+    }
+}
+
+/// The smallest value in both ascending lists.
+fn first_common(a: &[usize], b: &[usize]) -> Option<usize> {
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => return Some(a[i]),
+        }
+    }
+    None
+}
+
+/// A triangle's wedge at one of its corners: the triangle (its entry in the usable ones), then the far ends of its
+/// first and second edges there, counter-clockwise.
+type Wedge = (u32, DVec2, DVec2);
+
+/// Every pair of `tris` that share a vertex and whose interiors overlap, `[smaller, larger]` triangle index, sorted.
+///
+/// Two counter-clockwise triangles with a common corner `v` overlap exactly when their open wedges at `v` do: each
+/// lies in its wedge, and near `v` each fills it. An open wedge spans less than π, so two of them overlap exactly
+/// when the first edge of one lies in the other's half-open wedge `[first edge, second edge)`. Around each vertex the
+/// wedges are sorted by their first edge's direction (exactly: the half-plane by the signs of the differences, then
+/// the orientation predicate); each wedge is followed counter-clockwise while the next first edge lies in it, so a
+/// vertex of `k` wedges costs `O(k log k)` and one test per overlapping pair. Each pair found is confirmed by the
+/// triangle test itself.
+fn overlaps_around_vertices(tris: &[Usable], vertices: usize) -> Vec<[u32; 2]> {
+    // The triangles at each vertex (compressed rows), with the vertex's corner.
+    let mut offsets = vec![0usize; vertices + 1];
+    for u in tris {
+        u.ids.iter().for_each(|&v| offsets[v as usize + 1] += 1);
+    }
+    for i in 0..vertices {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut fill = offsets.clone();
+    let mut at = vec![(0u32, 0u8); offsets[vertices]];
+    for (k, u) in tris.iter().enumerate() {
+        for (m, &v) in u.ids.iter().enumerate() {
+            at[fill[v as usize]] = (k as u32, m as u8);
+            fill[v as usize] += 1;
+        }
+    }
+    let mut pairs: Vec<[u32; 2]> = (0..vertices)
+        .into_par_iter()
+        .filter(|&v| offsets[v + 1] - offsets[v] > 1)
+        .fold(
+            || (Vec::new(), Vec::new()),
+            |(mut found, mut wedges): (Vec<[u32; 2]>, Vec<Wedge>), v| {
+                wedges.clear();
+                wedges.extend(at[offsets[v]..offsets[v + 1]].iter().map(|&(k, m)| {
+                    let c = &tris[k as usize].c;
+                    (k, c[(m as usize + 1) % 3], c[(m as usize + 2) % 3])
+                }));
+                let centre = tris[wedges[0].0 as usize].c[at[offsets[v]].1 as usize];
+                // Directions from the centre, counter-clockwise from +x: first the half-plane, then the orientation.
+                let half = |p: DVec2| !(p.y > centre.y || (p.y == centre.y && p.x > centre.x));
+                wedges.sort_by(|a, b| {
+                    half(a.1).cmp(&half(b.1)).then_with(|| {
+                        let o = orient2d(centre, a.1, b.1);
+                        if o > 0.0 {
+                            std::cmp::Ordering::Less
+                        } else if o < 0.0 {
+                            std::cmp::Ordering::Greater
+                        } else {
+                            std::cmp::Ordering::Equal
+                        }
+                    })
+                });
+                let inside =
+                    |d: DVec2, s: DVec2, e: DVec2| orient2d(centre, s, d) >= 0.0 && orient2d(centre, d, e) > 0.0;
+                let n = wedges.len();
+                for i in 0..n {
+                    let (ka, s, e) = wedges[i];
+                    for step in 1..n {
+                        let (kb, d, _) = wedges[(i + step) % n];
+                        if !inside(d, s, e) {
+                            break;
+                        }
+                        let (a, b) = (&tris[ka as usize], &tris[kb as usize]);
+                        if interiors_overlap(&a.c, &b.c) {
+                            found.push([a.t.min(b.t), a.t.max(b.t)]);
+                        }
+                    }
+                }
+                (found, wedges)
+            },
+        )
+        .map(|(found, _)| found)
+        .reduce(Vec::new, |mut a, b| {
+            a.extend(b);
+            a
+        });
+    // A pair sharing an edge is found at both its ends, a pair of equal first edges from both sides.
+    pairs.par_sort_unstable();
+    pairs.dedup();
+    pairs
 }
 
 /// Vertices lying on an edge of a triangle that does not use them at another height than that edge (cracks).
@@ -338,7 +474,7 @@ pub fn find_cracks(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) ->
             let inside = p.x >= grid.lo.x && p.y >= grid.lo.y && p.x <= grid.hi.x && p.y <= grid.hi.y;
             let here: &[u32] = if inside { grid.members(grid.cell_of(p)) } else { &[] };
             here.iter().filter_map(move |&k| {
-                let (t, c, lo, hi) = &grid.tris[k as usize];
+                let Usable { t, c, lo, hi, .. } = &grid.tris[k as usize];
                 let tri = triangles[*t as usize];
                 if tri.contains(&v) || c.contains(&p) || p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
                     return None;
@@ -377,17 +513,43 @@ pub fn find_cracks(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) ->
     Cracks { count, first }
 }
 
-/// The usable triangles of a mesh (counter-clockwise corners and x,y box; invalid indices, non-finite corners and zero
-/// area left out) bucketed into a uniform grid over their boxes, with cells about one average triangle across.
+/// A usable triangle: counter-clockwise, with finite corners and a positive x,y area.
+struct Usable {
+    /// Its index in the mesh.
+    t: u32,
+    /// Its vertices, in the order of `c`.
+    ids: [u32; 3],
+    /// Its corners in x,y, counter-clockwise.
+    c: [DVec2; 3],
+    /// Its x,y box.
+    lo: DVec2,
+    hi: DVec2,
+}
+
+/// Most grid entries per usable triangle (beyond 16): the cells grow until the triangles meet no more.
+const ENTRIES_PER_TRIANGLE: usize = 32;
+
+/// The usable triangles of a mesh (invalid indices, non-finite corners and zero area left out) listed in the cells of
+/// a uniform grid that they meet.
+///
+/// A triangle is listed in every cell its closed x,y region meets, and possibly a few more: row by row, the cells
+/// between the least and the greatest x of the triangle within the row's band, the band and the x range both
+/// widened by a millionth of a cell and a billionth of the largest coordinate, far more than the rounding of the
+/// band's edges, of the edges' crossings with them, and of [`TriangleGrid::cell_of`]. So a point of a triangle (and
+/// every vertex on its edges) lies in a cell that lists it, and two triangles whose interiors overlap share a cell.
+/// The cells start at the side of a square per four triangles over the box of all of them and grow by half until there
+/// are at most four cells and [`ENTRIES_PER_TRIANGLE`] entries per triangle (long thin triangles, as in a fan, meet
+/// many small cells).
 struct TriangleGrid {
-    /// `(triangle, counter-clockwise corners, box min, box max)`.
-    tris: Vec<(u32, [DVec2; 3], DVec2, DVec2)>,
+    tris: Vec<Usable>,
     lo: DVec2,
     hi: DVec2,
     cell: f64,
     nx: usize,
     ny: usize,
-    /// The entries of `tris` whose box touches cell `c` are `members[offsets[c]..offsets[c + 1]]`.
+    /// The widening of the bands and x ranges.
+    slack: f64,
+    /// The entries of `tris` that meet cell `c` are `members[offsets[c]..offsets[c + 1]]`.
     offsets: Vec<usize>,
     members: Vec<u32>,
 }
@@ -395,11 +557,12 @@ struct TriangleGrid {
 impl TriangleGrid {
     /// The grid of the usable triangles; `None` when there is none.
     fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> Option<TriangleGrid> {
-        let mut tris: Vec<(u32, [DVec2; 3], DVec2, DVec2)> = Vec::with_capacity(triangles.len());
+        let mut tris: Vec<Usable> = Vec::with_capacity(triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
             if tri.iter().any(|&v| v as usize >= positions.len()) {
                 continue;
             }
+            let mut ids = *tri;
             let mut c = tri.map(|v| positions[v as usize].truncate());
             if !c.iter().all(|p| p.is_finite()) {
                 continue;
@@ -410,69 +573,142 @@ impl TriangleGrid {
             }
             if o < 0.0 {
                 c.swap(1, 2);
+                ids.swap(1, 2);
             }
             let lo = c[0].min(c[1]).min(c[2]);
             let hi = c[0].max(c[1]).max(c[2]);
-            tris.push((t as u32, c, lo, hi));
+            tris.push(Usable {
+                t: t as u32,
+                ids,
+                c,
+                lo,
+                hi,
+            });
         }
-        let (mut lo, mut hi) = (tris.first()?.2, tris.first()?.3);
-        let mut mean_extent = 0.0;
-        for (_, _, l, h) in &tris {
-            lo = lo.min(*l);
-            hi = hi.max(*h);
-            mean_extent += (*h - *l).max_element();
+        let (mut lo, mut hi) = (tris.first()?.lo, tris.first()?.hi);
+        for u in &tris {
+            lo = lo.min(u.lo);
+            hi = hi.max(u.hi);
         }
-        mean_extent /= tris.len() as f64;
         let size = hi - lo;
-        // Cells about one average triangle across, but no more than ~4 per triangle.
         let max_cells = 4.0 * tris.len() as f64 + 16.0;
-        let mut cell = mean_extent.max(f64::MIN_POSITIVE);
+        let max_entries = ENTRIES_PER_TRIANGLE * tris.len() + 16;
+        let mut cell = (4.0 * size.x * size.y / tris.len() as f64)
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
         let cells_for = |cell: f64| ((size.x / cell).floor() + 1.0) * ((size.y / cell).floor() + 1.0);
-        while cells_for(cell) > max_cells {
-            cell *= 1.5;
-        }
-        let nx = (size.x / cell).floor() as usize + 1;
-        let ny = (size.y / cell).floor() as usize + 1;
+        let slack_of = |cell: f64| 1e-6 * cell + 1e-9 * lo.abs().max(hi.abs()).max_element();
         let mut grid = TriangleGrid {
             tris,
             lo,
             hi,
             cell,
-            nx,
-            ny,
-            offsets: vec![0usize; nx * ny + 1],
+            nx: 1,
+            ny: 1,
+            slack: 0.0,
+            offsets: Vec::new(),
             members: Vec::new(),
         };
-        // Bucket triangles into every cell their box touches (compressed rows).
-        let ranges: Vec<(usize, usize, usize, usize)> = grid
+        // Cells grown until there are few enough, then until the triangles meet few enough of them (counted).
+        loop {
+            while cells_for(cell) > max_cells {
+                cell *= 1.5;
+            }
+            grid.cell = cell;
+            grid.nx = (size.x / cell).floor() as usize + 1;
+            grid.ny = (size.y / cell).floor() as usize + 1;
+            grid.slack = slack_of(cell);
+            // The cells of the boxes bound those met: counted first, the triangles are rasterized only when needed.
+            let boxes: f64 = grid.tris.iter().map(|u| grid.box_cells(u)).sum();
+            let mut entries = 0;
+            if boxes > max_entries as f64 {
+                for u in &grid.tris {
+                    grid.raster(u, |_| entries += 1);
+                    if entries > max_entries {
+                        break;
+                    }
+                }
+            }
+            if entries <= max_entries || grid.nx * grid.ny == 1 {
+                break;
+            }
+            cell *= 1.5;
+        }
+        // Bucket triangles into every cell they meet (compressed rows, each cell's triangles in increasing order).
+        let mut entries: Vec<(usize, u32)> = grid
             .tris
-            .iter()
-            .map(|t| {
-                let (a, b) = (grid.cell_xy(t.2), grid.cell_xy(t.3));
-                (a.0, a.1, b.0, b.1)
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(k, u)| {
+                let mut cells = Vec::new();
+                grid.raster(u, |c| cells.push((c, k as u32)));
+                cells
             })
             .collect();
-        for &(x0, y0, x1, y1) in &ranges {
-            for cy in y0..=y1 {
-                for cx in x0..=x1 {
-                    grid.offsets[cy * nx + cx + 1] += 1;
-                }
-            }
+        entries.par_sort_unstable();
+        let cells = grid.nx * grid.ny;
+        let mut offsets = vec![0usize; cells + 1];
+        for &(c, _) in &entries {
+            offsets[c + 1] += 1;
         }
-        for i in 0..nx * ny {
-            grid.offsets[i + 1] += grid.offsets[i];
+        for i in 0..cells {
+            offsets[i + 1] += offsets[i];
         }
-        let mut fill = grid.offsets.clone();
-        grid.members = vec![0u32; grid.offsets[nx * ny]];
-        for (k, &(x0, y0, x1, y1)) in ranges.iter().enumerate() {
-            for cy in y0..=y1 {
-                for cx in x0..=x1 {
-                    grid.members[fill[cy * nx + cx]] = k as u32;
-                    fill[cy * nx + cx] += 1;
-                }
-            }
-        }
+        grid.members = entries.into_iter().map(|(_, k)| k).collect();
+        grid.offsets = offsets;
         Some(grid)
+    }
+
+    /// Calls `f` with every cell that `u` meets (see [`TriangleGrid`]), in increasing order.
+    fn raster(&self, u: &Usable, mut f: impl FnMut(usize)) {
+        let (y0, y1) = (self.cell_xy(u.lo).1, self.cell_xy(u.hi).1);
+        for cy in y0..=y1 {
+            // The row's band, widened; the first and last rows reach to infinity (points beyond are clamped there).
+            let band_lo = if cy == 0 {
+                f64::NEG_INFINITY
+            } else {
+                self.lo.y + cy as f64 * self.cell - self.slack
+            };
+            let band_hi = if cy + 1 == self.ny {
+                f64::INFINITY
+            } else {
+                self.lo.y + (cy + 1) as f64 * self.cell + self.slack
+            };
+            let (mut xmin, mut xmax) = (f64::INFINITY, f64::NEG_INFINITY);
+            for i in 0..3 {
+                let (a, b) = (u.c[i], u.c[(i + 1) % 3]);
+                if (band_lo..=band_hi).contains(&a.y) {
+                    xmin = xmin.min(a.x);
+                    xmax = xmax.max(a.x);
+                }
+                // Where the edge crosses the band's lines.
+                for y in [band_lo, band_hi] {
+                    if (a.y < y) != (b.y < y) && y.is_finite() {
+                        let x = a.x + (y - a.y) * ((b.x - a.x) / (b.y - a.y));
+                        xmin = xmin.min(x);
+                        xmax = xmax.max(x);
+                    }
+                }
+            }
+            if xmin > xmax {
+                continue;
+            }
+            let p = |x: f64| DVec2::new(x, u.lo.y);
+            let (x0, x1) = (
+                self.cell_xy(p(xmin - self.slack)).0,
+                self.cell_xy(p(xmax + self.slack)).0,
+            );
+            for cx in x0..=x1 {
+                f(cy * self.nx + cx);
+            }
+        }
+    }
+
+    /// The number of cells of `u`'s box widened by the slack: at least those it meets.
+    fn box_cells(&self, u: &Usable) -> f64 {
+        let s = DVec2::splat(self.slack);
+        let ((x0, y0), (x1, y1)) = (self.cell_xy(u.lo - s), self.cell_xy(u.hi + s));
+        ((x1 - x0 + 1) * (y1 - y0 + 1)) as f64
     }
 
     /// The cell column and row holding `p` (clamped to the grid).
@@ -488,7 +724,7 @@ impl TriangleGrid {
         cy * self.nx + cx
     }
 
-    /// The entries of `tris` whose box touches cell `c`.
+    /// The entries of `tris` that meet cell `c`.
     fn members(&self, c: usize) -> &[u32] {
         &self.members[self.offsets[c]..self.offsets[c + 1]]
     }
@@ -889,6 +1125,60 @@ mod tests {
             }
             check_against_all_pairs(&positions, &triangles, limit)?;
         }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 100, ..ProptestConfig::default() })]
+
+        /// Same, on fans: a centre and spokes to points around it (long thin triangles that all meet the centre's
+        /// cells, grouped there by their hub), some spokes out of angular order so that wedges overlap at the centre,
+        /// the rim or both, and a few triangles across the fan that share no vertex with it.
+        #[test]
+        fn grid_search_matches_all_pairs_on_fans(
+            angles in prop::collection::vec(0.0f64..std::f64::consts::TAU, 3..80),
+            radii in prop::collection::vec(10.0f64..1000.0, 80),
+            swaps in prop::collection::vec((0usize..80, 0usize..80), 0..3),
+            across in prop::collection::vec(prop::array::uniform3((-1000.0f64..1000.0, -1000.0f64..1000.0)), 0..4),
+            sorted in any::<bool>(),
+            limit in 0usize..10,
+        ) {
+            let mut angles = angles;
+            if sorted {
+                angles.sort_by(f64::total_cmp);
+            }
+            let k = angles.len();
+            for &(i, j) in &swaps {
+                angles.swap(i % k, j % k);
+            }
+            let mut positions = vec![DVec3::ZERO];
+            positions.extend(angles.iter().zip(&radii).map(|(&a, &r)| DVec3::new(r * a.cos(), r * a.sin(), 0.0)));
+            let mut triangles: Vec<[u32; 3]> = (0..k as u32).map(|i| [0, i + 1, (i + 1) % k as u32 + 1]).collect();
+            for corners in &across {
+                let base = positions.len() as u32;
+                positions.extend(corners.iter().map(|&(x, y)| DVec3::new(x, y, 0.0)));
+                triangles.push([base, base + 1, base + 2]);
+            }
+            check_against_all_pairs(&positions, &triangles, limit)?;
+        }
+    }
+
+    /// Triangles at a fan's centre over several of its spokes' wedges (one sharing its first edge with a spoke, one
+    /// with another vertex of its own): every overlapping pair is found around the centre, once, also those that
+    /// share no other vertex and lie beyond the first wedge overlapped.
+    #[test]
+    fn a_wedge_over_several_spokes() {
+        let mut positions = vec![DVec3::ZERO];
+        positions.extend((0..8).map(|i| {
+            let a = f64::from(i) * std::f64::consts::FRAC_PI_4;
+            DVec3::new(100.0 * a.cos(), 100.0 * a.sin(), 0.0)
+        }));
+        let a = 2.5 * std::f64::consts::FRAC_PI_4;
+        positions.push(DVec3::new(50.0 * a.cos(), 50.0 * a.sin(), 0.0));
+        let mut triangles: Vec<[u32; 3]> = (0..8).map(|i| [0, i + 1, (i + 1) % 8 + 1]).collect();
+        triangles.push([0, 1, 9]);
+        triangles.push([0, 6, 8]);
+        check_against_all_pairs(&positions, &triangles, usize::MAX).expect("the pairs of all pairs");
+        assert_eq!(find_overlaps(&positions, &triangles, 0).count, 5);
     }
 
     fn check_against_all_pairs(positions: &[DVec3], triangles: &[[u32; 3]], limit: usize) -> Result<(), TestCaseError> {

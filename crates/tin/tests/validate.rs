@@ -325,3 +325,39 @@ proptest::proptest! {
         proptest::prop_assert_eq!(found.first, want);
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(100))]
+
+    /// The same on fans: spokes from a centre to lattice points (long thin triangles over many cells), with vertices
+    /// at the spokes' midpoints at the spoke's height or not, used by small triangles beside them, and vertices
+    /// placed exactly on the grid's cell edges by the lattice.
+    #[test]
+    fn cracks_match_brute_force_on_fans(
+        rim in proptest::collection::vec((-12i32..=12, -12i32..=12, 0i32..4), 3..40),
+        lifts in proptest::collection::vec(0i32..3, 40),
+    ) {
+        let mut rim: Vec<(i32, i32, i32)> = rim.into_iter().filter(|&(x, y, _)| (x, y) != (0, 0)).collect();
+        rim.sort_by(|a, b| f64::from(a.1).atan2(f64::from(a.0)).total_cmp(&f64::from(b.1).atan2(f64::from(b.0))));
+        rim.dedup_by_key(|p| (p.0, p.1));
+        let mut positions = vec![DVec3::ZERO];
+        positions.extend(rim.iter().map(|&(x, y, z)| DVec3::new(f64::from(x), f64::from(y), f64::from(z))));
+        let k = rim.len() as u32;
+        let mut triangles: Vec<[u32; 3]> = (0..k).map(|i| [0, i + 1, (i + 1) % k + 1]).collect();
+        // A midpoint of each even spoke, a little triangle on it: on the spoke's line at its height (lift 1) or not.
+        for (i, &(x, y, z)) in rim.iter().enumerate() {
+            if x % 2 == 0 && y % 2 == 0 {
+                let lift = f64::from(lifts[i % lifts.len()]) - 1.0;
+                let m = positions.len() as u32;
+                positions.push(DVec3::new(f64::from(x / 2), f64::from(y / 2), 0.5 * f64::from(z) + lift));
+                positions.push(DVec3::new(f64::from(x / 2) + 0.25, f64::from(y / 2) + 0.5, 0.0));
+                triangles.push([m, m + 1, i as u32 + 1]);
+            }
+        }
+        let found = tin::find_cracks(&positions, &triangles, usize::MAX);
+        let mut want = cracks_brute(&positions, &triangles);
+        want.sort_unstable();
+        proptest::prop_assert_eq!(found.count, want.len());
+        proptest::prop_assert_eq!(found.first, want);
+    }
+}
