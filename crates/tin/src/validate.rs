@@ -635,27 +635,24 @@ impl TriangleGrid {
             cell *= 1.5;
         }
         // Bucket triangles into every cell they meet (compressed rows, each cell's triangles in increasing order).
-        let mut entries: Vec<(usize, u32)> = grid
-            .tris
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(k, u)| {
-                let mut cells = Vec::new();
-                grid.raster(u, |c| cells.push((c, k as u32)));
-                cells
-            })
-            .collect();
-        entries.par_sort_unstable();
         let cells = grid.nx * grid.ny;
         let mut offsets = vec![0usize; cells + 1];
-        for &(c, _) in &entries {
-            offsets[c + 1] += 1;
+        for u in &grid.tris {
+            grid.raster(u, |c| offsets[c + 1] += 1);
         }
         for i in 0..cells {
             offsets[i + 1] += offsets[i];
         }
-        grid.members = entries.into_iter().map(|(_, k)| k).collect();
+        let mut fill = offsets.clone();
+        let mut members = vec![0u32; offsets[cells]];
+        for (k, u) in grid.tris.iter().enumerate() {
+            grid.raster(u, |c| {
+                members[fill[c]] = k as u32;
+                fill[c] += 1;
+            });
+        }
         grid.offsets = offsets;
+        grid.members = members;
         Some(grid)
     }
 
