@@ -29,13 +29,13 @@
 //!
 //! The nodes are stored in depth-first order (a culled node skips its subtree by index) and the regions in flat
 //! arrays of their f32 values (left bounds apart, as most tests end there); the region test is
-//! [`StoredRegion::contains`]'s arithmetic on them. A node with a region in at least an eighth of the sectors (nine
-//! in ten of them on the bundled terrains) has a slot per sector, its empty regions a left bound of `+∞` that no
-//! camera passes; the others mark their non-empty sectors in a bitmap, a region's slot being the node's first plus
-//! the number of marked sectors before it. So the culler holds at most about eight times what the file stores (a
-//! slot per sector for every node made a file of 100,000 nodes without regions at 1,024 sectors take 819 MB). A
-//! node has a slot per sector only when it has at least `s / 8` regions, so there are at most eight slots per region,
-//! fewer than `2^31` under [`MAX_REGIONS`](crate::hierarchy::MAX_REGIONS): a slot index fits beside the flag bit.
+//! [`StoredRegion::contains`]'s arithmetic on them. A node with regions in at least an eighth of the `s` sectors
+//! (nine in ten of them on the bundled terrains) has a slot per sector, its empty regions a left bound of `+∞` that no
+//! camera passes; the others mark their non-empty sectors in a bitmap of `s` bits, a region's slot being the node's
+//! first plus the number of marked sectors before it. So there are at most eight slots per region (fewer than `2^31`
+//! under [`MAX_REGIONS`](crate::hierarchy::MAX_REGIONS): a slot index fits beside the flag bit), and the culler holds
+//! at most about eight times what the file stores (a slot per sector for every node made a file of 100,000 nodes
+//! without regions at 1,024 sectors take 819 MB).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -808,8 +808,9 @@ mod tests {
     }
 
     /// The flattened region test is [`StoredRegion::contains`], bit for bit: at the vertices, between them, at the
-    /// left bound, on the tail, on the boundary itself and just off it; with up to 64 sectors (one bitmap word in the
-    /// node) and more (up to 1,024, 16 words), each region found in its own slot and every empty one in none.
+    /// left bound, on the tail, on the boundary itself and just off it; with up to 64 sectors (one bitmap word a
+    /// node) and more (up to 1,024, 16 words), each region found in its own slot and every empty one in none or in
+    /// one that holds no camera.
     #[test]
     fn flat_regions_contain_what_stored_regions_contain() {
         let mut g = Gen(5);

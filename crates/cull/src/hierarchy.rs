@@ -312,7 +312,8 @@ impl Hierarchy {
             .sum();
         if regions >= MAX_REGIONS || points >= MAX_REGION_POINTS {
             return invalid(format!(
-                "{regions} regions of {points} vertices and tails: the cullers hold fewer than {MAX_REGIONS} and                  {MAX_REGION_POINTS}"
+                "{regions} regions of {points} vertices and tails: the cullers hold fewer than {MAX_REGIONS} and \
+                 {MAX_REGION_POINTS}"
             ));
         }
         let n = self.nodes.len();

@@ -242,7 +242,7 @@ pub struct Overlaps {
 /// non-finite corner or zero area are skipped (they are reported elsewhere). The result does not depend on the
 /// number of threads.
 ///
-/// Pairs that share a vertex are found around it ([`overlaps_around_vertices`]); the others in the cells of a grid
+/// Pairs that share a vertex are found around it (`overlaps_around_vertices`); the others in the cells of a grid
 /// that both triangles meet, where the triangles are grouped by their *hub* (the corner with the most triangles):
 /// a group's pairs share its hub and are not looked at there, so the spokes of a fan, which all meet its centre's
 /// cells, cost nothing there.
