@@ -532,14 +532,14 @@ const ENTRIES_PER_TRIANGLE: usize = 32;
 /// The usable triangles of a mesh (invalid indices, non-finite corners and zero area left out) listed in the cells of
 /// a uniform grid that they meet.
 ///
-/// A triangle is listed in every cell its closed x,y region meets, and possibly a few more: row by row, the cells
-/// between the least and the greatest x of the triangle within the row's band, the band and the x range both
-/// widened by a millionth of a cell and a billionth of the largest coordinate, far more than the rounding of the
-/// band's edges, of the edges' crossings with them, and of [`TriangleGrid::cell_of`]. So a point of a triangle (and
-/// every vertex on its edges) lies in a cell that lists it, and two triangles whose interiors overlap share a cell.
-/// The cells start at the side of a square per four triangles over the box of all of them and grow by half until there
-/// are at most four cells and [`ENTRIES_PER_TRIANGLE`] entries per triangle (long thin triangles, as in a fan, meet
-/// many small cells).
+/// A triangle is listed in every cell its closed x,y region meets, and possibly a few more: the cells of its box
+/// when that spans at most four, else row by row the cells between the least and the greatest x of the triangle
+/// within the row's band; the box, the band and the x range widened by a millionth of a cell and a billionth of the
+/// largest coordinate, far more than the rounding of the band's edges, of the edges' crossings with them, and of
+/// [`TriangleGrid::cell_of`]. So a point of a triangle (and every vertex on its edges) lies in a cell that lists it,
+/// and two triangles whose interiors overlap share a cell. The cells start at the side of a square per four
+/// triangles over the box of all of them and grow by half until there are at most four cells and
+/// [`ENTRIES_PER_TRIANGLE`] entries per triangle (long thin triangles, as in a fan, meet many small cells).
 struct TriangleGrid {
     tris: Vec<Usable>,
     lo: DVec2,
@@ -658,6 +658,17 @@ impl TriangleGrid {
 
     /// Calls `f` with every cell that `u` meets (see [`TriangleGrid`]), in increasing order.
     fn raster(&self, u: &Usable, mut f: impl FnMut(usize)) {
+        // A box of a few cells, widened by the slack, is taken whole: it holds every cell the triangle meets.
+        let s = DVec2::splat(self.slack);
+        let ((bx0, by0), (bx1, by1)) = (self.cell_xy(u.lo - s), self.cell_xy(u.hi + s));
+        if (bx1 - bx0 + 1) * (by1 - by0 + 1) <= 4 {
+            for cy in by0..=by1 {
+                for cx in bx0..=bx1 {
+                    f(cy * self.nx + cx);
+                }
+            }
+            return;
+        }
         let (y0, y1) = (self.cell_xy(u.lo).1, self.cell_xy(u.hi).1);
         for cy in y0..=y1 {
             // The row's band, widened; the first and last rows reach to infinity (points beyond are clamped there).
