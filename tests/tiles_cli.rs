@@ -613,27 +613,34 @@ fn folders_made_for_a_failed_tile_are_removed() {
     let dir = tempfile::tempdir().expect("tempdir");
     let plan = planned(dir.path());
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&plan).expect("plan")).expect("JSON");
-    // Without the digests (a plan made before they were kept) an edited output is taken as it is.
+    // Without the digests (a plan made before they were kept) an edited output is taken as it is. Tile 0 in a
+    // folder inside tile 1's, both missing.
     for t in v["tiles"].as_array_mut().expect("tiles") {
         t.as_object_mut().expect("tile").remove("file_digest");
     }
     v["tiles"][0]["output"] = serde_json::json!("new/sub/t0.tch");
+    v["tiles"][1]["output"] = serde_json::json!("new/t1.tch");
     let edited = dir.path().join("edited.json");
     std::fs::write(&edited, serde_json::to_string(&v).expect("JSON")).expect("write");
-    let far = dir.path().join(v["tiles"][0]["far"].as_str().expect("far"));
-    let far_bytes = std::fs::read(&far).expect("far field");
-    std::fs::write(&far, &far_bytes[..far_bytes.len() / 2]).expect("truncate");
-    fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "tile 0");
-    assert!(
-        !dir.path().join("new").exists(),
-        "the folders made for the tile are removed"
-    );
-    std::fs::write(&far, &far_bytes).expect("restore");
-    ok(&["tiles", "build", s(&edited), "--tile", "0", "-q"]);
-    assert!(
-        dir.path().join("new/sub/t0.tch").is_file(),
-        "built into the folders it made"
-    );
+    let far = |i: usize| dir.path().join(v["tiles"][i]["far"].as_str().expect("far"));
+    let far_bytes = [0, 1].map(|i| std::fs::read(far(i)).expect("far field"));
+    for (i, bytes) in far_bytes.iter().enumerate() {
+        std::fs::write(far(i), &bytes[..bytes.len() / 2]).expect("truncate");
+    }
+    for tiles in [&["--tile", "0"][..], &["--tile", "1", "--tile", "0"]] {
+        fails_with(&[&["tiles", "build", s(&edited)][..], tiles].concat(), "far field");
+        assert!(
+            !dir.path().join("new").exists(),
+            "the folders made for {tiles:?} are removed"
+        );
+    }
+    for (i, bytes) in far_bytes.iter().enumerate() {
+        std::fs::write(far(i), bytes).expect("restore");
+    }
+    ok(&["tiles", "build", s(&edited), "--tile", "0", "--tile", "1", "-q"]);
+    for built in ["new/sub/t0.tch", "new/t1.tch"] {
+        assert!(dir.path().join(built).is_file(), "{built} built into the folders made");
+    }
 }
 
 /// A mesh's plan keeps a list per square of its tiles and of its far field's blocks: cut into too many, it is

@@ -503,8 +503,9 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
     }
     dirs.sort_unstable();
     dirs.dedup();
+    // Deepest first: a folder inside another is made with it, and both are removed in that order.
     let mut made = Vec::new();
-    for dir in &dirs {
+    for dir in dirs.iter().rev() {
         made.push(outfile::NewDir::create_all(dir).with_context(|| format!("cannot create {}", dir.display()))?);
     }
     let start = Instant::now();
