@@ -64,7 +64,10 @@
 //!   bound `min(top(u_A), top(a_{j+1}))`, and the column containing `u_C` on `[a_j, u_C]`. Such a right-anchored
 //!   cover `[x, a_{j+1}]` and a left-anchored cover `[a_j, y]` with `y ≥ x` (from any occluders written so far)
 //!   together cover the whole column, so `H_j ← max(H_j, min(bound₁, bound₂))` keeps the invariant. Each column
-//!   keeps two candidates per side (the highest bound, and the widest cover).
+//!   keeps two candidates per side (the highest bound, and the widest cover). `y ≥ x` is known when both covers end
+//!   at the same point (their `u` are then one value computed from the same offset) or when `y` exceeds `x` by more
+//!   than their rounding; the point is told by its id (`PointId`), a mesh vertex or a point of the cell-edge
+//!   occluders' grid, in disjoint ranges: equal numbers of the two kinds name different points.
 //!
 //! ## Testing an occludee
 //!
@@ -152,14 +155,14 @@ pub(crate) struct Proj {
     pub hi: f64,
 }
 
-/// A vertex projected into every face where its forward coordinate is positive (`mask` bit `k`), with the mesh
-/// vertex it came from (partial covers that end and start at the same vertex meet exactly).
+/// A vertex projected into every face where its forward coordinate is positive (`mask` bit `k`), with the point it
+/// stands for (partial covers that end and start at the same point meet exactly).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Projected {
     pub mask: u8,
     /// [`wedge_of`] this vertex.
     pub wedge: u8,
-    pub id: u32,
+    pub id: PointId,
     pub face: [Proj; FACES],
 }
 
@@ -171,8 +174,43 @@ pub(crate) struct Reach {
     v: [f64; FACES],
 }
 
-/// No vertex: covers that end here never meet another one exactly.
-pub(crate) const NO_VERTEX: u32 = u32::MAX;
+/// The point of the x,y plane that a projected vertex stands for, by which two partial covers are known to meet
+/// exactly: a mesh vertex, or a point of the cell-edge occluders' grid ([`crate::lloyd_egbert`]: a grid corner or the
+/// end of a piece), in two disjoint ranges of ids. Equal ids name one point, so the two `u` are one computed value;
+/// a grid point never shares an id with a mesh vertex, even where their numbers are equal (the safe culler writes
+/// both kinds into one horizon once its work budget is spent).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PointId(u64);
+
+impl PointId {
+    /// No point: a cover that ends here meets another one only by the rounding margin.
+    pub(crate) const NONE: PointId = PointId(u64::MAX);
+
+    /// Mesh vertex `v`.
+    #[inline(always)]
+    pub(crate) fn vertex(v: u32) -> PointId {
+        PointId(u64::from(v))
+    }
+
+    /// Point `g` of the cell-edge occluders' grid, or [`PointId::NONE`] for [`NO_GRID_POINT`].
+    #[inline(always)]
+    pub(crate) fn grid(g: u32) -> PointId {
+        if g == NO_GRID_POINT {
+            PointId::NONE
+        } else {
+            PointId(1 << 32 | u64::from(g))
+        }
+    }
+}
+
+impl Default for PointId {
+    fn default() -> PointId {
+        PointId::NONE
+    }
+}
+
+/// A segment end of the cell-edge occluders that is no grid point ([`PointId::grid`] makes it [`PointId::NONE`]).
+pub(crate) const NO_GRID_POINT: u32 = u32::MAX;
 
 /// What a culler's height margin `μ` depends on, computed from the mesh's positions (not from a file's origin
 /// field, which a file may set anywhere): the lowest and highest corners of the box of the vertices, the extent `e`
@@ -226,9 +264,9 @@ impl Scale {
 /// Largest `|u|` or `|v|` of a projection (see [`project`]).
 const PROJ_MAX: f64 = 1e300;
 
-/// Projects the offset `d = p − c` of mesh vertex `id` into every face where `f > 0`, with the height margin `mu`.
+/// Projects the offset `d = p − c` of the point `id` into every face where `f > 0`, with the height margin `mu`.
 #[inline]
-pub(crate) fn project(d: [f64; 3], mu: f64, id: u32) -> Projected {
+pub(crate) fn project(d: [f64; 3], mu: f64, id: PointId) -> Projected {
     let mut out = Projected {
         id,
         ..Projected::default()
@@ -326,16 +364,16 @@ struct Top {
     ua: f64,
     ub: f64,
     uc: f64,
-    /// Mesh vertices at `ua` and `uc`.
-    ida: u32,
-    idc: u32,
+    /// Points at `ua` and `uc`.
+    ida: PointId,
+    idc: PointId,
     /// A segment: `top` is `AC` alone.
     segment: bool,
 }
 
 impl Top {
     #[inline(always)]
-    fn new(p: [(f64, f64, u32); 3]) -> Option<Top> {
+    fn new(p: [(f64, f64, PointId); 3]) -> Option<Top> {
         // Sorting network on `u` (a NaN ends up anywhere; `Edge::new` refuses every edge with a value not finite).
         let [mut a, mut b, mut c] = p;
         if b.0 < a.0 {
@@ -366,7 +404,7 @@ impl Top {
 
     /// A lowered segment `P Q` as a degenerate triangle: `top` is the segment itself (`AC`), with no short edges.
     #[inline(always)]
-    fn segment(p: (f64, f64, u32), q: (f64, f64, u32)) -> Option<Top> {
+    fn segment(p: (f64, f64, PointId), q: (f64, f64, PointId)) -> Option<Top> {
         let (a, c) = if q.0 < p.0 { (q, p) } else { (p, q) };
         let ac = Edge::new((a.0, a.1), (c.0, c.1)).ok()??;
         Some(Top {
@@ -411,18 +449,18 @@ fn max_or_nan(a: f64, b: f64) -> f64 {
 }
 
 /// Partial covers of one column: left-anchored (`[a_j, reach]`) and right-anchored (`[start, a_{j+1}]`), two
-/// candidates each (the highest bound and the widest cover), each with the mesh vertex at its inner end.
+/// candidates each (the highest bound and the widest cover), each with the point at its inner end.
 #[derive(Clone, Copy, Debug)]
 struct Partial {
     /// `(bound, reach, vertex)`: highest bound, widest reach.
-    left: [(f64, f64, u32); 2],
+    left: [(f64, f64, PointId); 2],
     /// `(bound, start, vertex)`: highest bound, widest (smallest start).
-    right: [(f64, f64, u32); 2],
+    right: [(f64, f64, PointId); 2],
 }
 
 const NO_PARTIAL: Partial = Partial {
-    left: [(f64::NEG_INFINITY, f64::NEG_INFINITY, NO_VERTEX); 2],
-    right: [(f64::NEG_INFINITY, f64::INFINITY, NO_VERTEX); 2],
+    left: [(f64::NEG_INFINITY, f64::NEG_INFINITY, PointId::NONE); 2],
+    right: [(f64::NEG_INFINITY, f64::INFINITY, PointId::NONE); 2],
 };
 
 /// The horizon buffer: `4 w` column values and the partial covers behind them.
@@ -647,7 +685,7 @@ impl Horizon {
     /// front of the camera in face `k`, spanning the `u` of its vertices from `a` to `b`, with `bound` the least
     /// lowered `v` of its vertices; see the module documentation). `a` and `b` (in either order) carry the mesh
     /// vertices at the ends.
-    pub(crate) fn write_flat(&mut self, k: usize, a: (f64, u32), b: (f64, u32), bound: f64) {
+    pub(crate) fn write_flat(&mut self, k: usize, a: (f64, PointId), b: (f64, PointId), bound: f64) {
         let (a, b) = if b.0 < a.0 { (b, a) } else { (a, b) };
         let Some([j0, j1]) = self.columns(a.0, b.0) else {
             return;
@@ -702,7 +740,7 @@ impl Horizon {
         let right_col = end; // contains hi_u
         if left_col < right_col {
             // The covers run exactly from and to the end vertices (`ua`, `uc`); whether two covers meet is decided
-            // in `combine`, exactly when they share the vertex, else with the rounding margin.
+            // in `combine`, exactly when they share the point ([`PointId`]), else with the rounding margin.
             if (0..w).contains(&left_col) {
                 let b = self.boundary(left_col as usize + 1);
                 let bound = top.low(top.ua).min(top.low(b));
@@ -716,7 +754,7 @@ impl Horizon {
         }
     }
 
-    fn add_left_anchored(&mut self, col: usize, cover: (f64, f64, u32)) {
+    fn add_left_anchored(&mut self, col: usize, cover: (f64, f64, PointId)) {
         // A cover no higher than the column can raise it in no pair (a pair raises it to the lower of two bounds).
         if !(cover.0 > self.h[col]) {
             return;
@@ -731,7 +769,7 @@ impl Horizon {
         self.combine(col);
     }
 
-    fn add_right_anchored(&mut self, col: usize, cover: (f64, f64, u32)) {
+    fn add_right_anchored(&mut self, col: usize, cover: (f64, f64, PointId)) {
         // A cover no higher than the column can raise it in no pair (a pair raises it to the lower of two bounds).
         if !(cover.0 > self.h[col]) {
             return;
@@ -747,15 +785,15 @@ impl Horizon {
     }
 
     /// Raises column `col` to the best pair of partial covers that together cover it: a left-anchored cover reaching
-    /// the same mesh vertex where a right-anchored one starts (the same point), or reaching past its start by more
-    /// than the rounding margin.
+    /// the point where a right-anchored one starts (the same [`PointId`], hence the same computed `u`), or reaching
+    /// past its start by more than the rounding margin.
     fn combine(&mut self, col: usize) {
         let p = self.partial[col];
         let mut best = self.h[col];
         for l in p.left {
             for r in p.right {
-                let meet =
-                    (l.2 == r.2 && l.2 != NO_VERTEX) || l.1 - REL * (1.0 + l.1.abs()) >= r.1 + REL * (1.0 + r.1.abs());
+                let meet = (l.2 == r.2 && l.2 != PointId::NONE)
+                    || l.1 - REL * (1.0 + l.1.abs()) >= r.1 + REL * (1.0 + r.1.abs());
                 if meet {
                     best = best.max(l.0.min(r.0));
                 }
@@ -810,9 +848,9 @@ impl Horizon {
                 }
             }
             let Some(top) = Top::new([
-                (p[0].u, p[0].hi, NO_VERTEX),
-                (p[1].u, p[1].hi, NO_VERTEX),
-                (p[2].u, p[2].hi, NO_VERTEX),
+                (p[0].u, p[0].hi, PointId::NONE),
+                (p[1].u, p[1].hi, PointId::NONE),
+                (p[2].u, p[2].hi, PointId::NONE),
             ]) else {
                 return false;
             };
@@ -1100,19 +1138,19 @@ mod tests {
         let mut h = Horizon::new(64);
         // A wall across face 0 at x = 10, 5 m above the camera: two triangles.
         let wall = [[10.0, -50.0, 5.0], [10.0, 50.0, 5.0], [11.0, 0.0, 5.0]];
-        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, PointId::NONE)).collect();
         h.write_triangle([&p[0], &p[1], &p[2]]);
         // Behind it at x = 20..30 and below the sight line (z < 10 at x = 20).
         let behind = [[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
-        let q: Vec<Projected> = behind.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        let q: Vec<Projected> = behind.iter().map(|&d| project(d, mu, PointId::NONE)).collect();
         assert!(h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         // Above the sight line: visible.
         let above = [[20.0, -1.0, 10.5], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]];
-        let q: Vec<Projected> = above.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        let q: Vec<Projected> = above.iter().map(|&d| project(d, mu, PointId::NONE)).collect();
         assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         // Beyond the wall's lateral extent: visible.
         let aside = [[20.0, 45.0, 0.0], [30.0, 70.0, 0.0], [25.0, 60.0, 0.0]];
-        let q: Vec<Projected> = aside.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        let q: Vec<Projected> = aside.iter().map(|&d| project(d, mu, PointId::NONE)).collect();
         assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
         // A disk behind the wall, low enough, is hidden; one reaching above the sight line is not.
         assert!(h.disk_hidden([25.0, 0.0], 3.0, 8.0 + mu, false));
@@ -1129,12 +1167,12 @@ mod tests {
         let mut h = Horizon::new(64);
         // A high wall across face 3 (−y), nothing at all in face 0 (+x).
         let wall = [[-60.0, -10.0, 50.0], [60.0, -10.0, 50.0], [0.0, -11.0, 50.0]];
-        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        let p: Vec<Projected> = wall.iter().map(|&d| project(d, mu, PointId::NONE)).collect();
         h.write_triangle([&p[0], &p[1], &p[2]]);
         // A patch in the quadrant x > 0, y < 0: one vertex in plain view in face 0, one hidden behind the wall in
         // face 3, and one south of the camera at x = 1e-298 (in face 0 with f > 0, but at u ≈ −2e299).
         let patch = [[30.0, -5.0, 0.0], [5.0, -30.0, 0.0], [1e-298, -20.0, 0.0]];
-        let q: Vec<Projected> = patch.iter().map(|&d| project(d, mu, NO_VERTEX)).collect();
+        let q: Vec<Projected> = patch.iter().map(|&d| project(d, mu, PointId::NONE)).collect();
         assert!(q[2].mask & 1 != 0 && q[2].face[0].u < -1e299, "{:?}", q[2].face[0]);
         assert!(!h.vertices_hidden(&q, false), "the vertex in face 0 is in plain view");
         assert!(!h.triangle_hidden([&q[0], &q[1], &q[2]], false));
@@ -1158,7 +1196,7 @@ mod tests {
         let p: Vec<Projected> = [[1e-298, -20.0, mu], [10.0, 3.0, 5.0], [10.0, 9.0, 5.0]]
             .iter()
             .enumerate()
-            .map(|(i, &d)| project(d, mu, i as u32))
+            .map(|(i, &d)| project(d, mu, PointId::vertex(i as u32)))
             .collect();
         assert!(p[0].face[0].u < -1e299 && p[0].face[0].lo == 0.0, "{:?}", p[0].face[0]);
         h.write_segment([&p[0], &p[1]]);
@@ -1174,9 +1212,9 @@ mod tests {
         let mu = 1e-6;
         let mut h = Horizon::new(64);
         // A ridge line across face 0 at x = 10, 5 m above the camera, as two edges meeting at a vertex.
-        let a = project([10.0, -50.0, 5.0], mu, 0);
-        let b = project([10.0, 0.5, 5.0], mu, 1);
-        let c = project([10.0, 50.0, 5.0], mu, 2);
+        let a = project([10.0, -50.0, 5.0], mu, PointId::vertex(0));
+        let b = project([10.0, 0.5, 5.0], mu, PointId::vertex(1));
+        let c = project([10.0, 50.0, 5.0], mu, PointId::vertex(2));
         h.write_segment([&a, &b]);
         h.write_segment([&b, &c]);
         assert!(
@@ -1184,7 +1222,7 @@ mod tests {
             "{:?}",
             &h.values()[..64]
         );
-        let tri = |p: [[f64; 3]; 3]| p.map(|d| project(d, mu, NO_VERTEX));
+        let tri = |p: [[f64; 3]; 3]| p.map(|d| project(d, mu, PointId::NONE));
         // Behind it and below the sight line: hidden, by the vertex bound and triangle by triangle.
         let behind = tri([[20.0, -1.0, 9.0], [30.0, 1.0, 9.0], [25.0, 3.0, 9.0]]);
         assert!(h.triangle_hidden([&behind[0], &behind[1], &behind[2]], false));
@@ -1208,13 +1246,17 @@ mod tests {
         // A high wall all around the camera, its corners between the faces' diagonals.
         for k in 0..8 {
             let (a0, a1) = ((k as f64 + 0.5) * FRAC_PI_4, (k as f64 + 1.5) * FRAC_PI_4);
-            let p = project([5.0 * a0.cos(), 5.0 * a0.sin(), 100.0], mu, k);
-            let q = project([5.0 * a1.cos(), 5.0 * a1.sin(), 100.0], mu, (k + 1) % 8);
+            let p = project([5.0 * a0.cos(), 5.0 * a0.sin(), 100.0], mu, PointId::vertex(k));
+            let q = project(
+                [5.0 * a1.cos(), 5.0 * a1.sin(), 100.0],
+                mu,
+                PointId::vertex((k + 1) % 8),
+            );
             h.write_segment([&p, &q]);
         }
         // Low vertices behind it in the wedges of faces 0, 1 and 2: three wedges are more than a set of triangles
         // that do not contain the camera is known to stay within, so the bound is not used; two adjacent ones are.
-        let verts = [[20.0, 10.0, 0.0], [10.0, 20.0, 0.0], [-20.0, 10.0, 0.0]].map(|d| project(d, mu, NO_VERTEX));
+        let verts = [[20.0, 10.0, 0.0], [10.0, 20.0, 0.0], [-20.0, 10.0, 0.0]].map(|d| project(d, mu, PointId::NONE));
         assert!(!h.vertices_hidden(&verts, false));
         assert!(h.vertices_hidden(&verts[..2], false));
     }
@@ -1224,11 +1266,11 @@ mod tests {
         let mu = 0.0;
         let mut h = Horizon::new(4);
         // Two triangles meeting at u = 0.1 (inside column 2 of 4: [0, 0.5]) make one wall over [−0.5, 0.6].
-        let a = project([10.0, -5.0, 5.0], mu, 0);
-        let b = project([10.0, 1.0, 5.0], mu, 1);
-        let c = project([10.0, 6.0, 5.0], mu, 2);
-        let apex1 = project([11.0, -2.0, 5.0], mu, 3);
-        let apex2 = project([11.0, 3.0, 5.0], mu, 4);
+        let a = project([10.0, -5.0, 5.0], mu, PointId::vertex(0));
+        let b = project([10.0, 1.0, 5.0], mu, PointId::vertex(1));
+        let c = project([10.0, 6.0, 5.0], mu, PointId::vertex(2));
+        let apex1 = project([11.0, -2.0, 5.0], mu, PointId::vertex(3));
+        let apex2 = project([11.0, 3.0, 5.0], mu, PointId::vertex(4));
         h.write_triangle([&a, &b, &apex1]);
         assert_eq!(h.values()[2], f64::NEG_INFINITY);
         h.write_triangle([&b, &c, &apex2]);
@@ -1334,7 +1376,7 @@ mod tests {
             let mu = 1e-6;
             let pts: Vec<[f64; 3]> = points.iter().map(|&(x, y, z)| [x, y, z]).collect();
             let n = pts.len();
-            let proj: Vec<Projected> = pts.iter().enumerate().map(|(i, &d)| project(d, mu, i as u32)).collect();
+            let proj: Vec<Projected> = pts.iter().enumerate().map(|(i, &d)| project(d, mu, PointId::vertex(i as u32))).collect();
             let lowered = |i: usize| [pts[i][0], pts[i][1], pts[i][2] - mu];
             let mut h = Horizon::new(1 << log_w);
             // Every occluder written, as lowered segments, for the check.
@@ -1356,7 +1398,7 @@ mod tests {
                     let lo = *chain.iter().min_by(|x, y| by_u(x).total_cmp(&by_u(y))).expect("a chain");
                     let hi = *chain.iter().max_by(|x, y| by_u(x).total_cmp(&by_u(y))).expect("a chain");
                     let bound = chain.iter().map(|&i| proj[i].face[k].lo).fold(f64::INFINITY, f64::min);
-                    h.write_flat(k, (by_u(&lo), lo as u32), (by_u(&hi), hi as u32), bound);
+                    h.write_flat(k, (by_u(&lo), PointId::vertex(lo as u32)), (by_u(&hi), PointId::vertex(hi as u32)), bound);
                 }
                 written.extend(chain.windows(2).map(|w| (w[0], w[1])));
             }
@@ -1385,7 +1427,7 @@ mod tests {
             let up: Vec<Projected> = pts
                 .iter()
                 .enumerate()
-                .map(|(i, &d)| project([d[0], d[1], d[2] - lift], mu, (n + i) as u32))
+                .map(|(i, &d)| project([d[0], d[1], d[2] - lift], mu, PointId::vertex((n + i) as u32)))
                 .collect();
             for &(a, b, c) in &tris {
                 let (a, b, c) = (a % n, b % n, c % n);

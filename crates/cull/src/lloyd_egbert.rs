@@ -79,7 +79,9 @@
 //! more than their ends' `δt`, or meet at the same exactly computed point (one mesh vertex, one canonical mesh edge,
 //! one grid corner). Triangles without area in x,y are skipped (a profile through the others is still under the
 //! surface). The segment's end points that are grid corners carry the corner's id, so that two covers ending there
-//! join exactly in the horizon (same x,y: the same projected `u`, bit for bit).
+//! join exactly in the horizon (same x,y: the same projected `u`, bit for bit); the ids are grid ids
+//! (`PointId::grid`), never equal to a mesh vertex's, since the safe culler writes these segments into the horizon of
+//! its patches' edges.
 //!
 //! **(ii) holds, rounding included.** `d_min` is multiplied by `1 − 1e-12` and `d_max` by `1 + 1e-12`, far beyond
 //! the few-ulp errors of a square root of a sum of squares of correctly rounded differences.
@@ -95,7 +97,7 @@ use std::time::{Duration, Instant};
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::{Grouping, Hierarchy};
-use crate::horizon::{Horizon, NO_VERTEX, Projected, Scale, project};
+use crate::horizon::{Horizon, NO_GRID_POINT, PointId, Projected, Scale, project};
 use crate::sector::circle_outside_view;
 
 /// The finest grid of occluders: `2^8 = 256` cells a side (about 130 000 cell edges).
@@ -119,7 +121,7 @@ struct BoxNode {
     cell: Option<[usize; 2]>,
 }
 
-/// One occluder: a 3-D segment on or below the terrain, with the grid-corner ids of its ends ([`NO_VERTEX`] for an
+/// One occluder: a 3-D segment on or below the terrain, with the grid-corner ids of its ends ([`NO_GRID_POINT`] for an
 /// end that is not a corner).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Occluder {
@@ -330,8 +332,10 @@ impl CellEdges {
             }
             q.pending.pop();
             let o = &self.occluders[o as usize];
-            let pa = project(sub(o.a, eye), mu, o.ida);
-            let pb = project(sub(o.b, eye), mu, o.idb);
+            // Grid ids, never taken for mesh vertices' ([`PointId`]): the safe culler writes these segments into a
+            // horizon that holds the covers of its patches' edges.
+            let pa = project(sub(o.a, eye), mu, PointId::grid(o.ida));
+            let pb = project(sub(o.b, eye), mu, PointId::grid(o.idb));
             horizon.write_segment([&pa, &pb]);
             written += 1;
         }
@@ -588,7 +592,7 @@ fn box_top_hidden(horizon: &Horizon, node: &BoxNode, eye: [f64; 3], mu: f64) -> 
     if horizon.disk_hidden(m, r, dz + mu, false) {
         return true;
     }
-    let corner = |x: f64, y: f64| -> Projected { project([x - eye[0], y - eye[1], dz], mu, NO_VERTEX) };
+    let corner = |x: f64, y: f64| -> Projected { project([x - eye[0], y - eye[1], dz], mu, PointId::NONE) };
     let c = [
         corner(node.lo[0], node.lo[1]),
         corner(node.hi[0], node.lo[1]),
@@ -829,7 +833,7 @@ fn fit(
         } else if t == corners[1].0 {
             corners[1].1
         } else {
-            NO_VERTEX
+            NO_GRID_POINT
         }
     };
     // The segment in `PIECES` pieces (each between two points of the lowered line, so below it), that become
@@ -967,7 +971,7 @@ mod tests {
         let mut ids = std::collections::HashMap::new();
         for o in &c.cells.occluders {
             for (p, id) in [(o.a, o.ida), (o.b, o.idb)] {
-                if id != NO_VERTEX {
+                if id != NO_GRID_POINT {
                     assert_eq!(*ids.entry(id).or_insert(at(p)), at(p));
                 }
             }

@@ -134,7 +134,7 @@ use std::collections::BinaryHeap;
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
-use crate::horizon::{FACES, Horizon, Projected, REL, Reach, Scale, face_coords, project};
+use crate::horizon::{FACES, Horizon, PointId, Projected, REL, Reach, Scale, face_coords, project};
 use crate::lloyd_egbert::{CellEdges, EdgeQueue};
 use crate::sector::circle_outside_view;
 
@@ -361,8 +361,8 @@ impl Count {
 #[derive(Clone, Copy, Debug)]
 struct Chain {
     mask: u8,
-    lo: [(f64, u32); FACES],
-    hi: [(f64, u32); FACES],
+    lo: [(f64, PointId); FACES],
+    hi: [(f64, PointId); FACES],
     bound: [f64; FACES],
 }
 
@@ -370,8 +370,8 @@ impl Default for Chain {
     fn default() -> Self {
         Chain {
             mask: 0b1111,
-            lo: [(f64::INFINITY, 0); FACES],
-            hi: [(f64::NEG_INFINITY, 0); FACES],
+            lo: [(f64::INFINITY, PointId::NONE); FACES],
+            hi: [(f64::NEG_INFINITY, PointId::NONE); FACES],
             bound: [f64::INFINITY; FACES],
         }
     }
@@ -616,8 +616,8 @@ impl SafeCuller {
             }
             count.flats += 1;
             let off = |p: [f64; 3]| [p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]];
-            let pa = project(off(crest.a), mu, crest.ids[0]);
-            let pb = project(off(crest.b), mu, crest.ids[1]);
+            let pa = project(off(crest.a), mu, PointId::vertex(crest.ids[0]));
+            let pb = project(off(crest.b), mu, PointId::vertex(crest.ids[1]));
             let num = crest.z - eye[2] - mu;
             for k in 0..FACES {
                 let (mf, _) = face_coords(k, m[0], m[1]);
@@ -1038,9 +1038,11 @@ impl SafeCuller {
             let at = scratch.projected.len();
             let range = node.verts[0] as usize..node.verts[1] as usize;
             for (p, &v) in self.verts[range.clone()].iter().zip(&self.vids[range]) {
-                scratch
-                    .projected
-                    .push(project([p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]], mu, v));
+                scratch.projected.push(project(
+                    [p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]],
+                    mu,
+                    PointId::vertex(v),
+                ));
             }
             let tris = &self.tris[node.tris[0] as usize..node.tris[1] as usize];
             let nv = node.verts[1] as usize - node.verts[0] as usize;

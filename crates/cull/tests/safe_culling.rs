@@ -944,3 +944,93 @@ proptest! {
         }
     }
 }
+
+/// Regression (found by an audit of the proofs): once the work budget is spent, the safe culler writes the cell-edge
+/// segments of `lloyd_egbert`, whose ends carry the ids of grid points, into a horizon holding the partial covers of
+/// its patches' edges, whose ends carry mesh vertex ids. Both were `u32` numbers, so grid corner (20, 0) of this
+/// 4 × 4 grid (id 12) was taken for mesh vertex 12, at another `u`: a left-anchored cover ending at the corner and a
+/// right-anchored one starting at the vertex were paired as if they met, and the column was raised over a gap that
+/// no occluder covers. Triangle X, seen through that gap, was culled at every budget from 7 on. The ids now live in
+/// disjoint ranges (`horizon::PointId`).
+#[test]
+fn a_grid_corner_numbered_like_a_mesh_vertex_is_not_that_vertex() {
+    use cull::{BuildInfo, Hierarchy, Mesh, Node};
+    let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let positions = vec![
+        p(10.0, -10.0, -20.0), // 0..2: F1, the grid's lower-left corner
+        p(10.3, -9.9, -20.0),
+        p(10.2, -9.6, -20.0),
+        p(10.0, -0.2, 0.0), // 3: R, with P and Q the occluder A
+        p(19.5, 0.0, 10.0), // 4: W's fourth corner
+        p(14.0, 1.9, 7.0),  // 5: Q
+        p(16.8, 2.3, 0.0),  // 6..8: T, which makes the culler write A's edges
+        p(17.2, 2.3, 0.0),
+        p(17.0, 2.7, 0.0),
+        p(19.5, -4.0, 10.0), // 9..11 and 4: W, a slab across grid line x = 20 up to the corner (20, 0)
+        p(20.5, -4.0, 10.0),
+        p(20.5, 0.0, 10.0),
+        p(14.0, 0.08, 7.0), // 12: P, numbered like grid corner (2, 2) = (20, 0)
+        p(27.5, 1.8, -5.0), // 13..15: X, seen through the gap between the corner's u and P's
+        p(28.5, 1.8, -5.0),
+        p(28.0, 2.6, -5.0),
+        p(30.0, 10.0, -20.0), // 16..18: F2, the grid's upper-right corner
+        p(29.7, 9.9, -20.0),
+        p(29.8, 9.6, -20.0),
+    ];
+    let triangles = vec![
+        [0, 1, 2],
+        [3, 12, 5],
+        [6, 7, 8],
+        [9, 10, 11],
+        [9, 11, 4],
+        [13, 14, 15],
+        [16, 17, 18],
+    ];
+    let tin = Tin::from_parts(positions, triangles).expect("a TIN");
+    // Each group its own root leaf; the last triangle is the always-visible set.
+    let nodes: Vec<Node> = [[0u32, 1], [1, 2], [2, 3], [3, 5], [5, 6], [6, 7]]
+        .iter()
+        .map(|&triangles| Node {
+            centre: [0.0; 2],
+            radius: 0.0,
+            children: vec![],
+            triangles,
+            level: 0,
+            regions: vec![],
+        })
+        .collect();
+    let h = Hierarchy {
+        sectors: 16,
+        origin: [0.0; 3],
+        roots: (0..nodes.len() as u32).collect(),
+        nodes,
+        always_visible: [7, 7],
+        mesh: Mesh {
+            positions: tin.positions().iter().map(|p| p.to_array()).collect(),
+            triangles: tin.triangles().to_vec(),
+        },
+        build: BuildInfo::default(),
+    };
+    h.check_invariants().expect("valid");
+    let eye = DVec3::new(0.0, -3.0, 0.0);
+    let visible = GroundTruth::new(&tin).visible_triangles(eye);
+    assert!(visible[5], "X is visible to the exact checker");
+    let mut false_culls = Vec::new();
+    for budget in 1..=20 {
+        let params = SafeParams {
+            columns_per_face: 8,
+            patch: 2,
+            occluder_budget: usize::MAX,
+            work_budget: budget,
+            coarse_columns: 0,
+        };
+        let mask = SafeCuller::new(&h, params)
+            .cull(&Camera::all_around(eye.to_array()))
+            .mask(7);
+        false_culls.extend((0..7).filter(|&t| visible[t] && !mask[t]).map(|t| (budget, t)));
+    }
+    assert!(
+        false_culls.is_empty(),
+        "false culls (budget, triangle): {false_culls:?}"
+    );
+}
