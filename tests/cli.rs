@@ -985,6 +985,34 @@ fn build_is_deterministic_across_threads_and_seeds() {
     assert!(build("c.tch", "4", "2") != one, "another seed should change the groups");
 }
 
+/// `-` names standard output for outputs; for an input, the error says how to read standard input.
+#[test]
+fn a_dash_input_points_to_dev_stdin() {
+    fails_with(
+        &["info", "-"],
+        "-: no file of that name (standard input is read as /dev/stdin)",
+    );
+}
+
+/// `--threads` sets the worker count, before or after the command, and changes no byte of the output.
+#[test]
+fn threads_sets_the_worker_count() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (a, b) = (dir.path().join("a.tch"), dir.path().join("b.tch"));
+    let m = mesh("jacksboro-2k.obj");
+    let one = json(&["--threads", "1", "build", s(&m), "-o", s(&a), "--json", "-q"]);
+    assert_eq!(one["threads"], 1, "{one}");
+    let three = json(&["build", s(&m), "-o", s(&b), "--threads", "3", "--json", "-q"]);
+    assert_eq!(three["threads"], 3, "{three}");
+    assert!(
+        std::fs::read(&a).expect("written") == std::fs::read(&b).expect("written"),
+        "1 vs 3 threads: different .tch files"
+    );
+    let c = dir.path().join("c.tch");
+    fails_with(&["build", s(&m), "-o", s(&c), "--threads", "0"], "--threads");
+    assert!(!c.exists());
+}
+
 /// Byte-identical outputs at any thread count, on the 10k mesh (large enough for the parallel sorts, checks and
 /// orders of `tin` and `crystal` to split their work) and through the DEM paths (simplification, the whole grid),
 /// at 1, 3 and 5 threads on a 2-core machine (more threads than cores split the work differently again).
@@ -1673,6 +1701,21 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         "needs a quadtree hierarchy",
     );
     fails_with(&["view", s(&tch), "--pvs-cell-size", "0"], "at least 1 m");
+    // The side panel's build parameters are refused as `build` refuses them (the panel clamped them, and a rebuild
+    // with too many subsectors failed inside the window only).
+    fails_with(&["view", s(&tch), "--sectors", "3"], "at least 4 sectors are needed");
+    fails_with(
+        &["view", s(&tch), "--min-group", "0"],
+        "`min_group`: must be at least 1",
+    );
+    fails_with(
+        &["view", s(&mesh("jacksboro-2k.obj")), "--max-expanse", "-1"],
+        "`max_expanse`: must be a positive fraction",
+    );
+    fails_with(
+        &["view", s(&mesh("jacksboro-2k.obj")), "--sectors", "2000"],
+        "exceeds the limit",
+    );
     // Without regions a rebuild can only make a quadtree, and takes no horizon parameters.
     let no_regions = "--no-regions needs --grouping quadtree";
     fails_with(&["view", s(&tch), "--no-regions"], no_regions);
@@ -1693,6 +1736,20 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         &["view", s(&mesh("jacksboro-2k.obj")), "--truth"],
         "a mesh has no culler until it is built: add --rebuild",
     );
+    // Without a display: said plainly, once the arguments are checked.
+    let shot = dir.path().join("shot.png");
+    let out = bin()
+        .args(["view", s(&tch), "--screenshot", s(&shot)])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("no display to open the viewer's window on") && !err.contains(".rs:"),
+        "{err}"
+    );
+    assert!(!shot.exists());
     assert_eq!(
         std::fs::read(&tch).expect("hierarchy"),
         before,

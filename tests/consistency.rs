@@ -411,6 +411,13 @@ fn nonsense_values_are_refused() {
         fails_with(&["render", s(&tch), "-o", s(&jpg)], "render writes a PNG image");
         assert!(!jpg.exists());
     }
+    // Every PNG output wants its name: a failure map named .jpg would be a PNG under another name.
+    let jpg = dir.path().join("map.jpg");
+    fails_with(
+        &["failmap", s(&tch), "--cell-size", "1000", "-o", s(&jpg)],
+        "-o writes a PNG image; name it .png",
+    );
+    assert!(!jpg.exists());
     let obj = dir.path().join("s.obj");
     fails_with(
         &["synth", "-o", s(&obj), "--vertices", "100", "--relief", "1e308"],

@@ -88,6 +88,10 @@ fn one_cell_a_grid_and_the_binary_file_agree() {
         text.contains("(a tincull PVS file,") && text.contains(&format!("cells         1, mean PVS {size} triangles")),
         "{text}"
     );
+    // By its content, whatever its name: the same file named .tch is described as a PVS file too.
+    let renamed = dir.path().join("one-pvs.tch");
+    std::fs::copy(&file, &renamed).expect("copy");
+    assert_eq!(json(&["info", s(&renamed), "--json"])["cells"], info["cells"]);
 
     // The grid: deterministic, and its cell containing the one above has ranges of the same kind.
     let (g1, g2) = (dir.path().join("g1.pvs"), dir.path().join("g2.pvs"));

@@ -171,6 +171,11 @@ fn errors_name_what_is_wrong() {
         &["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch"))],
         "tile 0 has not been built",
     );
+    // With no tile built, the hint builds them all.
+    fails_with(
+        &["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch"))],
+        &format!("run `tincull tiles build {} --all`", plan.display()),
+    );
     // A tile's file that is not a hierarchy: the merge names the tile and its file, and writes nothing.
     let outputs = tile_outputs(&plan);
     for path in &outputs {

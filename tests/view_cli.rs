@@ -45,7 +45,11 @@ fn view(input: &std::path::Path, args: &[&str], shot: &std::path::Path) -> Optio
     let stderr = String::from_utf8_lossy(&out.stderr);
     if !out.status.success() {
         // Only a missing display or GPU is a reason to skip; any other failure is a failure.
-        if stderr.contains("viewer window") || stderr.contains("no GPU adapter") || stderr.contains("xvfb-run") {
+        if stderr.contains("viewer window")
+            || stderr.contains("no display")
+            || stderr.contains("no GPU adapter")
+            || stderr.contains("xvfb-run")
+        {
             skip(&format!(
                 "the viewer could not open a window ({}): {stderr}",
                 out.status

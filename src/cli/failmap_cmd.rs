@@ -68,7 +68,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     files.input(&args.hierarchy)?;
     if let Some(path) = &args.out {
         files.check_file(path, "-o", "the map is a PNG image (binary)")?;
-        super::files::refuse_other_format(path, "a PNG image", "png")?;
+        super::files::require_png(path, "-o")?;
     }
     if let Some(path) = &args.csv {
         files.check_or_stdout(path, "--csv", &mut out)?;

@@ -181,6 +181,15 @@ pub fn refuse_other_format(path: &Path, what: &str, own: &str) -> Result<()> {
     refuse_other_formats(path, what, &[own])
 }
 
+/// An error unless the image output `path` (of `what`: `render`, `--screenshot`, …) is named `.png`: the images
+/// are PNG whatever the name, and another name would hide that.
+pub fn require_png(path: &Path, what: &str) -> Result<()> {
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        bail!("{}: {what} writes a PNG image; name it .png", path.display());
+    }
+    Ok(())
+}
+
 /// [`refuse_other_format`] for an output that may take any of the extensions `own` (glTF: `.glb` or `.gltf`).
 pub fn refuse_other_formats(path: &Path, what: &str, own: &[&str]) -> Result<()> {
     let Some(ext) = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase) else {

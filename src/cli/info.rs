@@ -26,17 +26,19 @@ pub struct InfoArgs {
 
 /// Runs `tincull info`.
 pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
-    if super::mesh_input::is_hierarchy(&args.mesh.mesh) {
+    // What the file holds decides, by content first (a PVS file named .tch is still described), then by name (then
+    // the reader says what is wrong with it: empty, truncated, another format).
+    let is_pvs = super::mesh_input::file_kind(&args.mesh.mesh) == super::mesh_input::FileKind::Pvs;
+    if !is_pvs && super::mesh_input::is_hierarchy(&args.mesh.mesh) {
         args.mesh.refuse_for_hierarchy()?;
         return hierarchy(&args.mesh.mesh, out);
     }
-    // By content, or by name (then the PVS reader says what is wrong with it: empty, truncated, another format).
     let named_pvs = args
         .mesh
         .mesh
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("pvs"));
-    if named_pvs || super::mesh_input::file_kind(&args.mesh.mesh) == super::mesh_input::FileKind::Pvs {
+    if is_pvs || named_pvs {
         args.mesh.refuse_import_flags("a PVS file (.pvs) holds no mesh")?;
         return pvs_file(&args.mesh.mesh, out);
     }

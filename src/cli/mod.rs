@@ -36,6 +36,11 @@ pub struct Cli {
     /// The command to run.
     #[command(subcommand)]
     pub command: Command,
+    /// Worker threads of the parallel stages (horizons, ground truth, tiles) [default: the `RAYON_NUM_THREADS`
+    /// environment variable, else one per core]. Outputs are the same at any count. Accepted before or after the
+    /// command.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
 }
 
 impl Cli {
@@ -131,6 +136,12 @@ pub(crate) fn no_viewer(what: &str) -> anyhow::Error {
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
+    if let Some(n) = cli.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(n))
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("--threads {n}: {e}"))?;
+    }
     match cli.command {
         Command::Demo(args) => demo_cmd::run(&args, args.output.into()),
         Command::Info(args) => info::run(&args, args.output.into()),

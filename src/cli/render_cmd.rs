@@ -142,11 +142,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     let mut files = Outputs::new();
     files.input(&args.input)?;
     files.check(&args.out)?;
-    anyhow::ensure!(
-        args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
-        "{}: render writes a PNG image; name it .png",
-        args.out.display()
-    );
+    super::files::require_png(&args.out, "render")?;
     if args.compare {
         files.check(&diff_path(&args.out))?;
     }

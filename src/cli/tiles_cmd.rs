@@ -49,7 +49,7 @@ const DEFAULT_MAX_ERROR: f64 = 1.0;
 /// Arguments of `tincull tiles plan`.
 #[derive(Debug, Args)]
 pub struct PlanArgs {
-    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF;
+    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 8- or 16-bit greyscale .png or GeoTIFF;
     /// or a mesh (OBJ), read whole once and cut into squares (then --tile, --halo and --far-block are metres).
     pub dem: PathBuf,
     /// For a mesh: use the file's own triangles (checked to form a height field) instead of re-triangulating.
@@ -118,7 +118,7 @@ pub struct TileBuildArgs {
     /// Build every tile of the plan.
     #[arg(long)]
     pub all: bool,
-    /// Threads [default: all cores]: a single tile's build uses them (up to the machine's cores); several tiles are
+    /// Threads [default: --threads, else all cores]: a single tile's build uses them (up to the machine's cores); several tiles are
     /// built at once on them, at most one thread per tile, with a warning above the machine's cores (each running
     /// tile holds its own memory).
     #[arg(long)]
@@ -509,7 +509,8 @@ fn build(args: &TileBuildArgs, out: Output) -> Result<()> {
         made.push(outfile::NewDir::create_all(dir).with_context(|| format!("cannot create {}", dir.display()))?);
     }
     let start = Instant::now();
-    let mut builder = rayon::ThreadPoolBuilder::new();
+    // Without --jobs, as many threads as the global pool (--threads, `RAYON_NUM_THREADS` or the cores).
+    let mut builder = rayon::ThreadPoolBuilder::new().num_threads(rayon::current_num_threads());
     if let Some(j) = args.jobs {
         if j == 0 {
             bail!("--jobs must be at least 1");
@@ -629,12 +630,20 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
             n if n <= 20 => format!(", nor tiles {}", shown[1..].join(", ")),
             n => format!(", nor {} more tiles ({}, ...)", n - 1, shown[1..].join(", ")),
         };
+        // The command that builds them: every tile (`--all`) when none is built, else the missing ones by number.
+        let build = if missing.len() == plan.tiles.len() && missing.len() > 1 {
+            format!("`tincull tiles build {} --all`", args.plan.display())
+        } else {
+            format!(
+                "`tincull tiles build {} --tile {}`{}",
+                args.plan.display(),
+                shown.join(" --tile "),
+                if missing.len() > 20 { " and the others" } else { "" }
+            )
+        };
         bail!(
-            "tile {first} has not been built ({} is missing){more}: run `tincull tiles build {} --tile {}`{}",
+            "tile {first} has not been built ({} is missing){more}: run {build}",
             Plan::resolve(&args.plan, &plan.tiles[first].output).display(),
-            args.plan.display(),
-            shown.join(" --tile "),
-            if missing.len() > 20 { " and the others" } else { "" }
         );
     }
     let bar = out.progress(plan.tiles.len() as u64, "merging");

@@ -16,7 +16,7 @@ use super::{Output, OutputArgs};
 #[derive(Debug, Args)]
 #[command(group(clap::ArgGroup::new("budget").required(true).multiple(true).args(["vertices", "max_error", "keep_grid"])))]
 pub struct TinArgs {
-    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 16-bit grayscale .png or GeoTIFF
+    /// The DEM: .npy (with its .json sidecar or --spacing), .asc, .hgt (SRTM), 8- or 16-bit greyscale .png or GeoTIFF
     /// (.tif, .tiff; geographic CRSs are converted to metres like .hgt).
     pub dem: PathBuf,
     /// Output OBJ file (`-` for standard output).

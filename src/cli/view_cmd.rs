@@ -74,11 +74,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         let mut files = super::files::Outputs::new();
         files.input(&args.input)?;
         files.check(shot)?;
-        anyhow::ensure!(
-            shot.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")),
-            "{}: --screenshot writes a PNG image; name it .png",
-            shot.display()
-        );
+        super::files::require_png(shot, "--screenshot")?;
     } else if args.screenshot_after != DEFAULT_SCREENSHOT_AFTER {
         anyhow::bail!("--screenshot-after {} applies to --screenshot", args.screenshot_after);
     }
@@ -149,6 +145,11 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         }
         Source::Mesh(tin)
     };
+    // The panel starts from these values: refused as `build` refuses them, before the window opens (the panel
+    // would clamp them, and a rebuild with them would fail only inside the window).
+    params
+        .validate()
+        .context("the side panel's build parameters (from the command line and the hierarchy)")?;
     let title = format!(
         "tincull — {}",
         args.input
@@ -156,6 +157,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
+    no_display_is_an_error()?;
     let summary = viewer::app::run(ViewerOptions {
         title,
         source,
@@ -217,6 +219,21 @@ fn check_no_regions(args: &ViewArgs, grouping: &pipeline::Grouping) -> Result<()
         let mut given = args.params.resolve(None)?;
         given.grouping = grouping.clone();
         super::build_cmd::check_no_regions(&given)?;
+    }
+    Ok(())
+}
+
+/// Without a display the window cannot open: said plainly (the windowing library's own error names its source file),
+/// after every argument is checked.
+fn no_display_is_an_error() -> Result<()> {
+    #[cfg(all(unix, not(target_os = "macos")))]
+    {
+        let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+        anyhow::ensure!(
+            set("DISPLAY") || set("WAYLAND_DISPLAY"),
+            "no display to open the viewer's window on (neither DISPLAY nor WAYLAND_DISPLAY is set): run it in a \
+             desktop session or under `xvfb-run`; `tincull render` draws pictures without a window"
+        );
     }
     Ok(())
 }

@@ -52,7 +52,14 @@ pub fn open(path: &Path) -> io::Result<File> {
             "a pipe or terminal, read already (it gives its bytes once): this input is read from a regular file",
         ));
     }
-    let file = File::open(path)?;
+    let file = File::open(path).map_err(|e| match e.kind() {
+        // Outputs take `-` for standard output; an input takes the device's name.
+        io::ErrorKind::NotFound if path == Path::new("-") => io::Error::new(
+            io::ErrorKind::NotFound,
+            "no file of that name (standard input is read as /dev/stdin)",
+        ),
+        _ => e,
+    })?;
     match refused(&file.metadata()?.file_type()) {
         None => Ok(file),
         Some(_) if file.is_terminal() => Ok(file),

@@ -91,7 +91,9 @@ impl fmt::Display for ViewpointClass {
 impl FromStr for ViewpointClass {
     type Err = TruthError;
 
+    /// A class by its name, blanks around it ignored (`--classes "ground, low"`, as other lists are read).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.trim();
         ViewpointClass::ALL
             .into_iter()
             .find(|c| c.name() == s)
@@ -296,6 +298,8 @@ mod tests {
             "Ground".parse::<ViewpointClass>(),
             Err(TruthError::UnknownClass("Ground".into()))
         );
+        // Blanks around a name, as in `--classes "ground, low"`.
+        assert_eq!(" low ".parse::<ViewpointClass>(), Ok(ViewpointClass::Low));
     }
 
     #[test]
