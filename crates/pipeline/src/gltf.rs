@@ -12,8 +12,9 @@
 //! - **Materials**: the group colours of the OBJ export ([`crate::palette`]), converted from sRGB to the linear
 //!   `baseColorFactor` glTF expects, dark grey for the always-visible set; not metallic, fully rough.
 //! - **Nodes**: node 0 `terrain` is the root. It turns the terrain's +z up into glTF's +y up (`rotation` −90° about +x:
-//!   `(x, y, z) → (x, z, −y)`, so north is −z) and moves it to its local origin (`translation`: the origin, rounded to
-//!   f32, turned the same way); the buffer and `extras` keep the terrain's own axes. Hierarchy node
+//!   `(x, y, z) → (x, z, −y)`, so north is −z) and moves it to its local origin (`translation`: the origin turned the
+//!   same way, written exactly as f64: a reader that keeps f64 places the scene where the culler's world frame puts
+//!   it, one that keeps f32 rounds it, up to 0.25 m at UTM northings); the buffer and `extras` keep the terrain's own axes. Hierarchy node
 //!   `i` is glTF node `i + 1`, with the children of the hierarchy as its children and, for a leaf, its group's mesh;
 //!   the hierarchy's top-level nodes and, when there are always-visible triangles, a last node `always_visible` (with
 //!   their mesh) are the children of node 0.
@@ -143,7 +144,7 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
     nodes.push(json!({
         "name": "terrain",
         "rotation": [-half, 0.0, 0.0, half],
-        "translation": [o[0] as f32, o[2] as f32, -(o[1] as f32)],
+        "translation": [o[0], o[2], -o[1]],
         "children": root_children,
     }));
     for (i, n) in h.nodes.iter().enumerate() {

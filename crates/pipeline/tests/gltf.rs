@@ -159,6 +159,11 @@ fn gltf_with_bin_reimports() {
     let g = gltf::Gltf::open(&path).expect("the gltf crate reads the .gltf");
     let bin = std::fs::read(dir.path().join("terrain.bin")).expect("bin");
     check_reimport(&h, &g.document, &bin);
+    // The root's translation is the origin exactly (f64 in the JSON), for readers that keep f64.
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&path).expect("gltf")).expect("the .gltf is JSON");
+    let o = h.origin;
+    assert_eq!(json["nodes"][0]["translation"], serde_json::json!([o[0], o[2], -o[1]]));
     assert!(
         gltf_files(&h, &dir.path().join("x.bin")).is_err(),
         "a .gltf named .bin is refused"

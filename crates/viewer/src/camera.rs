@@ -23,6 +23,35 @@ pub fn vertical_fov(hfov: f32, aspect: f32) -> f32 {
 /// The widest horizontal field of view a perspective render shows; wider culling fields are drawn at this width.
 pub const MAX_RENDER_HFOV_DEG: f32 = 150.0;
 
+/// The most an [`EyeCamera`] is pitched up or down (radians), short of looking straight up or down.
+pub const MAX_EYE_PITCH: f32 = 1.55;
+
+/// The horizontal field of view (degrees, in `(0, 360]`) that a culler must keep around the yaw of an [`EyeCamera`]
+/// drawn with the field `hfov_deg` (as the viewer draws it: at most [`MAX_RENDER_HFOV_DEG`]), pitched by
+/// `pitch_deg`, into an image of aspect `aspect` (width / height): every pixel's azimuth lies within half of it of
+/// the yaw. Pitched, an image reaches further round than its field at the corners on the side it tilts toward: with
+/// `t_h = tan(h/2)` and `t_v = t_h / aspect`, the pixel `(a t_h, b t_v)` (`a, b` in `[−1, 1]`) looks along
+/// `f + a t_h r + b t_v u` (forward `f`, right `r`, up `u`), whose horizontal part is `cos p − b t_v sin p` forward
+/// and `a t_h` aside: its azimuth from the yaw is `atan(|a| t_h / (cos p − b t_v sin p))`, largest at a corner,
+/// `atan(t_h / (cos p − t_v |sin p|))`. Where that denominator is below 0.05 the image reaches the nadir or the
+/// zenith, or comes close enough that the f32 rounding of the render would matter: 360. The result is widened by far more than the f32 rounding of the render (a relative
+/// 1e-4 and 0.01°), and is never narrower than `hfov_deg` itself (wider culling fields are drawn narrower).
+pub fn culling_hfov_deg(hfov_deg: f64, pitch_deg: f64, aspect: f64) -> f64 {
+    let drawn = hfov_deg.clamp(1.0, f64::from(MAX_RENDER_HFOV_DEG)).to_radians();
+    let pitch = pitch_deg
+        .to_radians()
+        .clamp(-f64::from(MAX_EYE_PITCH), f64::from(MAX_EYE_PITCH));
+    let t_h = (0.5 * drawn).tan();
+    let t_v = t_h / aspect.max(1e-6);
+    let forward = pitch.cos() - t_v * pitch.sin().abs();
+    // NaN (a field or pitch not a number) looks all around too.
+    if forward.is_nan() || forward < 0.05 || !hfov_deg.is_finite() {
+        return 360.0;
+    }
+    let reach = 2.0 * (t_h / forward).atan().to_degrees();
+    (reach * (1.0 + 1e-4) + 0.01).max(hfov_deg).min(360.0)
+}
+
 /// The top-down orthographic map of a box: x east to the right, y north up, the whole footprint in view.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapView {
@@ -165,8 +194,60 @@ impl EyeCamera {
     /// The clip transform for an image of aspect `aspect` (reversed Z, near plane 0.1 m, no far plane).
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
         let hfov = self.hfov.clamp(1f32.to_radians(), MAX_RENDER_HFOV_DEG.to_radians());
-        let pitch = self.pitch.clamp(-1.55, 1.55);
+        let pitch = self.pitch.clamp(-MAX_EYE_PITCH, MAX_EYE_PITCH);
         let view = look_to_mat4(self.position, direction(self.yaw, pitch), Vec3::Z);
         perspective_infinite_reverse(vertical_fov(hfov, aspect), aspect.max(1e-6), 0.1) * view
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Every pixel of an eye view (its corners, edges and inside, unprojected through the render's own clip
+        /// transform) lies within half the culling field of the yaw.
+        #[test]
+        fn the_culling_field_holds_every_pixel(
+            hfov in 1.0f64..200.0, pitch in -95.0f64..95.0, aspect in 0.2f64..5.0, yaw in -400.0f64..400.0,
+        ) {
+            let field = culling_hfov_deg(hfov, pitch, aspect);
+            prop_assert!(field >= hfov.min(360.0) && field <= 360.0);
+            if field < 360.0 {
+                let cam = EyeCamera {
+                    position: Vec3::new(100.0, -50.0, 20.0),
+                    yaw: (yaw as f32).to_radians(),
+                    pitch: (pitch as f32).to_radians(),
+                    hfov: (hfov.min(f64::from(MAX_RENDER_HFOV_DEG)) as f32).to_radians(),
+                };
+                let inverse = cam.view_proj(aspect as f32).inverse();
+                for i in 0..=8 {
+                    for j in 0..=8 {
+                        // Depth 1e-3 is 100 m away (near plane 0.1 m, reversed Z): far enough from the eye that the
+                        // f32 unprojection does not blur the direction.
+                        let ndc = Vec3::new(i as f32 / 4.0 - 1.0, j as f32 / 4.0 - 1.0, 1e-3);
+                        let d = (inverse.project_point3(ndc) - cam.position).as_dvec3();
+                        let off = (d.y.atan2(d.x).to_degrees() - yaw).rem_euclid(360.0);
+                        let off = off.min(360.0 - off);
+                        prop_assert!(off <= 0.5 * field, "pixel ({i}, {j}): {off}° off the yaw, field {field}°");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_level_view_culls_its_own_field() {
+        for hfov in [1.0, 60.0, 90.0, 150.0] {
+            let field = culling_hfov_deg(hfov, 0.0, 16.0 / 9.0);
+            assert!(field >= hfov && field < hfov * 1.001 + 0.02, "{hfov}: {field}");
+        }
+        // Wider than drawn: the culler keeps the field asked for.
+        assert_eq!(culling_hfov_deg(200.0, 0.0, 1.0), 200.0);
+        // Looking down, the bottom corners reach further round; straight down, everything.
+        assert!(culling_hfov_deg(90.0, -30.0, 16.0 / 9.0) > 119.0);
+        assert_eq!(culling_hfov_deg(90.0, -80.0, 16.0 / 9.0), 360.0);
+        assert_eq!(culling_hfov_deg(f64::NAN, 0.0, 1.0), 360.0);
     }
 }

@@ -29,7 +29,7 @@ mod panel;
 
 use jobs::{RebuildJob, Truth, TruthJob};
 
-use crate::camera::{EyeCamera, MAX_RENDER_HFOV_DEG, MapView, Orbit};
+use crate::camera::{EyeCamera, MAX_RENDER_HFOV_DEG, MapView, Orbit, culling_hfov_deg};
 use crate::error::{Result, ViewerError};
 use crate::gpu::Gpu;
 use crate::headless::split_items;
@@ -398,6 +398,11 @@ struct ViewerApp {
     list: DrawList,
     /// The fingerprint of `list`'s ranges after the last cull (0 with no culler).
     drawn_fingerprint: u64,
+    /// The camera of the last cull: the eye view is culled again before it is drawn when the camera has changed since
+    /// (the controls move it after the frame's cull).
+    culled_for: Option<Camera>,
+    /// Width over height of the eye view as last drawn, for the culler's field ([`culling_hfov_deg`]).
+    view_aspect: f64,
     colours_key: Option<(ColourMode, u32, u64)>,
     map_dirty: bool,
     cull_us: Smoothed,
@@ -494,6 +499,8 @@ impl ViewerApp {
             pvs: None,
             list: DrawList::default(),
             drawn_fingerprint: 0,
+            culled_for: None,
+            view_aspect: 1.0,
             colours_key: Some((colour, 0, 0)),
             map_dirty: true,
             cull_us: Smoothed::default(),
@@ -513,8 +520,10 @@ impl ViewerApp {
     }
 
     fn camera(&self) -> Camera {
+        // The culler keeps every azimuth the pitched eye view shows, which is more than its field once it is pitched.
+        let fov = culling_hfov_deg(self.fov_deg, self.pitch_deg, self.view_aspect);
         // The slider keeps the field of view in (0, 360] and the eye is finite; anything else looks all around.
-        Camera::from_degrees(self.eye, self.yaw_deg, self.fov_deg).unwrap_or(Camera::all_around(self.eye))
+        Camera::from_degrees(self.eye, self.yaw_deg, fov).unwrap_or(Camera::all_around(self.eye))
     }
 
     fn terrain(&self) -> &Terrain {
@@ -524,6 +533,7 @@ impl ViewerApp {
     /// Runs the culler for the current viewpoint (timed) and returns the drawn mask's fingerprint.
     fn cull(&mut self) -> u64 {
         let camera = self.camera();
+        self.culled_for = Some(camera);
         let Some(culler) = &self.model.culler else {
             self.list.ranges.clear();
             self.list.ranges.push([0, self.terrain().num_triangles() as u32]);
@@ -758,6 +768,13 @@ impl ViewerApp {
     fn render_views(&mut self, size: [u32; 2]) -> Result<()> {
         self.main.resize(&self.gpu, &self.egui_renderer, size)?;
         let aspect = size[0] as f32 / size[1].max(1) as f32;
+        // What is drawn is culled for this very camera and image (the input handled after the frame's cull may have
+        // moved, turned or pitched it, and the window may have changed shape).
+        self.view_aspect = f64::from(aspect);
+        if self.culled_for != Some(self.camera()) {
+            let fingerprint = self.cull();
+            self.update_colours(fingerprint);
+        }
         let t = &self.model.terrain;
         let (view_proj, marker) = match self.mode {
             ViewMode::Eye => {

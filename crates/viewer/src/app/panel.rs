@@ -11,6 +11,7 @@ use pipeline::export::{mtl_path, to_json, write_grouped_obj_to, write_mtl_to};
 use pipeline::{Grouping, QuadtreeParams};
 
 use super::{RebuildParams, ViewMode, ViewerApp};
+use crate::camera::culling_hfov_deg;
 use crate::scene::ColourMode;
 
 impl ViewerApp {
@@ -135,10 +136,12 @@ impl ViewerApp {
         };
         let eye = Vec3::from(self.terrain().to_local(self.eye)).truncate();
         let centre = to_px(eye);
-        if self.fov_deg < 360.0 {
+        // The field the culler keeps (wider than the picture's once it is pitched).
+        let field = culling_hfov_deg(self.fov_deg, self.pitch_deg, self.view_aspect);
+        if field < 360.0 {
             let reach = self.map_view.half.length() * 0.25;
             for side in [-0.5, 0.5] {
-                let a = (self.yaw_deg + side * self.fov_deg).to_radians() as f32;
+                let a = (self.yaw_deg + side * field).to_radians() as f32;
                 let tip = to_px(eye + Vec2::new(a.cos(), a.sin()) * reach);
                 ui.painter()
                     .line_segment([centre, tip], egui::Stroke::new(1.5, egui::Color32::BLACK));
@@ -228,7 +231,8 @@ impl ViewerApp {
                 ui.checkbox(&mut self.show_horizon, "horizon buffer");
                 if self.show_horizon {
                     let profile = le.horizon_after(&self.camera()).profile();
-                    let view = (self.fov_deg < 360.0).then_some((self.yaw_deg, self.fov_deg));
+                    let field = culling_hfov_deg(self.fov_deg, self.pitch_deg, self.view_aspect);
+                    let view = (field < 360.0).then_some((self.yaw_deg, field));
                     horizon_plot(ui, &profile, view);
                 }
             }
