@@ -57,7 +57,11 @@ pub struct Camera {
     /// View direction as an azimuth in radians, counter-clockwise from +x; ignored at a 360° field of view.
     pub yaw: f64,
     /// Horizontal field of view in radians, in `(0, 2π)` to restrict the view; `2π` ([`Camera::all_around`]) or any
-    /// value outside `(0, 2π)` (NaN included) means no restriction.
+    /// value outside `(0, 2π)` (NaN included) means no restriction. Terrain whose azimuth from the eye lies outside
+    /// `yaw ± hfov / 2` is culled, so this must be the span of azimuths the picture covers: a level pinhole view's
+    /// horizontal field, but more for one pitched by `p` (its corners reach `atan(tan(h/2) / (cos p − tan(v/2)
+    /// |sin p|))` either side of the yaw, `h` and `v` the horizontal and vertical fields), and `2π` once the picture
+    /// reaches straight down or up (that denominator not positive).
     pub hfov: f64,
 }
 

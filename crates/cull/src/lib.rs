@@ -35,7 +35,8 @@
 //! let mut list = DrawList::default(); // reused: no allocation once it has grown
 //! # let frames: Vec<([f64; 3], f64)> = Vec::new();
 //! for (eye, yaw_deg) in frames {
-//!     // World coordinates as in the mesh; a 90° horizontal field of view (360 looks all around).
+//!     // World coordinates as in the mesh; a level view with a 90° horizontal field (360 looks all around; a
+//!     // pitched view covers more azimuths at its corners: see `Camera::hfov`).
 //!     culler.cull_into(&Camera::from_degrees(eye, yaw_deg, 90.0)?, &mut list);
 //!     for &[start, end] in &list.ranges {
 //!         // draw triangles start..end of h.mesh.triangles (one index-buffer range each)
