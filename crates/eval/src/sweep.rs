@@ -8,7 +8,8 @@
 //! Choices:
 //!
 //! - The results are a CSV table, one line per combination × method × class (the classes, then `all`). Lines are
-//!   kept sorted by the combination's key `(sectors, subsectors, seeds, rng_seed, viewpoints_per_class)`, then in the
+//!   kept sorted by the combination's key `(sectors, subsectors, seeds, rng_seed, viewpoints_per_class)` (both seeds 0
+//!   for a quadtree, which uses neither), then in the
 //!   evaluation's method and class order, so the file's order does not depend on the order the combinations ran in.
 //!   The column `viewpoints` counts the viewpoints scored on the line (every class's on an `all` line), as in
 //!   `eval`'s CSV.
@@ -76,9 +77,9 @@ pub struct SweepKey {
     pub sectors: u32,
     /// Subsectors per sector `k`.
     pub subsectors: u32,
-    /// Seeds of the first crystal pass (resolved: never "default").
+    /// Seeds of the first crystal pass (resolved: never "default"); 0 for a quadtree, which has none.
     pub seeds: usize,
-    /// Seed of the crystal's random generator.
+    /// Seed of the crystal's random generator; 0 for a quadtree, which has none.
     pub rng_seed: u64,
     /// Viewpoints per class.
     pub viewpoints: usize,
@@ -155,11 +156,17 @@ impl SweepSpec {
                             ));
                             continue;
                         }
+                        // A quadtree uses neither seed: its key says so rather than record values it ignored.
+                        let crystal = matches!(params.grouping, pipeline::Grouping::Crystal);
                         let key = SweepKey {
                             sectors: s,
                             subsectors: k,
-                            seeds: params.crystal.first_seeds(triangles),
-                            rng_seed,
+                            seeds: if crystal {
+                                params.crystal.first_seeds(triangles)
+                            } else {
+                                0
+                            },
+                            rng_seed: if crystal { rng_seed } else { 0 },
                             viewpoints: self.viewpoints,
                         };
                         combos.entry(key).or_insert(Combo { key, params });
@@ -594,6 +601,31 @@ mod tests {
             assert_eq!(c.params.crystal.first_seeds(4000), c.key.seeds);
             assert_eq!(c.params.crystal.rng_seed, c.key.rng_seed);
         }
+    }
+
+    /// A quadtree's combinations record no crystal seeds: it uses none.
+    #[test]
+    fn a_quadtree_key_has_no_seeds() {
+        let spec = SweepSpec {
+            sectors: vec![8],
+            subsectors: vec![2],
+            seeds: vec![None],
+            rng_seeds: vec![1],
+            base: BuildParams {
+                grouping: pipeline::Grouping::Quadtree(Default::default()),
+                ..BuildParams::default()
+            },
+            viewpoints: 3,
+        };
+        let (combos, notes) = spec.combos(4000).expect("combinations");
+        assert!(notes.is_empty(), "{notes:?}");
+        assert_eq!(combos.len(), 1);
+        assert_eq!((combos[0].key.seeds, combos[0].key.rng_seed), (0, 0));
+        let crystal = SweepSpec {
+            base: BuildParams::default(),
+            ..spec
+        };
+        assert_eq!(crystal.combos(4000).expect("combinations").0[0].key.seeds, 20);
     }
 
     /// Lists whose product is more than a sweep runs are refused, naming each list's length, before any combination
