@@ -116,6 +116,7 @@ fn main() -> Result<()> {
                 name: method.name(),
                 culler: Some(culler),
                 order: Some(order),
+                reach: None,
             };
             let leaves = Leaves {
                 ranges: &ranges,

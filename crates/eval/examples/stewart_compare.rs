@@ -97,6 +97,7 @@ fn main() -> Result<()> {
                 name: "safe_regions",
                 culler: Some(AnyCuller::new(&conservative, CullMethod::Thesis)),
                 order: Some(order),
+                reach: Some(eval::evaluate::conservative_reach(h)),
             });
             let ranges = h.leaf_ranges();
             let leaves = Leaves {

@@ -328,6 +328,16 @@ pub struct Method<'a> {
     /// Where each of the culler's triangles is in the scored TIN: triangle `i` of the culler's mesh is triangle
     /// `order[i]` of the TIN (a build's `crystal.order`). `None`: the same order.
     pub order: Option<&'a [u32]>,
+    /// The eyes the method judges, for one whose height margin is fixed when it is prepared (`safe_regions`): from an
+    /// eye it does not cover, everything is drawn. `None`: every eye.
+    pub reach: Option<truth::MarginReach>,
+}
+
+/// The eyes from which the conservative regions of `h` ([`pipeline::conservative_hierarchy`]) may be judged: those
+/// their height margin covers (`truth::MarginReach`).
+pub fn conservative_reach(h: &Hierarchy) -> truth::MarginReach {
+    let (mu, lo, hi) = pipeline::conservative_margin(h);
+    truth::MarginReach::new(mu, lo, hi)
 }
 
 /// The hierarchy's frustum test alone: `h` with every region removed.
@@ -369,31 +379,37 @@ pub fn standard_methods<'a>(
             name: "safe",
             culler: Some(AnyCuller::with_params(h, CullMethod::Safe, safe)),
             order,
+            reach: None,
         },
         Method {
             name: CullMethod::LloydEgbert.name(),
             culler: Some(AnyCuller::with_params(h, CullMethod::LloydEgbert, safe)),
             order,
+            reach: None,
         },
         Method {
             name: CullMethod::regions_for(h).name(),
             culler: Some(AnyCuller::new(h, CullMethod::regions_for(h))),
             order,
+            reach: None,
         },
         Method {
             name: "per_triangle",
             culler: per_triangle.map(|p| AnyCuller::Thesis(Culler::new(p))),
             order: None,
+            reach: None,
         },
         Method {
             name: "frustum_only",
             culler: Some(AnyCuller::Thesis(Culler::new(&frustum_only(h)))),
             order,
+            reach: None,
         },
         Method {
             name: "none",
             culler: None,
             order: None,
+            reach: None,
         },
     ]
 }
@@ -458,6 +474,8 @@ pub fn score(tin: &Tin, truth: &GroundTruthSet, methods: &[Method], leaves: Opti
         let mut methods = Vec::new();
         for m in &ordered {
             let (drawn, ns) = match &m.culler {
+                // A method judges only the eyes its margin covers; from the others it draws everything.
+                Some(_) if m.reach.is_some_and(|r| !r.covers(camera.position, camera.position)) => (vec![true; n], 0),
                 Some(c) => {
                     let ns = timed_cull(c, &camera, &mut list);
                     let mask = list.mask(n);
@@ -577,6 +595,7 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
             name: "safe_regions",
             culler: Some(AnyCuller::Thesis(Culler::new(&pipeline::conservative_hierarchy(h)))),
             order: None,
+            reach: Some(conservative_reach(h)),
         });
     }
     let safe_regions_setup_seconds = start.elapsed().as_secs_f64();

@@ -37,7 +37,11 @@
 //! middle), joined at each `T_k` through the lower of the two lines, so every point of the polyline lies under one of
 //! the half-planes.
 //!
-//! **Rounding.** `μ = 1e-7 (1 + extent + max |z|)` m (over 100 times the exact checker's tolerance); slopes are moved
+//! **Rounding.** `μ = 1e-7 (1 + extent + max |z|)` m ([`height_margin`]): a sight line called blocked passes at least
+//! `μ` below the terrain, which is at least ten times the exact checker's tolerance (`truth::walk`, growing with the
+//! eye's distance and height) for every eye that `truth::MarginReach` covers with `μ` and the vertices' box. The
+//! users of these regions judge only such eyes (`eval`'s `safe_regions` and `pvs`'s regions test call every node
+//! visible from farther away, some hundred times the terrain's size); slopes are moved
 //! towards smaller values by a relative `1e-9`, the offsets `b_k` down by `1e-9 (1 + |b_k| + |σ'| max |t|)`, the left
 //! bounds `T_k` up by `1e-9 (1 + |T_k|)`; the f32 storage (`cull::StoredRegion::from_f64`) only shrinks regions; the
 //! run-time test tests every sector that the directions from the node's bounding circle to the camera touch.
@@ -164,6 +168,21 @@ impl Topology {
     }
 }
 
+/// The height margin `μ = 1e-7 (1 + extent + max |z|)` m of the regions over the mesh `positions` (`extent` the
+/// diagonal of their box in x,y; 0 without positions).
+pub fn height_margin(positions: &[DVec3]) -> f64 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in positions {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if positions.is_empty() {
+        return 1e-7;
+    }
+    let extent = (hi.x - lo.x).hypot(hi.y - lo.y);
+    1e-7 * (1.0 + extent + lo.z.abs().max(hi.z.abs()))
+}
+
 /// Conservative regions of `nodes` over the mesh `positions`/`triangles`, for `sectors` sectors: per node, per
 /// sector, `None` (never hidden there) or the region's boundary (see the module documentation).
 pub fn conservative_regions(
@@ -180,7 +199,7 @@ pub fn conservative_regions(
         hi = hi.max(*p);
     }
     let extent = (hi.x - lo.x).hypot(hi.y - lo.y);
-    let mu = 1e-7 * (1.0 + extent + lo.z.abs().max(hi.z.abs()));
+    let mu = height_margin(positions);
     let w = std::f64::consts::PI / f64::from(sectors);
     nodes
         .par_iter()

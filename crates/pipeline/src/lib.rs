@@ -562,6 +562,21 @@ pub fn per_triangle_hierarchy(tin: &Tin, triangle_regions: &RegionTable) -> Hier
     }
 }
 
+/// The height margin `μ` of [`conservative_hierarchy`]'s regions over `h`'s mesh ([`occlusion::conservative`]), and
+/// the lowest and highest corners of the mesh's box: what `truth::MarginReach` needs to tell the eyes from which
+/// those regions may be judged.
+pub fn conservative_margin(h: &Hierarchy) -> (f64, [f64; 3], [f64; 3]) {
+    let positions: Vec<glam::DVec3> = h.mesh.positions.iter().map(|&p| glam::DVec3::from_array(p)).collect();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in &h.mesh.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (occlusion::conservative::height_margin(&positions), lo, hi)
+}
+
 /// `h` with every node's regions replaced by conservative ones ([`occlusion::conservative`]): the thesis' run-time
 /// test over them never culls a visible triangle. Computed from the hierarchy's own mesh and circles (widened to
 /// cover their f32 storage), so it applies to any hierarchy, crystal or not. The proof needs every point of a node

@@ -7,7 +7,8 @@
 //! **Occluders (2.5-D walls).** For every TIN edge `uv`, the wall `{(x, y, z) : (x, y) ∈ uv, z < ẑ(x, y)}` where `ẑ`
 //! interpolates the end heights lowered by `μ`. On an edge the terrain is exactly the segment between its end
 //! vertices, so a sight line passing under a wall's top at a point passes at least `μ` below the terrain there:
-//! blocked in the exact checker's sense (`μ` is far above its tolerance). The walls lie *below* the terrain, so
+//! blocked in the exact checker's sense for every eye that `truth::MarginReach` covers with `μ` (ten times its
+//! tolerance; [`crate::Pvs`] judges only cells it covers and calls every node visible from the others). The walls lie *below* the terrain, so
 //! anything they block the terrain blocks: dropping walls (or parts of them) only makes the answer more "visible".
 //!
 //! **Reduction to the plane (§4, Observation 1).** Take an axis `k` (x or y) and a sign along which `A` and `B` are
@@ -47,7 +48,9 @@
 //!
 //! **Rounding.** All geometry is in world f64 coordinates (no shift: the inputs are exact). `W = 1 + max |x|, |y|`
 //! over the mesh and the boxes; `S = (lateral extent) / (X2 − X1)` bounds the lines' slopes in the slab.
-//! - `μ = 1e-7 (1 + extent + max |z|)`: walls' tops; far above the checker's tolerance.
+//! - `μ = 1e-7 (1 + extent + max |z|)`: walls' tops; ten times the checker's tolerance at least, from the cells that
+//!   `truth::MarginReach` covers (the checker's tolerance grows with the eye's distance and height: a cell some
+//!   hundred times the terrain's size away is not judged).
 //! - Pieces stay `τ_a = 1e-12 W` inside the slab; an edge's pieces end where the computed `ẑ − T` reaches `2δ`, and
 //!   both end points are re-checked directly (`ẑ − T ≥ δ` and inside the slab), else the edge is dropped; `ẑ − T` is
 //!   affine along the edge, so the checks at the ends hold on the whole piece. `δ = μ / 2 + 1e-12 (W |T'| + max |z|)`
@@ -91,6 +94,9 @@ pub(crate) struct Walls {
     pub zabs: f64,
     /// The walls' lowering.
     pub mu: f64,
+    /// The eyes for which `mu` is far above the exact checker's tolerance (module docs): [`crate::Pvs`] applies the
+    /// test to a cell only when this covers it.
+    pub reach: truth::MarginReach,
 }
 
 /// Per-thread working memory of the planar test.
@@ -161,6 +167,7 @@ impl Walls {
             w,
             zabs,
             mu,
+            reach: truth::MarginReach::new(mu, lo, hi),
         };
         let spans: Vec<[usize; 4]> = walls
             .edges

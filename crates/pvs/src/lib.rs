@@ -230,6 +230,10 @@ pub struct Pvs<'a> {
     roots: Vec<u32>,
     walls: koltun::Walls,
     conservative: Option<Arc<Hierarchy>>,
+    /// The eyes for which the conservative regions' margin is far above the checker's tolerance.
+    regions_reach: truth::MarginReach,
+    /// The mesh's lowest height (the ground under a cell given above the ground lies above it).
+    zmin: f64,
 }
 
 impl<'a> Pvs<'a> {
@@ -266,6 +270,11 @@ impl<'a> Pvs<'a> {
             roots: Vec::new(),
             walls: koltun::Walls::new(&h.mesh.positions, &h.mesh.triangles),
             conservative,
+            regions_reach: {
+                let (mu, lo, hi) = pipeline::conservative_margin(h);
+                truth::MarginReach::new(mu, lo, hi)
+            },
+            zmin: h.mesh.positions.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min),
         };
         for (i, node) in h.nodes.iter().enumerate() {
             let bounds = pvs.bounds(node.triangles);
@@ -413,6 +422,18 @@ impl<'a> Pvs<'a> {
     pub fn compute(&self, cell: &ViewCell) -> Result<CellPvs, PvsError> {
         let start = Instant::now();
         let a = self.cell_box(cell)?;
+        // The cell's eyes as a box: its rectangle, from its lowest possible eye to its top. Each test judges the cell
+        // only when its margin is far above the exact checker's tolerance from all of them (`truth::MarginReach`);
+        // from a cell farther away, every node is visible.
+        let zlo = match cell.height {
+            Height::Band([z0, _]) => z0.min(self.zmin),
+            Height::AboveGround([h0, _]) => self.zmin + h0.min(0.0),
+        };
+        let eyes = ([a.lo[0], a.lo[1], zlo], [a.hi[0], a.hi[1], a.ztop]);
+        let judged = [
+            self.walls.reach.covers(eyes.0, eyes.1),
+            self.regions_reach.covers(eyes.0, eyes.1),
+        ];
         let mut scratch = self.walls.scratch();
         let mut out = CellPvs {
             ztop: a.ztop,
@@ -425,7 +446,7 @@ impl<'a> Pvs<'a> {
                 continue;
             }
             out.tests += 1;
-            if self.hidden(id, &a, &mut scratch) {
+            if self.hidden(id, &a, judged, &mut scratch) {
                 continue;
             }
             if node.hier != u32::MAX {
@@ -455,17 +476,20 @@ impl<'a> Pvs<'a> {
         Ok(out)
     }
 
-    fn hidden(&self, id: u32, a: &Box3, scratch: &mut koltun::Scratch) -> bool {
+    /// Whether node `id` is hidden from the cell `a`, by the tests that `judged` (Koltun's, the regions') allows.
+    fn hidden(&self, id: u32, a: &Box3, judged: [bool; 2], scratch: &mut koltun::Scratch) -> bool {
         let node = &self.nodes[id as usize];
         let by_regions = |_: ()| {
-            node.hier != u32::MAX
+            judged[1]
+                && node.hier != u32::MAX
                 && self
                     .conservative
                     .as_ref()
                     .is_some_and(|c| regions::hidden_by_regions(c, node.hier as usize, a))
         };
-        let by_koltun =
-            |scratch: &mut koltun::Scratch| self.walls.hidden(a, &node.bounds, self.params.resolution, scratch);
+        let by_koltun = |scratch: &mut koltun::Scratch| {
+            judged[0] && self.walls.hidden(a, &node.bounds, self.params.resolution, scratch)
+        };
         match self.params.method {
             Method::Koltun => by_koltun(scratch),
             Method::Regions => by_regions(()),

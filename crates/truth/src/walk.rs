@@ -53,6 +53,47 @@ pub(crate) fn tolerance(target: DVec3, eye: DVec3) -> f64 {
     EPS_REL * (1.0 + target.distance(eye) + target.z.abs().max(eye.z.abs()))
 }
 
+/// Where a height margin fixed in advance stays far above [`tolerance`]: the conservative methods whose margin `μ` is
+/// chosen when they are prepared, from the terrain alone (`occlusion`'s conservative regions, `pvs`'s walls), hide
+/// what lies at least `μ` under every sight line, which the checker calls hidden only while its tolerance, growing
+/// with the eye's distance and height, stays below `μ`. They judge an eye or a viewcell only when
+/// [`MarginReach::covers`] it, and call everything visible from farther away.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MarginReach {
+    mu: f64,
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl MarginReach {
+    /// The margin `mu` (m) of a terrain whose points all lie in the box `lo..=hi` (world coordinates).
+    pub fn new(mu: f64, lo: [f64; 3], hi: [f64; 3]) -> MarginReach {
+        MarginReach { mu, lo, hi }
+    }
+
+    /// Whether the margin is at least ten times [`tolerance`] for every segment from a point `e` of the box
+    /// `eye_lo..=eye_hi` to a point `p` of the terrain's box (centre `c`, sides `w`): `|e − p|` is at most the sum of
+    /// the coordinate differences, each at most `|e_k − c_k| + w_k / 2` in x and y and `|e.z| + |p.z|` in z, and
+    /// `max(|e.z|, |p.z|) ≤ |e.z| + |p.z|`, so `1 + |e − p| + max(|e.z|, |p.z|)` is below
+    /// `B = 1 + max|e.x − c.x| + max|e.y − c.y| + (w_x + w_y) / 2 + 2 max|e.z| + 2 max|p.z|`; the answer is
+    /// `10 · 1e-9 · B (1 + 1e-9) ≤ μ` (the relative 1e-9 covers the rounding of the sum). NaN anywhere: `false`.
+    pub fn covers(&self, eye_lo: [f64; 3], eye_hi: [f64; 3]) -> bool {
+        // `f64::max` drops a NaN: refused here first.
+        if !eye_lo.iter().chain(&eye_hi).all(|x| x.is_finite()) {
+            return false;
+        }
+        let off = |k: usize| {
+            let c = 0.5 * (self.lo[k] + self.hi[k]);
+            (eye_lo[k] - c).abs().max((eye_hi[k] - c).abs())
+        };
+        let half = 0.5 * ((self.hi[0] - self.lo[0]) + (self.hi[1] - self.lo[1]));
+        let ez = eye_lo[2].abs().max(eye_hi[2].abs());
+        let pz = self.lo[2].abs().max(self.hi[2].abs());
+        let bound = 1.0 + off(0) + off(1) + half + 2.0 * ez + 2.0 * pz;
+        10.0 * EPS_REL * bound * (1.0 + 1e-9) <= self.mu
+    }
+}
+
 /// [`point_visible`] with an optional triangle that probably contains the target (checked exactly before use).
 pub(crate) fn segment_clear(tin: &Tin, loc: &Locator, hint: Option<usize>, target: DVec3, eye: DVec3) -> bool {
     if !target.is_finite() || !eye.is_finite() {
@@ -622,6 +663,44 @@ fn shared_vertex(e: (u32, u32), f: (u32, u32)) -> Option<(u32, u32, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A margin that covers an eye box is ten times the tolerance of every segment from a point of it to a point
+        /// of the terrain's box (corners and random points of both).
+        #[test]
+        fn a_covered_eye_box_keeps_the_margin_above_every_tolerance(
+            c in prop::array::uniform3(-1e6f64..1e6), w in prop::array::uniform3(0.0f64..1e5),
+            e in prop::array::uniform3(-1e7f64..1e7), ew in prop::array::uniform3(0.0f64..1e4),
+            mu in 1e-6f64..1.0, t in prop::collection::vec(prop::array::uniform3(0.0f64..=1.0), 8),
+        ) {
+            let (lo, hi) = ([0, 1, 2].map(|k| c[k] - w[k]), [0, 1, 2].map(|k| c[k] + w[k]));
+            let (elo, ehi) = (e, [0, 1, 2].map(|k| e[k] + ew[k]));
+            let reach = MarginReach::new(mu, lo, hi);
+            if reach.covers(elo, ehi) {
+                let at = |a: [f64; 3], b: [f64; 3], f: [f64; 3]| {
+                    DVec3::new(a[0] + f[0] * (b[0] - a[0]), a[1] + f[1] * (b[1] - a[1]), a[2] + f[2] * (b[2] - a[2]))
+                };
+                for (i, f) in t.iter().enumerate() {
+                    let g = t[(i + 3) % t.len()].map(|x| x.round());
+                    let (eye, p) = (at(elo, ehi, *f), at(lo, hi, g));
+                    prop_assert!(10.0 * tolerance(p, eye) <= mu, "{eye} to {p}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_margin_covers_the_eyes_near_its_terrain_only() {
+        // A 10 km terrain up to 2 km high: μ = 1e-7 (1 + 20,000 + 2,000) ≈ 2.2 mm.
+        let (lo, hi) = ([0.0, 0.0, 0.0], [1e4, 1e4, 2e3]);
+        let reach = MarginReach::new(1e-7 * (1.0 + 2e4 + 2e3), lo, hi);
+        assert!(reach.covers([5e3, 5e3, 2.2e3], [5.1e3, 5.1e3, 2.4e3]));
+        assert!(reach.covers([-5e4, -5e4, 0.0], [-4e4, -4e4, 3e4]));
+        assert!(!reach.covers([1e6, 0.0, 0.0], [1e6, 1.0, 1.0]));
+        assert!(!reach.covers([0.0, 0.0, 8e5], [1.0, 1.0, 8e5]));
+        assert!(!reach.covers([f64::NAN, 0.0, 0.0], [1.0, 1.0, 1.0]));
+    }
 
     /// Two triangles over the unit square, with a ridge along the diagonal (0,0)-(1,1) of height `h`.
     fn square(h: f64) -> Tin {
