@@ -53,7 +53,8 @@ pub(crate) fn tolerance(target: DVec3, eye: DVec3) -> f64 {
     EPS_REL * (1.0 + target.distance(eye) + target.z.abs().max(eye.z.abs()))
 }
 
-/// Where a height margin fixed in advance stays far above [`tolerance`]: the conservative methods whose margin `μ` is
+/// Where a height margin fixed in advance stays far above the exact checker's tolerance (`1e-9 (1 + |eye − target| +
+/// max(|eye.z|, |target.z|))` m, see the module documentation): the conservative methods whose margin `μ` is
 /// chosen when they are prepared, from the terrain alone (`occlusion`'s conservative regions, `pvs`'s walls), hide
 /// what lies at least `μ` under every sight line, which the checker calls hidden only while its tolerance, growing
 /// with the eye's distance and height, stays below `μ`. They judge an eye or a viewcell only when
@@ -71,7 +72,7 @@ impl MarginReach {
         MarginReach { mu, lo, hi }
     }
 
-    /// Whether the margin is at least ten times [`tolerance`] for every segment from a point `e` of the box
+    /// Whether the margin is at least ten times the checker's tolerance for every segment from a point `e` of the box
     /// `eye_lo..=eye_hi` to a point `p` of the terrain's box (centre `c`, sides `w`): `|e − p|` is at most the sum of
     /// the coordinate differences, each at most `|e_k − c_k| + w_k / 2` in x and y and `|e.z| + |p.z|` in z, and
     /// `max(|e.z|, |p.z|) ≤ |e.z| + |p.z|`, so `1 + |e − p| + max(|e.z|, |p.z|)` is below
