@@ -276,14 +276,14 @@ int32_t tc_load_buffer(const uint8_t *data,
 
 /**
  * Culls from a camera at `eye` (3 doubles, world coordinates in metres) looking at azimuth `yaw_deg` (degrees,
- * counter-clockwise from +x) with a horizontal field of view of `fov_deg` degrees (in (0, 360]; 360 looks all
- * around; the yaw is then ignored, though it must be finite, where `tincull cull` refuses a `--yaw`), with the ranges
- * of `tincull cull --eye x,y,z --yaw Y --fov F`. The field is the span of azimuths the picture covers around the
- * yaw: a level view's horizontal field of view, a wider one for a pitched view (its corners reach further round;
- * see the `cull` crate's `Camera::hfov`), 360 once the view reaches straight down or up. Writes the ranges to draw, ascending and merged, into
- * `ranges[0..*count]`. When `capacity` is too small nothing is written, `*count` receives the number needed and the
- * result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough). Any finite eye is culled from, one
- * below the terrain too (nothing is visible from there, so no triangle culled is wrong).
+ * counter-clockwise from +x) with a horizontal field of view of `fov_deg` degrees (in (0, 360]; 360 looks all around;
+ * the yaw is then ignored, though it must be finite, where `tincull cull` refuses a `--yaw`), with the ranges of
+ * `tincull cull --eye x,y,z --yaw Y --fov F`. The field is the span of azimuths the picture covers around the yaw: a
+ * level view's horizontal field of view, a wider one for a pitched view (its corners reach further round; see the
+ * `cull` crate's `Camera::hfov`), 360 once the view reaches straight down or up. Writes the ranges to draw, ascending
+ * and merged, into `ranges[0..*count]`. When `capacity` is too small nothing is written, `*count` receives the number
+ * needed and the result is `TC_ERR_BUFFER_TOO_SMALL` (`TcInfo::max_ranges` is always enough). Any finite eye is culled
+ * from, one below the terrain too (nothing is visible from there, so no triangle culled is wrong).
  *
  * # Safety
  * `culler` comes from a `tc_load_*` call and is not used by another thread meanwhile; `eye` points to 3 doubles;

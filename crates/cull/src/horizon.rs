@@ -1376,7 +1376,8 @@ mod tests {
             let mu = 1e-6;
             let pts: Vec<[f64; 3]> = points.iter().map(|&(x, y, z)| [x, y, z]).collect();
             let n = pts.len();
-            let proj: Vec<Projected> = pts.iter().enumerate().map(|(i, &d)| project(d, mu, PointId::vertex(i as u32))).collect();
+            let proj: Vec<Projected> =
+                pts.iter().enumerate().map(|(i, &d)| project(d, mu, PointId::vertex(i as u32))).collect();
             let lowered = |i: usize| [pts[i][0], pts[i][1], pts[i][2] - mu];
             let mut h = Horizon::new(1 << log_w);
             // Every occluder written, as lowered segments, for the check.
@@ -1398,7 +1399,8 @@ mod tests {
                     let lo = *chain.iter().min_by(|x, y| by_u(x).total_cmp(&by_u(y))).expect("a chain");
                     let hi = *chain.iter().max_by(|x, y| by_u(x).total_cmp(&by_u(y))).expect("a chain");
                     let bound = chain.iter().map(|&i| proj[i].face[k].lo).fold(f64::INFINITY, f64::min);
-                    h.write_flat(k, (by_u(&lo), PointId::vertex(lo as u32)), (by_u(&hi), PointId::vertex(hi as u32)), bound);
+                    let (a, b) = (PointId::vertex(lo as u32), PointId::vertex(hi as u32));
+                    h.write_flat(k, (by_u(&lo), a), (by_u(&hi), b), bound);
                 }
                 written.extend(chain.windows(2).map(|w| (w[0], w[1])));
             }

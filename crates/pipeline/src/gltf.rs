@@ -13,11 +13,11 @@
 //!   `baseColorFactor` glTF expects, dark grey for the always-visible set; not metallic, fully rough.
 //! - **Nodes**: node 0 `terrain` is the root. It turns the terrain's +z up into glTF's +y up (`rotation` −90° about +x:
 //!   `(x, y, z) → (x, z, −y)`, so north is −z) and moves it to its local origin (`translation`: the origin turned the
-//!   same way, written exactly as f64: a reader that keeps f64 places the scene where the culler's world frame puts
-//!   it, one that keeps f32 rounds it, up to 0.25 m at UTM northings); the buffer and `extras` keep the terrain's own axes. Hierarchy node
-//!   `i` is glTF node `i + 1`, with the children of the hierarchy as its children and, for a leaf, its group's mesh;
-//!   the hierarchy's top-level nodes and, when there are always-visible triangles, a last node `always_visible` (with
-//!   their mesh) are the children of node 0.
+//!   same way, written exactly as f64: a reader that keeps f64 places the scene where the culler's world frame puts it,
+//!   one that keeps f32 rounds it, up to 0.25 m at UTM northings); the buffer and `extras` keep the terrain's own axes.
+//!   Hierarchy node `i` is glTF node `i + 1`, with the children of the hierarchy as its children and, for a leaf, its
+//!   group's mesh; the hierarchy's top-level nodes and, when there are always-visible triangles, a last node
+//!   `always_visible` (with their mesh) are the children of node 0.
 //! - **Culling data** in `extras.tincull` (documented here; no extension is required to load the file):
 //!   - on the scene: `{"version": 1, "sectors", "origin": [x, y, z] (exact f64), "roots": [hierarchy node indices],
 //!     "always_visible": [s, e], "triangles", "vertices", "node_offset": 1, "index_buffer_view": 2, "build": {...}}`;

@@ -5,11 +5,12 @@
 //! passes strictly below the terrain somewhere (design.md, "Safe culling"; touching is visible).
 //!
 //! **Occluders (2.5-D walls).** For every TIN edge `uv`, the wall `{(x, y, z) : (x, y) ∈ uv, z < ẑ(x, y)}` where `ẑ`
-//! interpolates the end heights lowered by `μ`. On an edge the terrain is exactly the segment between its end
-//! vertices, so a sight line passing under a wall's top at a point passes at least `μ` below the terrain there:
-//! blocked in the exact checker's sense for every eye that `truth::MarginReach` covers with `μ` (ten times its
-//! tolerance; [`crate::Pvs`] judges only cells it covers and calls every node visible from the others). The walls lie *below* the terrain, so
-//! anything they block the terrain blocks: dropping walls (or parts of them) only makes the answer more "visible".
+//! interpolates the end heights lowered by `μ`. On an edge the terrain is exactly the segment between its end vertices,
+//! so a sight line passing under a wall's top at a point passes at least `μ` below the terrain there: blocked in the
+//! exact checker's sense for every eye that `truth::MarginReach` covers with `μ` (ten times its tolerance;
+//! [`crate::Pvs`] judges only cells it covers and calls every node visible from the others). The walls lie *below* the
+//! terrain, so anything they block the terrain blocks: dropping walls (or parts of them) only makes the answer more
+//! "visible".
 //!
 //! **Reduction to the plane (§4, Observation 1).** Take an axis `k` (x or y) and a sign along which `A` and `B` are
 //! separated: `along = ±p_k`, `A` in `along ≤ X1`, `B` in `along ≥ X2 > X1`; `lat` is the other coordinate. Let `T`

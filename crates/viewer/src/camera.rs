@@ -27,15 +27,15 @@ pub const MAX_RENDER_HFOV_DEG: f32 = 150.0;
 pub const MAX_EYE_PITCH: f32 = 1.55;
 
 /// The horizontal field of view (degrees, in `(0, 360]`) that a culler must keep around the yaw of an [`EyeCamera`]
-/// drawn with the field `hfov_deg` (as the viewer draws it: at most [`MAX_RENDER_HFOV_DEG`]), pitched by
-/// `pitch_deg`, into an image of aspect `aspect` (width / height): every pixel's azimuth lies within half of it of
-/// the yaw. Pitched, an image reaches further round than its field at the corners on the side it tilts toward: with
-/// `t_h = tan(h/2)` and `t_v = t_h / aspect`, the pixel `(a t_h, b t_v)` (`a, b` in `[−1, 1]`) looks along
-/// `f + a t_h r + b t_v u` (forward `f`, right `r`, up `u`), whose horizontal part is `cos p − b t_v sin p` forward
-/// and `a t_h` aside: its azimuth from the yaw is `atan(|a| t_h / (cos p − b t_v sin p))`, largest at a corner,
-/// `atan(t_h / (cos p − t_v |sin p|))`. Where that denominator is below 0.05 the image reaches the nadir or the
-/// zenith, or comes close enough that the f32 rounding of the render would matter: 360. The result is widened by far more than the f32 rounding of the render (a relative
-/// 1e-4 and 0.01°), and is never narrower than `hfov_deg` itself (wider culling fields are drawn narrower).
+/// drawn with the field `hfov_deg` (as the viewer draws it: at most [`MAX_RENDER_HFOV_DEG`]), pitched by `pitch_deg`,
+/// into an image of aspect `aspect` (width / height): every pixel's azimuth lies within half of it of the yaw. Pitched,
+/// an image reaches further round than its field at the corners on the side it tilts toward: with `t_h = tan(h/2)` and
+/// `t_v = t_h / aspect`, the pixel `(a t_h, b t_v)` (`a, b` in `[−1, 1]`) looks along `f + a t_h r + b t_v u` (forward
+/// `f`, right `r`, up `u`), whose horizontal part is `cos p − b t_v sin p` forward and `a t_h` aside: its azimuth from
+/// the yaw is `atan(|a| t_h / (cos p − b t_v sin p))`, largest at a corner, `atan(t_h / (cos p − t_v |sin p|))`. Where
+/// that denominator is below 0.05 the image reaches the nadir or the zenith, or comes close enough that the f32
+/// rounding of the render would matter: 360. The result is widened by far more than the f32 rounding of the render (a
+/// relative 1e-4 and 0.01°), and is never narrower than `hfov_deg` itself (wider culling fields are drawn narrower).
 pub fn culling_hfov_deg(hfov_deg: f64, pitch_deg: f64, aspect: f64) -> f64 {
     let drawn = hfov_deg.clamp(1.0, f64::from(MAX_RENDER_HFOV_DEG)).to_radians();
     let pitch = pitch_deg
