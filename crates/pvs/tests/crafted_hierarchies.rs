@@ -1,7 +1,11 @@
 //! Regression tests found by an audit of the conservative regions' proofs, on hand-made hierarchies (which a `.tch`
 //! file may hold: nothing in a file promises what a build makes): the regions PVS test on a region that is not
-//! convex, a stored circle that misses its node's triangles, and a hierarchy of one sector. Each is checked against
-//! the exact segment-walk checker (`truth`).
+//! convex, a stored circle that misses its node's triangles, and a hierarchy of one sector; and viewcells far from
+//! the terrain or high above it, which neither test may judge: the walls' and the regions' height margin `μ` is fixed
+//! by the mesh while the exact checker's tolerance grows with the eye's distance and height, and from cells some
+//! hundred times the terrain's size away a sight line passing `2e-4` m under a ridge top was called blocked by both
+//! tests while the checker, within its tolerance, saw through (`truth::MarginReach` now keeps such cells out: every
+//! node is in their PVS). Each is checked against the exact segment-walk checker (`truth`).
 
 use cull::{BuildInfo, Camera, Culler, Hierarchy, Mesh, Node};
 use glam::{DVec2, DVec3};
@@ -213,4 +217,149 @@ fn one_sector_makes_no_conservative_region() {
             "{sectors} sectors: {visible} visible, {culled} culled"
         );
     }
+}
+
+/// The triangles of node 0 (its first `na`) that the exact checker sees from `eye` but the PVS of `cell` leaves out.
+fn missing(
+    h: &Hierarchy,
+    tin: &Tin,
+    na: u32,
+    cell: &ViewCell,
+    eye: DVec3,
+    method: Method,
+    resolution: u32,
+) -> Vec<usize> {
+    let truth = GroundTruth::new(tin);
+    let visible: Vec<usize> = (0..na as usize).filter(|&t| truth.triangle_visible(eye, t)).collect();
+    assert!(!visible.is_empty(), "truth sees node 0 from {eye:?}");
+    let params = PvsParams {
+        method,
+        resolution,
+        patch: 16,
+    };
+    let set = Pvs::new(h, params).expect("pvs").compute(cell).expect("a PVS");
+    let mask = set.mask(tin.num_triangles());
+    visible.into_iter().filter(|&t| !mask[t]).collect()
+}
+
+/// Koltun: the walls' margin μ = 1e-7 (1 + extent + max|z|) is fixed by the mesh, but the exact checker's tolerance
+/// 1e-9 (1 + |eye − target| + max|z|) grows with the eye's distance and height. From an eye 1e6 m away (a valid cell,
+/// off the terrain) a sight line passing 2e-4 m under a ridge top is "visible" for `truth` (tolerance 1.8e-3 m), but
+/// Koltun's wall pieces poke 2δ above the plane there and it calls the node hidden.
+#[test]
+fn koltun_judges_no_cell_beyond_its_margin() {
+    let h_ridge = 50.0;
+    let (xs, ys) = (steps(0.0, 200.0, 10.0), steps(0.0, 200.0, 10.0));
+    let terrain = grid(&xs, &ys, |x, _| if x == 100.0 { h_ridge } else { 0.0 });
+    let (h, tin, na) = two_nodes(
+        terrain,
+        |c| {
+            c.iter()
+                .all(|p| (150.0..=160.0).contains(&p.x) && (90.0..=110.0).contains(&p.y))
+        },
+        16,
+        None,
+    );
+    let big_x = -1e6;
+    let d = 2e-4;
+    let zeye = (h_ridge - d) * (160.0 - big_x) / 60.0;
+    let eye = DVec3::new(big_x, 100.0, zeye);
+    let cell = ViewCell {
+        rect: [big_x - 10.0, 95.0, big_x, 105.0],
+        height: Height::Band([zeye - 1.0, zeye]),
+    };
+    let mut failures = vec![];
+    for res in [16, 64, 256] {
+        let miss = missing(&h, &tin, na, &cell, eye, Method::Koltun, res);
+        if !miss.is_empty() {
+            failures.push((res, miss));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "visible triangles of node 0 missing from the Koltun PVS: {failures:?}"
+    );
+}
+
+/// Regions: the same tolerance gap in the conservative regions (μ fixed by the mesh, `truth`'s tolerance growing
+/// with the eye's distance). Node 0 is a thin strip 60–70 m behind a 5 m ridge; 63 sectors (the camera direction is a
+/// sector's centre). From 1e9 m away, at the highest z where the regions alone call node 0 hidden, the exact checker
+/// sees it: the PVS, which does not judge such a cell, holds it.
+#[test]
+fn the_regions_judge_no_cell_beyond_their_margin() {
+    let h_ridge = 5.0;
+    let xs = steps(0.0, 200.0, 10.0);
+    let mut ys = steps(0.0, 80.0, 10.0);
+    ys.extend(steps(81.0, 119.0, 1.0));
+    ys.extend(steps(120.0, 200.0, 10.0));
+    let terrain = grid(&xs, &ys, |x, _| if x == 100.0 { h_ridge } else { 0.0 });
+    let (h, tin, na) = two_nodes(
+        terrain,
+        |c| {
+            c.iter()
+                .all(|p| (150.0..=170.0).contains(&p.x) && (99.0..=101.0).contains(&p.y))
+        },
+        63,
+        None,
+    );
+    let cons = pvs::conservative_regions(&h);
+    assert!(!cons.nodes[0].regions.is_empty());
+    let big_x = -1e9;
+    let cell_at = |z: f64| pvs::Box3 {
+        lo: [big_x - 1.0, 99.5],
+        hi: [big_x, 100.5],
+        ztop: z,
+    };
+    let (mut lo, mut hi) = (0.0f64, 1e9f64);
+    assert!(pvs::regions::hidden_by_regions(&cons, 0, &cell_at(lo)));
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if pvs::regions::hidden_by_regions(&cons, 0, &cell_at(mid)) {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let z = lo;
+    let eye = DVec3::new(big_x, 100.0, z);
+    // And the PVS itself.
+    let cell = ViewCell {
+        rect: [big_x - 1.0, 99.5, big_x, 100.5],
+        height: Height::Band([z - 1.0, z]),
+    };
+    let miss = missing(&h, &tin, na, &cell, eye, Method::Regions, 64);
+    assert!(miss.is_empty(), "{miss:?}");
+}
+
+/// The same with the cell over the terrain: an eye 8e5 m above the ground looks past a 50 m cliff (12,500:1) at a
+/// strip just behind it. `truth`'s tolerance there is 8e-4 m; the sight line passes 2e-4 m under the cliff top.
+#[test]
+fn koltun_judges_no_cell_high_above_its_margin() {
+    let h_ridge = 50.0;
+    let mut xs = steps(0.0, 200.0, 10.0);
+    xs.extend([100.004, 100.006]);
+    xs.sort_by(f64::total_cmp);
+    let ys = steps(0.0, 200.0, 10.0);
+    let terrain = grid(&xs, &ys, |x, _| if x == 100.0 { h_ridge } else { 0.0 });
+    let (h, tin, na) = two_nodes(
+        terrain,
+        |c| {
+            c.iter()
+                .all(|p| (100.004..=100.006).contains(&p.x) && (90.0..=110.0).contains(&p.y))
+        },
+        16,
+        None,
+    );
+    let (x1, b1, d) = (20.0, 100.006, 2e-4);
+    let zeye = (h_ridge - d) * (b1 - x1) / (b1 - 100.0);
+    let eye = DVec3::new(x1, 100.0, zeye);
+    let cell = ViewCell {
+        rect: [10.0, 95.0, x1, 105.0],
+        height: Height::AboveGround([0.0, zeye]),
+    };
+    let miss = missing(&h, &tin, na, &cell, eye, Method::Koltun, 64);
+    assert!(
+        miss.is_empty(),
+        "eye {eye:?}: visible triangles of node 0 missing from the Koltun PVS: {miss:?}"
+    );
 }
