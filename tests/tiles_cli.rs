@@ -718,7 +718,7 @@ fn a_tile_of_one_row_of_samples_is_left_out_with_a_warning() {
     );
     assert!(text.contains("2 tiles of voids left out"), "{text}");
     assert!(
-        warning.contains("4 tiles left out") && warning.contains("one row or column"),
+        warning.contains("4 tiles left out") && warning.contains("lie on one line"),
         "{warning}"
     );
 }

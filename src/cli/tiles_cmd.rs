@@ -250,9 +250,9 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     };
     if left.line_tiles > 0 {
         out.warn(format!(
-            "{} left out: their {} lie in one row or column (or are fewer than 3), which a tile cannot triangulate \
-             alone; those on a side shared with another tile stay, the others are not in the tiled terrain (the \
-             untiled `tin` and `build` keep them; a larger --tile may too)",
+            "{} left out: their {} lie on one line (a row, a column, a diagonal) or are fewer than 3, which a tile \
+             cannot triangulate alone; those on a side shared with another tile stay, the others are not in the \
+             tiled terrain (the untiled `tin` and `build` keep them; a larger --tile may too)",
             count(left.line_tiles, "tile"),
             count(left.line_samples, "sample")
         ));

@@ -3,7 +3,7 @@
 //! Tiles cut the grid's sample intervals evenly: with `k` tiles across `n` samples, tile `i` spans samples
 //! `round(i·(n−1)/k) ..= round((i+1)·(n−1)/k)`, so neighbouring tiles share one row or column of samples, which both
 //! simplify identically ([`crate::boundary`]). A tile whose own samples are voids (or too few to triangulate: under
-//! three, or all in one row or column) holds no terrain and is left out of the plan; the others are numbered in
+//! three, or all on one line: a row, a column, a diagonal) holds no terrain and is left out of the plan; the others are numbered in
 //! order. The far field's pyramid is computed here, once, and each tile's cut
 //! through it goes to the tile's own file ([`crate::far_field`]), so the plan file stays small (a few hundred bytes
 //! a tile) and a job reads only what it needs, however large the terrain.
@@ -270,29 +270,38 @@ pub fn tile_grid(shape: [usize; 2], tile: usize) -> [usize; 2] {
 #[derive(Clone, Copy, Debug, Default)]
 struct TileTerrain {
     samples: usize,
-    rows: Option<[usize; 2]>,
-    cols: Option<[usize; 2]>,
+    /// The first valid sample and another one (grid column and row), while no sample has been seen off their line.
+    first: Option<[i64; 2]>,
+    second: Option<[i64; 2]>,
+    /// Whether three of the samples are not on one line (exact: integer grid positions).
+    spans_area: bool,
 }
 
 impl TileTerrain {
     /// Adds row `r`'s samples `z`, the first at column `c0`.
     fn add(&mut self, r: usize, c0: usize, z: &[f64]) {
-        let widen = |span: &mut Option<[usize; 2]>, i: usize| {
-            *span = Some(span.map_or([i, i], |[a, b]| [a.min(i), b.max(i)]));
-        };
         for (k, v) in z.iter().enumerate() {
-            if !v.is_nan() {
-                self.samples += 1;
-                widen(&mut self.rows, r);
-                widen(&mut self.cols, c0 + k);
+            if v.is_nan() {
+                continue;
+            }
+            self.samples += 1;
+            let q = [(c0 + k) as i64, r as i64];
+            match (self.first, self.second) {
+                _ if self.spans_area => {}
+                (None, _) => self.first = Some(q),
+                (Some(_), None) => self.second = Some(q),
+                (Some(a), Some(b)) => {
+                    // Grid positions are below 2^31, so the cross product is exact in i64.
+                    self.spans_area = (b[0] - a[0]) * (q[1] - a[1]) != (b[1] - a[1]) * (q[0] - a[0]);
+                }
             }
         }
     }
 
-    /// Whether the samples can be triangulated: three or more, not all in one row or one column.
+    /// Whether the samples can be triangulated: three that are not on one line (a row, a column or a diagonal would
+    /// leave the tile's job nothing to triangulate).
     fn can_triangulate(&self) -> bool {
-        let spans = |s: Option<[usize; 2]>| s.is_some_and(|[a, b]| a < b);
-        self.samples >= 3 && spans(self.rows) && spans(self.cols)
+        self.spans_area
     }
 }
 
@@ -308,7 +317,8 @@ fn cuts(n: usize, k: usize) -> Vec<usize> {
 pub struct LeftOut {
     /// Tiles whose samples are all voids.
     pub void_tiles: usize,
-    /// Tiles with samples too few or all in one row or column, which a tile job cannot triangulate alone.
+    /// Tiles with samples too few or all on one line (a row, a column, a diagonal), which a tile job cannot
+    /// triangulate alone.
     pub line_tiles: usize,
     /// The samples of those tiles (those on a side shared with a kept tile stay in the terrain, the others do not).
     pub line_samples: usize,
@@ -424,7 +434,7 @@ pub fn make_plan(
         .collect();
     if kept.is_empty() {
         return Err(TilesError::Parameter(format!(
-            "{}: no tile has samples to triangulate (at least 3, not all in one row or column): the DEM is voids",
+            "{}: no tile has samples to triangulate (at least 3, not all on one line): the DEM is voids",
             source.display()
         )));
     }

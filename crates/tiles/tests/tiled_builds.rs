@@ -110,6 +110,57 @@ fn max_sample_error(grid: &Grid, tin: &Tin) -> f64 {
     worst
 }
 
+/// Regression (found by an audit): a tile whose only valid samples lie on a diagonal was planned (three samples over
+/// two rows and two columns), and its job then failed, so the tiled build could not finish although the untiled one
+/// does. Samples on one line, in any direction, now leave the tile out of the plan; every planned tile builds.
+#[test]
+fn a_tile_whose_samples_lie_on_a_diagonal_is_left_out() {
+    let (rows, cols) = (9, 9);
+    let mut z = vec![f64::NAN; rows * cols];
+    for r in 0..rows {
+        for c in 0..4 {
+            z[r * cols + c] = (r * 7 + c * 3) as f64;
+        }
+    }
+    // The tile of rows 0..=4 and columns 4..=8: only (0, 4), (1, 5), (2, 6) hold samples.
+    for k in 0..3 {
+        z[k * cols + 4 + k] = 10.0 + k as f64;
+    }
+    let grid = Grid::new(rows, cols, 10.0, 10.0, DVec2::new(1000.0, 2000.0), z).expect("grid");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("terrain.npy");
+    let mut bytes = Vec::new();
+    tin::dem::npy::write_npy_to(&grid, &mut bytes).expect("npy");
+    std::fs::write(&npy, bytes).expect("write npy");
+    std::fs::write(tin::dem::npy::sidecar_path(&npy), tin::dem::npy::sidecar_json(&grid)).expect("sidecar");
+    let options = PlanOptions {
+        tile: 4,
+        halo: 1,
+        far_block: 2,
+        far_ratio: 0,
+        max_error: 0.5,
+        params: BuildParams {
+            sectors: 8,
+            subsectors: 2,
+            ..BuildParams::default()
+        },
+        no_regions: false,
+    };
+    let (_, _, left_out) = tiles::make_plan(
+        &npy,
+        DemOptions::default(),
+        options.clone(),
+        Path::new("plan.tiles"),
+        |_, _| {},
+    )
+    .expect("plan");
+    assert_eq!((left_out.void_tiles, left_out.line_tiles), (1, 1), "{left_out:?}");
+    let (plan, path) = write_plan(dir.path(), &npy, options);
+    for i in 0..plan.tiles.len() {
+        tiles::build_tile(&plan, &path, i, None).unwrap_or_else(|e| panic!("tile {i}: {e}"));
+    }
+}
+
 #[test]
 fn merged_terrain_reproduces_every_sample_within_the_bound() {
     let dir = tempfile::tempdir().expect("tempdir");
