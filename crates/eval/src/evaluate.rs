@@ -14,7 +14,7 @@
 //! | `none` | every triangle |
 //!
 //! With a field of view below 360°, each viewpoint gets a yaw from the generator, and `V` is restricted to the
-//! triangles with a vertex or the centroid inside the horizontal view wedge: a triangle wholly outside the view is
+//! triangles that meet the horizontal view wedge in x,y (`truth::in_view`): a triangle wholly outside the view is
 //! not counted as a false cull when culled, one partly inside is.
 //!
 //! Per viewpoint, besides the methods' metrics: `visible_fraction` (`|V| / |A|`) and `leaf_limit`, the occlusion

@@ -23,5 +23,5 @@ pub use error::{Result, TruthError};
 pub use locate::{Locator, ground_heights};
 pub use metrics::{Stat, Summary, ViewMetrics, summarize, view_metrics};
 pub use viewpoints::{ViewpointClass, viewpoints};
-pub use visible::{GroundTruth, MAX_LEVELS, NUDGE, SAMPLE_ANGLE_DEG, in_view, visible_triangles};
+pub use visible::{GroundTruth, MAX_LEVELS, MAX_SPLITS, NUDGE, SAMPLE_ANGLE_DEG, in_view, visible_triangles};
 pub use walk::{EPS_REL, MarginReach, point_visible};

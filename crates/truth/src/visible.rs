@@ -12,11 +12,20 @@
 //! 4. the remaining points of the barycentric grid `(i, j, k) / n`, `i + j + k = n`, where the number of levels `n`
 //!    is the smallest for which neighbouring samples subtend at most [`SAMPLE_ANGLE_DEG`] (0.25°) from the eye:
 //!    `n = ceil(longest edge / (distance lower bound · 0.25° in radians))`, with the distance lower bound
-//!    `|eye − centroid| − (largest centroid-to-corner distance)`. `n` is capped at [`MAX_LEVELS`] = 64
-//!    (2,145 grid points), which only binds for triangles closer than about 3.6 edge lengths to the eye.
+//!    `|eye − centroid| − (largest centroid-to-corner distance)`. Where `n` would exceed [`MAX_LEVELS`] = 64 (2,145
+//!    grid points; a triangle closer than about 3.6 edge lengths to the eye), the triangle is split at its edge
+//!    midpoints into four and each part is sampled the same way, its own `n` from its own corners, down to
+//!    [`MAX_SPLITS`] = 8 splits, where `n` is capped at 64. A part left coarser than 0.25° has a distance lower bound
+//!    below `L / (2^8 · 64 · 0.25° in radians) ≈ L / 71` (`L` the triangle's longest edge) and is at most `L / 2^8`
+//!    across, so the 0.25° spacing holds at every point of the triangle farther than `L / 71 + L / 128 < L / 45`
+//!    from the eye.
 //!
-//! Every sample is nudged toward the centroid by [`NUDGE`] in barycentric terms (each barycentric coordinate is at
-//! least 1e-6), so that it lies inside its own triangle and the walk starts there.
+//! Every sample's x,y is nudged toward the centroid by [`NUDGE`] in barycentric terms (each barycentric coordinate is
+//! at least 1e-6), so that it lies inside its own triangle and the walk starts there, and its height is that of the
+//! triangle's plane at the rounded x,y, computed as the walk computes it: a sample interpolated in 3-D lands off its
+//! plane by the slope times the rounding of x,y, which on a near-vertical face at UTM-sized coordinates exceeds the
+//! walk's tolerance and would bury it (regression test
+//! `a_cliff_face_at_utm_coordinates_is_not_buried_by_its_own_samples`, `tests/checker_attacks.rs`).
 //!
 //! Choices:
 //!
@@ -36,7 +45,7 @@
 
 use std::borrow::Cow;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use tin::Tin;
 
@@ -46,8 +55,12 @@ use crate::walk::{EPS_REL, Outcome, edge_blocks, segment_clear, tolerance, walk_
 /// Largest angle (degrees) that neighbouring grid samples of a triangle may subtend from the eye.
 pub const SAMPLE_ANGLE_DEG: f64 = 0.25;
 
-/// Cap on the number of barycentric grid levels per triangle ((64 + 1)(64 + 2) / 2 = 2,145 grid points).
+/// Cap on the number of barycentric grid levels per triangle or part of one ((64 + 1)(64 + 2) / 2 = 2,145 grid
+/// points); a triangle that needs more is split (module documentation).
 pub const MAX_LEVELS: usize = 64;
+
+/// Most times a triangle is split in four for its grid samples.
+pub const MAX_SPLITS: u32 = 8;
 
 /// How far every sample is pulled toward the centroid, in barycentric terms: each barycentric coordinate of a
 /// sample is at least this.
@@ -124,23 +137,14 @@ impl<'a> GroundTruth<'a> {
         self.test_triangle(eye, t)
     }
 
-    /// Number of barycentric grid levels used for triangle `t` seen from `eye` (1 to [`MAX_LEVELS`]; 0 for an index
-    /// out of range).
+    /// Number of barycentric grid levels of triangle `t` seen from `eye` before any split (1 to [`MAX_LEVELS`]; 0 for
+    /// an index out of range): [`MAX_LEVELS`] means that the triangle is split if [`MAX_SPLITS`] allows (module
+    /// documentation).
     pub fn levels(&self, eye: DVec3, t: usize) -> usize {
         if t >= self.tin.num_triangles() {
             return 0;
         }
-        let c = self.tin.corners(t);
-        let centroid = (c[0] + c[1] + c[2]) / 3.0;
-        let radius = c.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
-        let longest = (0..3).map(|i| c[i].distance(c[(i + 1) % 3])).fold(0.0, f64::max);
-        let dist = (eye.distance(centroid) - radius).max(f64::MIN_POSITIVE);
-        let n = (longest / (dist * SAMPLE_ANGLE_DEG.to_radians())).ceil();
-        if n.is_nan() {
-            MAX_LEVELS
-        } else {
-            n.clamp(1.0, MAX_LEVELS as f64) as usize
-        }
+        (levels_wanted(&self.tin.corners(t), eye).clamp(1.0, MAX_LEVELS as f64)) as usize
     }
 
     /// The sample points of triangle `t` seen from `eye`, in the order they are tried (none for an index out of
@@ -220,10 +224,6 @@ impl<'a> GroundTruth<'a> {
     /// Calls `f` on the samples of `t` in order until it returns true; returns whether it did.
     fn any_sample(&self, eye: DVec3, t: usize, mut f: impl FnMut(DVec3) -> bool) -> bool {
         let c = self.tin.corners(t);
-        let at = |b: [f64; 3]| {
-            let w = b.map(|x| (1.0 - 3.0 * NUDGE) * x + NUDGE);
-            c[0] * w[0] + c[1] * w[1] + c[2] * w[2]
-        };
         let third = 1.0 / 3.0;
         let fixed = [
             [third, third, third],
@@ -234,52 +234,128 @@ impl<'a> GroundTruth<'a> {
             [0.0, 0.5, 0.5],
             [0.5, 0.0, 0.5],
         ];
-        if fixed.iter().any(|&b| f(at(b))) {
+        if fixed.iter().any(|&b| f(sample_at(&c, b))) {
             return true;
         }
-        let n = self.levels(eye, t);
-        for i in 0..=n {
-            for j in 0..=n - i {
-                let k = n - i - j;
+        let whole = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        grid_samples(&c, whole, eye, 0, &mut f)
+    }
+}
+
+/// The number of grid levels that the 0.25° spacing asks of the triangle with corners `c` seen from `eye`
+/// (uncapped; infinite when the eye may touch it).
+fn levels_wanted(c: &[DVec3; 3], eye: DVec3) -> f64 {
+    let centroid = (c[0] + c[1] + c[2]) / 3.0;
+    let radius = c.iter().map(|p| p.distance(centroid)).fold(0.0, f64::max);
+    let longest = (0..3).map(|i| c[i].distance(c[(i + 1) % 3])).fold(0.0, f64::max);
+    let dist = (eye.distance(centroid) - radius).max(f64::MIN_POSITIVE);
+    let n = (longest / (dist * SAMPLE_ANGLE_DEG.to_radians())).ceil();
+    if n.is_nan() { f64::INFINITY } else { n }
+}
+
+/// The sample of the triangle with corners `c` at barycentric coordinates `b`: x,y nudged toward the centroid (each
+/// weight at least [`NUDGE`]), height that of the triangle's plane there as the walk computes it.
+fn sample_at(c: &[DVec3; 3], b: [f64; 3]) -> DVec3 {
+    let w = b.map(|x| (1.0 - 3.0 * NUDGE) * x + NUDGE);
+    let xy = c[0].truncate() * w[0] + c[1].truncate() * w[1] + c[2].truncate() * w[2];
+    xy.extend(plane_height(c, xy))
+}
+
+/// Calls `f` on the grid samples of the part of the triangle `c` whose corners have barycentric coordinates `part`,
+/// `depth` splits down (module documentation, sample 4), until it returns true; returns whether it did. The whole
+/// triangle (`depth` 0) skips the points tried before (corners, edge midpoints, centroid).
+fn grid_samples(
+    c: &[DVec3; 3],
+    part: [[f64; 3]; 3],
+    eye: DVec3,
+    depth: u32,
+    f: &mut impl FnMut(DVec3) -> bool,
+) -> bool {
+    let at = |w: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|k| part[0][k] * w[0] + part[1][k] * w[1] + part[2][k] * w[2])
+    };
+    let wanted = levels_wanted(&part.map(|b| c[0] * b[0] + c[1] * b[1] + c[2] * b[2]), eye);
+    if wanted > MAX_LEVELS as f64 && depth < MAX_SPLITS {
+        let mid = |i: usize, j: usize| std::array::from_fn(|k| 0.5 * (part[i][k] + part[j][k]));
+        let (m01, m12, m20) = (mid(0, 1), mid(1, 2), mid(2, 0));
+        return [
+            [part[0], m01, m20],
+            [m01, part[1], m12],
+            [m20, m12, part[2]],
+            [m01, m12, m20],
+        ]
+        .into_iter()
+        .any(|sub| grid_samples(c, sub, eye, depth + 1, f));
+    }
+    let n = wanted.clamp(1.0, MAX_LEVELS as f64) as usize;
+    let inv = 1.0 / n as f64;
+    for i in 0..=n {
+        for j in 0..=n - i {
+            let k = n - i - j;
+            if depth == 0 {
                 let is_corner = i == n || j == n || k == n;
                 let is_mid = 2 * i.max(j).max(k) == n && (i == 0 || j == 0 || k == 0);
                 let is_centroid = 3 * i == n && 3 * j == n;
                 if is_corner || is_mid || is_centroid {
                     continue;
                 }
-                let inv = 1.0 / n as f64;
-                if f(at([i as f64 * inv, j as f64 * inv, k as f64 * inv])) {
-                    return true;
-                }
+            }
+            if f(sample_at(c, at([i as f64 * inv, j as f64 * inv, k as f64 * inv]))) {
+                return true;
             }
         }
-        false
     }
+    false
 }
 
-/// The triangles in a horizontal view wedge: those with a vertex or the centroid inside `yaw ± half` (radians,
-/// azimuth counter-clockwise from +x) seen from `eye`; a point straight above or below the eye is inside. The ground
-/// truth of a view narrower than 360° is [`visible_triangles`] restricted to them (`eval --fov`, the viewer).
+/// The triangles in a horizontal view wedge: those with a point inside `yaw ± half` (radians, azimuth
+/// counter-clockwise from +x) seen from `eye`, in x,y: a vertex inside the wedge, an edge crossed by one of the
+/// wedge's two boundary rays, or the eye's x,y inside the (closed) triangle; a point straight above or below the eye
+/// is inside. The ground truth of a view narrower than 360° is [`visible_triangles`] restricted to them (`eval
+/// --fov`, the viewer). A triangle that meets the wedge with no vertex in it has a stretch of a boundary ray inside
+/// it, which either crosses one of its edges or starts inside it (at the eye), so no other case is left.
 pub fn in_view(tin: &Tin, eye: DVec3, yaw: f64, half: f64) -> Vec<bool> {
     use std::f64::consts::{PI, TAU};
+    if half >= PI {
+        return vec![true; tin.num_triangles()];
+    }
     // A yaw beyond one turn is reduced exactly first (through its sine and cosine), as `cull::Camera::frustum` does.
     let yaw = if yaw.abs() <= TAU {
         yaw
     } else {
         yaw.sin().atan2(yaw.cos())
     };
-    let inside = |p: DVec3| {
-        let d = p - eye;
+    let e = eye.truncate();
+    let inside = |p: DVec2| {
+        let d = p - e;
         if d.x == 0.0 && d.y == 0.0 {
             return true;
         }
         let gap = (d.y.atan2(d.x) - yaw + PI).rem_euclid(TAU) - PI;
         gap.abs() <= half
     };
+    let rays = [yaw - half, yaw + half].map(|a| DVec2::new(a.cos(), a.sin()));
+    // Whether the ray from the eye along `r` meets the closed segment `a b`.
+    let ray_meets = |r: DVec2, a: DVec2, b: DVec2| {
+        let (a, b) = (a - e, b - e);
+        let (sa, sb) = (r.perp_dot(a), r.perp_dot(b));
+        if (sa > 0.0 && sb > 0.0) || (sa < 0.0 && sb < 0.0) {
+            return false;
+        }
+        // The segment's point on the ray's line, as a distance along the ray (both ends on it: the farther one).
+        let along = if sa == sb {
+            a.dot(r).max(b.dot(r))
+        } else {
+            (sb * a.dot(r) - sa * b.dot(r)) / (sb - sa)
+        };
+        along >= 0.0
+    };
     (0..tin.num_triangles())
         .map(|t| {
-            let c = tin.corners(t);
-            c.iter().any(|&p| inside(p)) || inside((c[0] + c[1] + c[2]) / 3.0)
+            let c = tin.corners(t).map(|p| p.truncate());
+            c.iter().any(|&p| inside(p))
+                || (0..3).any(|i| rays.iter().any(|&r| ray_meets(r, c[i], c[(i + 1) % 3])))
+                || (0..3).all(|i| tin::orient2d(c[i], c[(i + 1) % 3], e) >= 0.0)
         })
         .collect()
 }
@@ -323,7 +399,8 @@ mod tests {
     fn sample_grid_has_no_duplicates_and_stays_inside() {
         let tin = flat();
         let gt = GroundTruth::new(&tin);
-        for (eye, levels) in [(DVec3::new(5.0, 5.0, 1e6), 1), (DVec3::new(5.0, 5.0, 1.0), MAX_LEVELS)] {
+        // 1 level from far above; 62 levels, the most without a split, from 60 m above.
+        for (eye, levels) in [(DVec3::new(5.0, 5.0, 1e6), 1), (DVec3::new(5.0, 5.0, 60.0), 62)] {
             assert_eq!(gt.levels(eye, 0), levels);
             let s = gt.samples(eye, 0);
             let n = levels;
@@ -336,9 +413,44 @@ mod tests {
             assert_eq!(s.len(), expected, "levels {n}");
             for (i, a) in s.iter().enumerate() {
                 assert_eq!(gt.locator().locate(&tin, a.truncate()), Some(0), "sample {i} inside");
+                assert_eq!(a.z, 0.0, "sample {i} on its plane");
                 for b in &s[..i] {
                     assert!(a.distance(*b) > 1e-9, "duplicate sample {a}");
                 }
+            }
+        }
+    }
+
+    /// A triangle near the eye is split: every point of it farther than `L / 45` from the eye (`L` its longest
+    /// edge) has a sample within 0.25° of it as seen from the eye, and every sample lies inside it.
+    #[test]
+    fn a_near_triangle_is_split_until_its_samples_are_a_quarter_degree_apart() {
+        let tin = flat();
+        let gt = GroundTruth::new(&tin);
+        let eye = DVec3::new(5.0, 5.0, 0.5);
+        assert_eq!(gt.levels(eye, 0), MAX_LEVELS);
+        let s = gt.samples(eye, 0);
+        assert!(s.len() > 2 * 2145, "{} samples", s.len());
+        for (i, a) in s.iter().enumerate() {
+            assert_eq!(gt.locator().locate(&tin, a.truncate()), Some(0), "sample {i} inside");
+        }
+        let c = tin.corners(0);
+        let near = 200f64.sqrt() / 45.0;
+        let angle = |p: DVec3, q: DVec3| (p - eye).angle_between(q - eye);
+        let steps = 24;
+        for i in 0..=steps {
+            for j in 0..=steps - i {
+                let w = [i, j, steps - i - j].map(|x| x as f64 / steps as f64);
+                let p = c[0] * w[0] + c[1] * w[1] + c[2] * w[2];
+                if p.distance(eye) <= near {
+                    continue;
+                }
+                let best = s.iter().map(|&q| angle(p, q)).fold(f64::INFINITY, f64::min);
+                assert!(
+                    best <= SAMPLE_ANGLE_DEG.to_radians(),
+                    "point {p}: nearest sample {}°",
+                    best.to_degrees()
+                );
             }
         }
     }
