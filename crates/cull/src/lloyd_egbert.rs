@@ -62,26 +62,35 @@
 //! it is blocked too. Nodes never tested lie below a hidden ancestor, whose box contains theirs. Nothing in this
 //! argument depends on which nodes were drawn or in what order; the order only decides how much is culled.
 //!
-//! **(i) holds, rounding included.** The profile's breakpoints are computed, not exact: a crossing of grid line
-//! `x = X` with mesh edge `AB` (the edge always taken from its lower vertex index, so both triangles at the edge
-//! compute the same bits) is `s = (X − A.x) / (B.x − A.x)`, `t = A.y + s (B.y − A.y)`, `z = A.z + s (B.z − A.z)`:
-//! a few roundings each, so `|t − t_true| ≤ δt = ERR (|A.y| + |B.y|)` and `|z − z_true| ≤ δz = ERR (|A.z| + |B.z|)`
-//! with `ERR = 1e-14` (about 90 ε; the operations cost under 10 ε). Vertices on the line are taken exactly; an end
-//! at a grid corner is exact in `t` and interpolated on its chord: its `δz` is the chord ends' `δz` plus the smaller
-//! of `|chord slope| · δt` and the chord's height difference, plus `ERR` of its heights (the interpolated value is
-//! clamped between the chord ends'). For the fitted line `ℓ(t) = a + b (t − t_m)` with `a` the least of
-//! `z_k − b (t_k − t_m)` over the computed breakpoints: at a true breakpoint `ℓ(t_true) ≤ ℓ(t_k) + |b| δt ≤ z_k +
-//! |b| δt ≤ z_true + δz + |b| δt`, so the line lowered by `M = max_k (δz_k + |b| δt_k) + ERR (|z_k| + |b| |t_k −
-//! t_m|)` (the last term covering the rounding of `a`) is below the profile at every breakpoint, hence everywhere
-//! between (both linear there). Its end heights are rounded once more and lowered by `ERR` of their own size; the
-//! segment between the two lowered ends is below the line. A stretch of coverage is shrunk at each end by that end's
-//! `δt` (so it never reaches beyond the TIN), and two chords are joined into one stretch only when they overlap by
-//! more than their ends' `δt`, or meet at the same exactly computed point (one mesh vertex, one canonical mesh edge,
-//! one grid corner). Triangles without area in x,y are skipped (a profile through the others is still under the
-//! surface). The segment's end points that are grid corners carry the corner's id, so that two covers ending there
-//! join exactly in the horizon (same x,y: the same projected `u`, bit for bit); the ids are grid ids
-//! (`PointId::grid`), never equal to a mesh vertex's, since the safe culler writes these segments into the horizon of
-//! its patches' edges.
+//! **(i) holds, rounding included.** The profile's breakpoints are computed, not exact: a crossing of grid line `x =
+//! X` with mesh edge `AB` (the edge always taken from its lower vertex index, so both triangles at the edge compute
+//! the same bits) is `s = (X − A.x) / (B.x − A.x)`, `t = A.y + s (B.y − A.y)`, `z = A.z + s (B.z − A.z)`: a few
+//! roundings each, so `|t − t_true| ≤ δt = ERR (|A.y| + |B.y|)` and `|z − z_true| ≤ δz = ERR (|A.z| + |B.z|)` with
+//! `ERR = 1e-14` (about 90 ε; the operations cost under 10 ε). Vertices on the line are taken exactly. A chord from
+//! computed end `t_0` to `t_1` is cut at a grid corner `r` only when `t_0 + δt_0 < r < t_1 − δt_1`, so that the true
+//! chord surely passes the corner (cutting a chord whose end lay within `δt` of the corner claimed a corner the TIN
+//! might not reach, and two such stretches met exactly at it over a slit narrower than the rounding: regression test
+//! `a_slit_through_a_grid_corner_is_not_closed_by_clipped_occluders`, `tests/lloyd_egbert_attacks.rs`); a chord not
+//! cut keeps its ends and may reach a little into the next cell edge, still under the terrain. The end at the corner
+//! is exact in `t` and interpolated on its chord, clamped between the computed ends' heights. With `δt`, `δz` the
+//! larger of the ends' and `Δz` their height difference, its `δz` is `δz + min((Δz + 2 δz) δt / (t_1 − t_0), Δz) + ERR
+//! (|z_0| + |z_1|)`: the line through the computed ends differs at `r` from the line through the computed `t`s and
+//! true heights by at most `δz` (`r` lies between `t_0` and `t_1`: a convex combination), and that line differs from
+//! the true chord by its slope, at most `(Δz + 2 δz) / (t_1 − t_0)`, times how far the ends' errors move the corner's
+//! parameter, at most `δt` (`r` lies on the true chord, so that move is a convex combination of the ends' errors too);
+//! and the clamped value and the true one both lie between the computed ends' heights `± δz`, so they differ by at
+//! most `Δz + δz`. For the fitted line `ℓ(t) = a + b (t − t_m)` with `a` the least of `z_k − b (t_k − t_m)` over the
+//! computed breakpoints: at a true breakpoint `ℓ(t_true) ≤ ℓ(t_k) + |b| δt ≤ z_k + |b| δt ≤ z_true + δz + |b| δt`, so
+//! the line lowered by `M = max_k (δz_k + |b| δt_k) + ERR (|z_k| + |b| |t_k − t_m|)` (the last term covering the
+//! rounding of `a`) is below the profile at every breakpoint, hence everywhere between (both linear there). Its end
+//! heights are rounded once more and lowered by `ERR` of their own size; the segment between the two lowered ends is
+//! below the line. A stretch of coverage is shrunk at each end by that end's `δt` (so it never reaches beyond the
+//! TIN), and two chords are joined into one stretch only when they overlap by more than their ends' `δt`, or meet at
+//! the same exactly computed point (one mesh vertex, one canonical mesh edge, one grid corner). Triangles without area
+//! in x,y are skipped (a profile through the others is still under the surface). The segment's end points that are
+//! grid corners carry the corner's id, so that two covers ending there join exactly in the horizon (same x,y: the same
+//! projected `u`, bit for bit); the ids are grid ids (`PointId::grid`), never equal to a mesh vertex's, since the safe
+//! culler writes these segments into the horizon of its patches' edges.
 //!
 //! **(ii) holds, rounding included.** `d_min` is multiplied by `1 − 1e-12` and `d_max` by `1 + 1e-12`, far beyond
 //! the few-ulp errors of a square root of a sum of squares of correctly rounded differences.
@@ -688,8 +697,9 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                         let k = (c1.b.z - c0.b.z) / (c1.b.t - c0.b.t);
                         let z = (c0.b.z + (r - c0.b.t) * k).clamp(lo_z, hi_z);
                         let dtm = c0.b.dt.max(c1.b.dt);
-                        let dz = c0.b.dz.max(c1.b.dz)
-                            + (k.abs() * 2.0 * dtm).min(hi_z - lo_z)
+                        let dzm = c0.b.dz.max(c1.b.dz);
+                        let dz = dzm
+                            + ((hi_z - lo_z + 2.0 * dzm) * dtm / (c1.b.t - c0.b.t)).min(hi_z - lo_z)
                             + ERR * (c0.b.z.abs() + c1.b.z.abs());
                         Some(ChordEnd {
                             b: Break { t: r, z, dt: 0.0, dz },
@@ -698,13 +708,16 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                     };
                     // Corner indices of a point at `t = line(o, jj)` on line `i` of `axis`.
                     let corner = |jj: usize| if axis == 0 { (i, jj) } else { (jj, i) };
-                    let start = if c0.b.t >= r0 {
+                    // A chord is cut at a grid corner only when its computed ends lie on either side of the corner
+                    // by more than their `δt`, so that the true chord surely passes it (module documentation, (i)).
+                    let passes = |r: f64| c0.b.t + c0.b.dt < r && r < c1.b.t - c1.b.dt;
+                    let start = if !passes(r0) {
                         Some(c0)
                     } else {
                         let (ix, iy) = corner(j);
                         clip(r0, c0, ix, iy)
                     };
-                    let end = if c1.b.t <= r1 {
+                    let end = if !passes(r1) {
                         Some(c1)
                     } else {
                         let (ix, iy) = corner(j + 1);

@@ -51,8 +51,12 @@
 //! points of that ancestor, inside the ancestor's circle: every point of `B` lies at a horizontal distance `≥ d_A`. A
 //! patch made eligible at `A` has `d_max < d_A`, so whenever it is written (lazily, maybe while `B` is tested) it lies
 //! nearer than every point of `B`, which is what the theorem needs with `D = d_A`. The keys are computed in f64 as
-//! `|m − c| − r` from circles grown by a relative 1e-12 (and an absolute 1e-9 m), more than the rounding of the
-//! distance and of the subtraction, so a computed key never exceeds the true least distance of the circle's points.
+//! `|m − c| − r` from circles grown by a relative 1e-12 (and an absolute 1e-9 m). A computed key may exceed the exact
+//! `|m − c| − r` by the rounding of the distance and of the subtraction, at most `3ε (|m − c| − r + r)` with
+//! `ε = 2⁻⁵³` (an eye 10⁸ m from a 1 m circle: 6e-9 m); that does not matter for the order, which the argument above
+//! takes from the keys as computed. What is compared with an occluder's `d_max` is not the key but
+//! `d_min = (|m − c| − r)(1 − 1e-12)`: the 1e-12 taken off it, with the 1e-12 `r` of the circle's growth, is more than
+//! `3ε` times each term, so `d_min` never exceeds the true least distance of the node's points.
 //!
 //! ## Coarse nodes
 //!
