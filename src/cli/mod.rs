@@ -136,6 +136,8 @@ pub(crate) fn no_viewer(what: &str) -> anyhow::Error {
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
+    // One command, then the process ends: a pipe given as an input may be looked at before it is read.
+    infile::keep_pipes();
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(usize::from(n))

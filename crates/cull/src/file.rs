@@ -15,9 +15,9 @@
 //! version-2 payload without it, and reads as one with [`crate::Grouping::Crystal`] (variant 0, encoded as the single
 //! byte 0) appended; every version-1 file was crystal-grouped.
 //!
-//! Anything after the payload is rejected as foreign. This crate reads files but writes none: [`Hierarchy::to_bytes`]
-//! is the file's content, and the writer is the embedder's (tincull's is the `outfile` crate: atomic replacement,
-//! symlinks followed, non-regular targets refused).
+//! Anything after the payload, or after the hierarchy inside the payload, is rejected as foreign. This crate reads
+//! files but writes none: [`Hierarchy::to_bytes`] is the file's content, and the writer is the embedder's (tincull's
+//! is the `outfile` crate: atomic replacement, symlinks followed, non-regular targets refused).
 
 use std::path::Path;
 
@@ -109,6 +109,20 @@ fn fill_header(magic: &[u8; 8], version: u32, mut out: Vec<u8>) -> Vec<u8> {
     out
 }
 
+/// Decodes a whole postcard payload (as [`unframe`] gives it): bytes the decoder leaves over are refused as foreign, as
+/// bytes after the payload are. The error is the message to show.
+pub fn decode<T: serde::de::DeserializeOwned>(payload: &[u8]) -> Result<T, String> {
+    let (value, rest) = postcard::take_from_bytes(payload).map_err(|e| e.to_string())?;
+    if rest.is_empty() {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{} unexpected bytes after the data, inside the payload",
+            rest.len()
+        ))
+    }
+}
+
 /// The version and payload of bytes written by [`frame`] with `magic`, after checking the magic, the length (no
 /// byte missing, none after the payload) and the checksum.
 pub fn unframe<'a>(bytes: &'a [u8], magic: &[u8; 8]) -> Result<(u32, &'a [u8]), FrameError> {
@@ -185,7 +199,9 @@ impl Hierarchy {
         } else {
             payload
         };
-        let h: Hierarchy = postcard::from_bytes(payload).map_err(|e| HierarchyError::Decode(e.to_string()))?;
+        // `decode` also refuses a version-2 payload framed as version 1, which would otherwise decode with its own
+        // grouping, the appended byte left over.
+        let h: Hierarchy = decode(payload).map_err(HierarchyError::Decode)?;
         h.check_invariants()?;
         Ok(h)
     }

@@ -9,23 +9,40 @@
 //! a rename between the check and the read changes nothing. The callers name the path in their own errors.
 //!
 //! A pipe or a terminal gives its bytes once, yet a command may look at an input's first bytes (to tell a hierarchy
-//! from a mesh) before its reader reads it, and look again to word an error. So the first [`read`] or [`peek`] of a
-//! pipe or a terminal reads it whole and keeps its bytes, and every later [`read`] or [`peek`] of the same path in
-//! this process is answered from them: the pipe reads as a file would. A regular file is read from disk each time.
-//! [`open`] streams a file; it refuses a path whose bytes are kept (its readers need a regular file they can seek).
+//! from a mesh) before its reader reads it, and look again to word an error. So in a process that asked for it with
+//! [`keep_pipes`] (a one-shot program: the `tincull` command line), the first [`read`] or [`peek`] of a pipe or a
+//! terminal reads it whole and keeps its bytes, and every later [`read`] or [`peek`] of the same path in this process
+//! is answered from them: the pipe reads as a file would. A long-lived program (a renderer loading hierarchies through
+//! the library or its C API) does not ask: every read of a pipe then reads the pipe afresh, as the same path may
+//! name another pipe, or a file, later. A regular file is read from disk each time. [`open`] streams a file; it
+//! refuses a path whose bytes are kept (its readers need a regular file they can seek).
 
 #![warn(missing_docs)]
 
 use std::fs::{File, FileType};
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// The bytes of the pipes and terminals read so far, by the path they were read by.
 static KEPT: Mutex<Vec<(PathBuf, Arc<[u8]>)>> = Mutex::new(Vec::new());
 
+/// Whether this process keeps the bytes of the pipes and terminals it reads ([`keep_pipes`]).
+static KEEPING: AtomicBool = AtomicBool::new(false);
+
+/// Makes this process keep the bytes of every pipe and terminal it reads from now on, so that later reads and looks
+/// of the same path get them again (see the crate documentation). For one-shot programs only: the bytes are kept
+/// until the process ends, and a path is never read again.
+pub fn keep_pipes() {
+    KEEPING.store(true, Ordering::SeqCst);
+}
+
 /// The kept bytes of `path`, if it is a pipe or terminal read before.
 fn kept(path: &Path) -> Option<Arc<[u8]>> {
+    if !KEEPING.load(Ordering::SeqCst) {
+        return None;
+    }
     let kept = KEPT.lock().unwrap_or_else(|e| e.into_inner());
     kept.iter().find(|(p, _)| p == path).map(|(_, b)| Arc::clone(b))
 }
@@ -34,7 +51,7 @@ fn kept(path: &Path) -> Option<Arc<[u8]>> {
 fn whole(mut file: File, path: &Path) -> io::Result<Vec<u8>> {
     let mut bytes = Vec::new();
     file.read_to_end(&mut bytes)?;
-    if !file.metadata()?.is_file() {
+    if KEEPING.load(Ordering::SeqCst) && !file.metadata()?.is_file() {
         KEPT.lock()
             .unwrap_or_else(|e| e.into_inner())
             .push((path.to_path_buf(), bytes.as_slice().into()));
@@ -86,7 +103,8 @@ pub fn read_to_string(path: &Path) -> io::Result<String> {
 }
 
 /// The first `n` bytes of `path` (all of them when it is shorter), leaving the whole to the next [`read`]: a regular
-/// file's first bytes on disk; a pipe or a terminal is read whole (and kept, see the crate documentation).
+/// file's first bytes on disk; a pipe or a terminal is read whole and kept (see the crate documentation; without
+/// [`keep_pipes`], its bytes are gone once looked at).
 pub fn peek(path: &Path, n: usize) -> io::Result<Vec<u8>> {
     if let Some(bytes) = kept(path) {
         return Ok(bytes[..n.min(bytes.len())].to_vec());
@@ -103,7 +121,7 @@ pub fn peek(path: &Path, n: usize) -> io::Result<Vec<u8>> {
 }
 
 /// The size in bytes of what [`read`] gives for `path`: a regular file's size on disk, a pipe's or a terminal's bytes
-/// (read whole now if they were not yet, and kept).
+/// (read whole now if they were not yet, and kept as [`peek`] keeps them).
 pub fn size(path: &Path) -> io::Result<u64> {
     if let Some(bytes) = kept(path) {
         return Ok(bytes.len() as u64);
@@ -211,11 +229,13 @@ mod tests {
         assert!(kept(&path).is_none());
     }
 
-    /// A pipe looked at (to tell what it holds) is read whole once: every later look and read of its path gets the
-    /// same bytes, its size is theirs, and `open` (whose readers seek) refuses it rather than wait for a writer.
+    /// In a process that keeps pipes, a pipe looked at (to tell what it holds) is read whole once: every later look
+    /// and read of its path gets the same bytes, its size is theirs, and `open` (whose readers seek) refuses it
+    /// rather than wait for a writer.
     #[cfg(unix)]
     #[test]
     fn a_pipe_looked_at_reads_as_a_file_would() {
+        keep_pipes();
         let dir = tempfile::tempdir().expect("temporary directory");
         let fifo = dir.path().join("fifo.tch");
         let writer = fifo_writer(&fifo, b"TINCULL\xff and the rest");

@@ -6,7 +6,7 @@
 //! postcard varints, so a PVS of a few hundred ranges takes a few hundred bytes. This crate encodes and decodes; the
 //! writer is the caller's (tincull's is the `outfile` crate).
 
-use cull::file::{FrameError, unframe};
+use cull::file::{FrameError, decode, unframe};
 use serde::{Deserialize, Serialize};
 
 use crate::{CellPvs, PvsError, PvsParams, ViewCell};
@@ -121,7 +121,7 @@ impl PvsFile {
         if version != FORMAT_VERSION {
             return bad(format!("format version {version}, this build reads {FORMAT_VERSION}"));
         }
-        let file: PvsFile = postcard::from_bytes(payload).map_err(|e| PvsError::BadFile(e.to_string()))?;
+        let file: PvsFile = decode(payload).map_err(PvsError::BadFile)?;
         for (i, c) in file.cells.iter().enumerate() {
             if c.range_deltas.len() % 2 != 0 || c.ranges().iter().any(|r| r[1] > file.triangles) {
                 return bad(format!("cell {i} has ranges beyond the {} triangles", file.triangles));
@@ -164,6 +164,12 @@ mod tests {
         bad[last] ^= 1;
         assert!(PvsFile::from_bytes(&bad).is_err());
         assert!(PvsFile::from_bytes(&bytes[..10]).is_err());
+        // Bytes left inside the payload (framed with a matching checksum) are refused too.
+        let mut payload = bytes[cull::file::HEADER_LEN..].to_vec();
+        payload.push(0);
+        let padded = cull::file::frame(&MAGIC, FORMAT_VERSION, &payload);
+        let e = PvsFile::from_bytes(&padded).expect_err("a byte left over");
+        assert!(e.to_string().contains("1 unexpected bytes"), "{e}");
         let short = PvsFile { triangles: 100, ..file };
         assert!(PvsFile::from_bytes(&short.to_bytes().expect("encodes")).is_err());
     }

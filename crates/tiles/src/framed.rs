@@ -37,7 +37,7 @@ pub(crate) fn decode<T: DeserializeOwned>(
     if found != version {
         return Err(bad(format!("{what} version {found} is not {version}")));
     }
-    postcard::from_bytes(payload).map_err(|e| bad(format!("malformed {what}: {e}")))
+    cull::file::decode(payload).map_err(|e| bad(format!("malformed {what}: {e}")))
 }
 
 /// Reads the file at `path` whole.
