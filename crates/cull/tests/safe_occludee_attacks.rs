@@ -6,7 +6,7 @@ use std::f64::consts::TAU;
 
 mod common;
 
-use common::{grid_tin, notch, random_tin_at, spatial, splitmix};
+use common::{grid_tin, notch, random_tin_at, spatial_order, splitmix};
 use cull::{BuildInfo, Camera, Hierarchy, Mesh, Node, SafeCuller, SafeParams};
 use glam::DVec3;
 use tin::Tin;
@@ -92,20 +92,6 @@ fn hierarchy_with_order(tin: &Tin, order: &[u32], leaf: usize, orphans: usize, m
     };
     h.check_invariants().expect("a valid test hierarchy");
     h
-}
-
-/// The spatial order of `tin`'s triangles.
-fn spatial_order(tin: &Tin) -> Vec<u32> {
-    let nt = tin.num_triangles();
-    let centroids: Vec<[f64; 2]> = (0..nt)
-        .map(|t| {
-            let c = tin.corners(t);
-            [(c[0].x + c[1].x + c[2].x) / 3.0, (c[0].y + c[1].y + c[2].y) / 3.0]
-        })
-        .collect();
-    let mut order: Vec<u32> = (0..nt as u32).collect();
-    spatial(&mut order, &centroids);
-    order
 }
 
 /// A shuffled order (patches become scattered: circles overlap, children's circles leave their parents').

@@ -8,6 +8,19 @@ use cull::{BuildInfo, Hierarchy, Mesh, Node};
 use glam::DVec3;
 use tin::{DedupePolicy, Tin, triangulate};
 
+/// `tin`'s triangles in the spatial order of their centroids ([`spatial`]).
+pub fn spatial_order(tin: &Tin) -> Vec<u32> {
+    let centroids: Vec<[f64; 2]> = (0..tin.num_triangles())
+        .map(|t| {
+            let c = tin.corners(t);
+            [(c[0].x + c[1].x + c[2].x) / 3.0, (c[0].y + c[1].y + c[2].y) / 3.0]
+        })
+        .collect();
+    let mut order: Vec<u32> = (0..tin.num_triangles() as u32).collect();
+    spatial(&mut order, &centroids);
+    order
+}
+
 /// Orders triangles so that halving is a spatial split (the build's layout, written independently here).
 pub fn spatial(tris: &mut [u32], c: &[[f64; 2]]) {
     if tris.len() <= 2 {
@@ -36,14 +49,7 @@ pub fn spatial(tris: &mut [u32], c: &[[f64; 2]]) {
 /// order (`order[i]` is the TIN triangle drawn `i`-th).
 pub fn hierarchy_of(tin: &Tin, leaf: usize, orphans: usize) -> (Hierarchy, Vec<u32>) {
     let nt = tin.num_triangles();
-    let centroids: Vec<[f64; 2]> = (0..nt)
-        .map(|t| {
-            let c = tin.corners(t);
-            [(c[0].x + c[1].x + c[2].x) / 3.0, (c[0].y + c[1].y + c[2].y) / 3.0]
-        })
-        .collect();
-    let mut order: Vec<u32> = (0..nt as u32).collect();
-    spatial(&mut order, &centroids);
+    let order = spatial_order(tin);
     let orphans = orphans.min(nt);
     let grouped = (nt - orphans) as u32;
     let origin = tin.origin().to_array();
