@@ -325,7 +325,9 @@ fn path_of(s: &CStr) -> Result<&Path, Failure> {
 
 /// Loads the `.tch` file at `path` (NUL-terminated: any bytes on Unix, UTF-8 elsewhere) and prepares a culler of
 /// method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`]; on failure
-/// `*out` is set to NULL.
+/// `*out` is set to NULL. The file is read in this call, whole once its first 8 bytes are the magic number (a file of
+/// another kind is refused by them): a named pipe is read afresh at every call, and the call waits for its writer,
+/// as opening a pipe does.
 ///
 /// # Safety
 /// `path` is a NUL-terminated string and `out` a writable pointer, or NULL (then `TC_ERR_NULL`).

@@ -211,7 +211,8 @@ impl Hierarchy {
     /// [`Hierarchy::to_bytes`] gives what to write.
     pub fn load(path: impl AsRef<Path>) -> Result<Hierarchy, HierarchyError> {
         let path = path.as_ref();
-        let bytes = infile::read(path).map_err(|source| HierarchyError::Io {
+        // A file of another kind is refused by its first bytes, not read whole first.
+        let bytes = infile::read_if(path, MAGIC.len(), |head| head == MAGIC).map_err(|source| HierarchyError::Io {
             path: path.to_path_buf(),
             source,
         })?;

@@ -92,6 +92,22 @@
 //! projected `u`, bit for bit); the ids are grid ids (`PointId::grid`), never equal to a mesh vertex's, since the safe
 //! culler writes these segments into the horizon of its patches' edges.
 //!
+//! **Bounded preparation.** A grid line meets each triangle it crosses in a chord, cut into one piece per cell edge
+//! it spans: a chord's pieces are one plus the grid corners `r` with `t_0 < r ≤ t_1` (by the cell index of each end).
+//! Over a height field the chords of a line overlap only at their ends, except that a mesh edge lying on the line is
+//! the chord of both triangles at it: a corner lies inside at most two chords and is the upper end of at most two
+//! more, so a line's pieces are at most its chords plus 4 per corner (chords that only touch the line at a vertex
+//! span no corner). A line whose pieces pass its chords plus `PIECES_PER_CORNER` = 8 per corner (room for computed
+//! ends within rounding of a corner) is not over a height field — its triangles overlap in x,y, as a `.tch` from
+//! elsewhere may hold (the crate documentation) —, or its chords crowd within rounding of a corner: it is given up,
+//! and its cell edges get no occluder. Fewer occluders cull less, never wrongly: (i) and (ii) are about each
+//! occluder written. So the pieces kept are at most the chords plus 8 per corner and the work is linear in the
+//! (triangle, grid line) pairs, where 16 copies of one triangle spanning a 256 × 256 grid (a 234-byte file) asked
+//! for 2 million pieces, 107 MB. A cull is bounded too: it looks at each cell edge at most 9 times, queueing every
+//! edge at once when the drawn nodes' boxes would make it look more (overlapping boxes each spanning the grid did:
+//! 4.4 s a cull with 16,385 leaves); more occluders pending than the drawn nodes ask for cull no visible triangle,
+//! by the same argument.
+//!
 //! **(ii) holds, rounding included.** `d_min` is multiplied by `1 − 1e-12` and `d_max` by `1 + 1e-12`, far beyond
 //! the few-ulp errors of a square root of a sum of squares of correctly rounded differences.
 //!
@@ -117,6 +133,13 @@ pub const PIECES: usize = 1;
 
 /// Relative rounding bound of the profile computations (see the module documentation).
 const ERR: f64 = 1e-14;
+
+/// Times the grid's cell edges that one cull may look at before it queues them all ([`CellEdges::queue_cells`]).
+const LOOKS_PER_EDGE: usize = 8;
+
+/// Chord pieces allowed per grid corner on a grid line beyond one per chord, before the line is given up (see the
+/// module documentation, "Bounded preparation").
+const PIECES_PER_CORNER: usize = 8;
 
 /// A node's box and links.
 #[derive(Clone, Copy, Debug)]
@@ -212,6 +235,10 @@ pub(crate) struct EdgeQueue {
     pending: BinaryHeap<Reverse<(u64, u32)>>,
     stamp: Vec<u32>,
     round: u32,
+    /// Cell edges looked at this cull, queued before or not (see [`CellEdges::queue_cells`]).
+    looked_at: usize,
+    /// Whether every cell edge was queued this cull.
+    all: bool,
 }
 
 impl EdgeQueue {
@@ -223,6 +250,8 @@ impl EdgeQueue {
             self.round = 0;
         }
         self.round += 1;
+        self.looked_at = 0;
+        self.all = false;
     }
 }
 
@@ -279,11 +308,24 @@ impl CellEdges {
 
     /// Makes the occluders on the edges of the cells `x.0 ..= x.1` by `y.0 ..= y.1` pending (each edge once a cull),
     /// at most `room` of them (decreased by those queued).
+    ///
+    /// The edges of a block are looked at one by one, those queued before included, so drawn nodes whose boxes
+    /// overlap would look at the same edges again and again (16,385 leaves whose boxes each span a 256 × 256 grid: 2
+    /// billion looks, 4.4 s a cull). Once the looks of a cull would exceed [`LOOKS_PER_EDGE`] times the grid's edges,
+    /// every edge is queued at once instead (at most `room`), and later calls of the cull return at once: a cull
+    /// looks at most `LOOKS_PER_EDGE + 1` times at each edge. Queueing more occluders than the drawn nodes ask for
+    /// culls no visible triangle: the proof (module documentation) asks only that an occluder lie on or below the
+    /// terrain and be nearer than the node it hides, whichever node made it pending.
     fn queue_cells(&self, x: (usize, usize), y: (usize, usize), eye: [f64; 3], q: &mut EdgeQueue, room: &mut usize) {
-        if *room == 0 {
+        if *room == 0 || q.all {
             return;
         }
         let g = &self.grid;
+        let (w, h) = (x.1 - x.0 + 1, y.1 - y.0 + 1);
+        let looks = (w + 1) * h + (h + 1) * w;
+        let every = q.looked_at + looks > LOOKS_PER_EDGE * g.edges();
+        q.looked_at += if every { g.edges() } else { looks };
+        q.all = every;
         // Whether there is room left after queueing edge `e`'s occluders.
         let mut visit = |e: usize| {
             if q.stamp[e] != q.round {
@@ -301,6 +343,14 @@ impl CellEdges {
             }
             *room > 0
         };
+        if every {
+            for e in 0..g.edges() {
+                if !visit(e) {
+                    return;
+                }
+            }
+            return;
+        }
         // Vertical lines x = X_i (axis 0) with segments j along y; horizontal lines y = Y_j (axis 1).
         for i in x.0..=x.1 + 1 {
             for j in y.0..=y.1 {
@@ -617,6 +667,10 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
     let n = grid.n;
     let mut chords: Vec<Vec<(ChordEnd, ChordEnd)>> = vec![Vec::new(); grid.edges()];
     let mut points: Vec<ChordEnd> = Vec::with_capacity(6);
+    // Per grid line (`axis * (n + 1) + i`): chords met and pieces made so far, and whether it was given up.
+    let mut met = vec![0usize; 2 * (n + 1)];
+    let mut pieces = vec![0usize; 2 * (n + 1)];
+    let mut given_up = vec![false; 2 * (n + 1)];
     for tri in &h.mesh.triangles {
         let p = tri.map(|v| pos[v as usize]);
         let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
@@ -631,7 +685,8 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
             let last = ((((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize).saturating_add(1)).min(n);
             for i in first..=last {
                 let x = grid.line(axis, i);
-                if !(lo <= x && x <= hi) {
+                let line = axis * (n + 1) + i;
+                if !(lo <= x && x <= hi) || given_up[line] {
                     continue;
                 }
                 points.clear();
@@ -687,6 +742,18 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                     continue;
                 }
                 let (j0, j1) = grid.cells(o, c0.b.t, c1.b.t);
+                // The pieces of a line stay within its chords plus `PIECES_PER_CORNER` per grid corner on it, as they
+                // do over a height field (module documentation); a line past that bound is given up, occluders and
+                // all, so that the work and memory stay linear in the chords.
+                met[line] += 1;
+                pieces[line] += j1 - j0 + 1;
+                if pieces[line] > met[line] + PIECES_PER_CORNER * (n + 1) {
+                    given_up[line] = true;
+                    for j in 0..n {
+                        chords[grid.edge(axis, i, j)] = Vec::new();
+                    }
+                    continue;
+                }
                 for j in j0..=j1 {
                     let (r0, r1) = (grid.line(o, j), grid.line(o, j + 1));
                     let clip = |r: f64, end: ChordEnd, ix: usize, iy: usize| -> Option<ChordEnd> {
@@ -990,5 +1057,119 @@ mod tests {
             }
         }
         assert!(!ids.is_empty());
+    }
+
+    /// Over a height field no grid line is given up, at the finest grid too (mesh edges on every 64th grid line,
+    /// vertices at grid corners): every cell edge has its occluder. Over 16 copies of each half of the square (a mesh
+    /// that is no height field; 16 copies of one triangle in a 234-byte `.tch` asked for 107 MB of chord pieces) every
+    /// grid line meets 32 chords of 258 pieces together, past the bound of 32 + 8 per corner: every line is given up
+    /// and nothing is kept.
+    #[test]
+    fn lines_are_given_up_only_where_triangles_overlap() {
+        let mut h = hierarchy(|x, y| 0.3 * x + (y * 0.2).sin());
+        h.build.grouping = Grouping::Quadtree {
+            built_depth: 8,
+            stored_depth: 8,
+        };
+        let c = LloydEgbertCuller::new(&h, 64);
+        assert_eq!(c.grid_cells(), 256);
+        assert_eq!(c.occluder_count(), 2 * 256 * 257 * PIECES);
+        // Corners 0, 4, 24 and 20 of the 5 × 5 grid of vertices: (0, 0), (40, 0), (40, 40), (0, 40).
+        h.mesh.triangles = [[0, 4, 24], [0, 24, 20]].repeat(16);
+        h.nodes[0].triangles = [0, 32];
+        h.always_visible = [32, 32];
+        h.check_invariants().expect("a valid structure");
+        let c = LloydEgbertCuller::new(&h, 64);
+        assert_eq!(c.occluder_count(), 0);
+    }
+
+    /// Drawn leaves whose boxes each span the grid (every leaf holds two triangles at opposite ends of the terrain):
+    /// a cull looks at each cell edge at most `LOOKS_PER_EDGE + 1` times, having queued every edge once the looks
+    /// passed the limit (they were 2,000 a leaf, a million a cull here; 2 billion with 16,385 leaves over a 256 × 256
+    /// grid), and culls no triangle that the exact checker sees.
+    #[test]
+    fn leaves_spanning_the_grid_look_at_each_cell_edge_a_bounded_number_of_times() {
+        use glam::DVec3;
+        let n = 33;
+        let mut pts = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (20.0 * i as f64, 20.0 * j as f64);
+                let z = 25.0 * (x / 70.0).sin() * (y / 90.0).cos() + 0.02 * x;
+                pts.push(DVec3::new(x + 500_000.0, y + 4_000_000.0, z + 300.0));
+            }
+        }
+        let (tin, _) = tin::triangulate(&pts, tin::DedupePolicy::Reject).expect("a grid");
+        let nt = tin.num_triangles();
+        // Triangles by the sum of their centroid's coordinates; leaf k holds the k-th and the k-th from the end.
+        let sum = |t: usize| tin.corners(t).iter().map(|p| p.x + p.y).sum::<f64>();
+        let mut by_sum: Vec<usize> = (0..nt).collect();
+        by_sum.sort_by(|&a, &b| sum(a).total_cmp(&sum(b)).then(a.cmp(&b)));
+        let order: Vec<usize> = (0..nt / 2).flat_map(|k| [by_sum[k], by_sum[nt - 1 - k]]).collect();
+        let nodes: Vec<Node> = (0..nt / 2)
+            .map(|k| Node {
+                // The culler takes the box of the node's vertices, not its circle.
+                centre: [0.0; 2],
+                radius: 1.0,
+                children: vec![],
+                triangles: [2 * k as u32, 2 * k as u32 + 2],
+                level: 0,
+                regions: vec![],
+            })
+            .collect();
+        let grouped = 2 * (nt / 2) as u32;
+        let h = Hierarchy {
+            sectors: 16,
+            origin: [0.0; 3],
+            roots: (0..nodes.len() as u32).collect(),
+            nodes,
+            always_visible: [grouped, nt as u32],
+            mesh: Mesh {
+                positions: tin.positions().iter().map(|p| p.to_array()).collect(),
+                triangles: order
+                    .iter()
+                    .chain(&by_sum[grouped as usize..])
+                    .map(|&t| tin.triangles()[t])
+                    .collect(),
+            },
+            build: BuildInfo::default(),
+        };
+        h.check_invariants().expect("a valid hierarchy");
+        let culler = LloydEgbertCuller::new(&h, 256);
+        let edges = culler.cells.grid.edges();
+        assert_eq!(culler.grid_cells(), 32, "1,024 leaves: a 32 × 32 grid");
+        let truth = truth::GroundTruth::new(&tin);
+        let mut list = DrawList::default();
+        let mut culled = 0;
+        for (k, [x, y]) in [[30.0, 30.0], [330.0, 310.0], [610.0, 50.0], [150.0, 600.0]]
+            .into_iter()
+            .enumerate()
+        {
+            let at = glam::DVec2::new(x + 500_000.0, y + 4_000_000.0);
+            let ground = truth::ground_heights(&h.mesh.positions, &h.mesh.triangles, &[at])[0]
+                .expect("the eye is over the terrain");
+            let eye = at.extend(ground + 2.0);
+            culler.cull_into(&Camera::all_around(eye.to_array()), &mut list);
+            let q = &list.le_scratch.edges;
+            assert!(
+                q.all,
+                "eye {k}: the drawn leaves' boxes ask for every edge many times over"
+            );
+            assert!(
+                q.looked_at <= (LOOKS_PER_EDGE + 1) * edges,
+                "eye {k}: {} looks",
+                q.looked_at
+            );
+            let seen = truth.visible_triangles(eye);
+            let mut drawn = vec![false; nt];
+            for &[s, e] in &list.ranges {
+                drawn[s as usize..e as usize].iter_mut().for_each(|d| *d = true);
+            }
+            for (i, &t) in order.iter().chain(&by_sum[grouped as usize..]).enumerate() {
+                assert!(drawn[i] || !seen[t], "eye {k}: triangle {t} is visible but culled");
+                culled += usize::from(!drawn[i]);
+            }
+        }
+        assert!(culled > 0, "the leaves hidden from the valleys are culled");
     }
 }

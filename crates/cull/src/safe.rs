@@ -63,17 +63,18 @@
 //! With [`SafeParams::coarse_columns`] `n > 0`, a visible inner node (not containing the camera) whose circle is small
 //! on screen (`radius · w < n · distance`, `w` the columns per face: about `n` columns) is drawn whole instead of
 //! refined, and queued as an occluder like a drawn patch (from its greatest distance `d_max`). Its occluders are its
-//! *crests*, computed once when the culler is prepared (for nodes of at most 2,048 triangles): for x and for y, the
-//! bottleneck path of its TIN edges between its vertices in the first and the last quarter of its extent, stored as
-//! the path's two end vertices `a`, `b` and the least height `z*` of its vertices (edges taken by decreasing lower
-//! end into a union-find until one component holds a vertex of each quarter). The path is a connected set of TIN
-//! edges at heights `≥ z*` inside the node's circle; lowered by `μ`, it is a chain in the sense of
+//! *crests*, computed once when the culler is prepared (for nodes of at most 2,048 triangles, once a range, within a
+//! bound on the triangles scanned past which a node gets none and writes nothing: `CREST_SCANS_PER_TRIANGLE`): for x
+//! and for y, the bottleneck path of its TIN edges between its vertices in the first and the last quarter of its
+//! extent, stored as the path's two end vertices `a`, `b` and the least height `z*` of its vertices (edges taken by
+//! decreasing lower end into a union-find until one component holds a vertex of each quarter). The path is a connected
+//! set of TIN edges at heights `≥ z*` inside the node's circle; lowered by `μ`, it is a chain in the sense of
 //! [`crate::horizon`] in every face `k` whose half-plane `f > 0` holds the whole circle (`m_f − r > 0`, `m` the
-//! circle's centre less the camera): its `u` fill `[u_a, u_b]`, and each of its points has `f` in
-//! `[m_f − r, m_f + r]` and height `≥ z* − μ`, so `v ≥ (z* − μ − c.z) / (m_f + r)` when that numerator is `≥ 0`, else
-//! `≥ (z* − μ − c.z) / (m_f − r)`; this bound (the radius grown for the rounding of `m`, `f` moved outward and the
-//! quotient lowered by `REL`, as for disks) is written as a flat cover over `[u_a, u_b]`. Drawing a node whole draws
-//! a superset of what refining it would; the crests only raise the horizon by what the theorem allows.
+//! circle's centre less the camera): its `u` fill `[u_a, u_b]`, and each of its points has `f` in `[m_f − r, m_f + r]`
+//! and height `≥ z* − μ`, so `v ≥ (z* − μ − c.z) / (m_f + r)` when that numerator is `≥ 0`, else `≥ (z* − μ − c.z) /
+//! (m_f − r)`; this bound (the radius grown for the rounding of `m`, `f` moved outward and the quotient lowered by
+//! `REL`, as for disks) is written as a flat cover over `[u_a, u_b]`. Drawing a node whole draws a superset of what
+//! refining it would; the crests only raise the horizon by what the theorem allows.
 //!
 //! ## The work budget
 //!
@@ -134,7 +135,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::collections::{BinaryHeap, HashMap};
 
 use crate::culler::{Camera, CullStats, DrawList};
 use crate::hierarchy::Hierarchy;
@@ -273,6 +274,13 @@ struct Crest {
 
 /// Largest node (triangles) given crests: larger ones are never small enough on screen to be drawn whole.
 const CREST_MAX: u32 = 2048;
+
+/// Triangles scanned for crests, per triangle of the mesh, beyond which nodes get no crests. Nodes of one range share
+/// theirs, and the hierarchies `tincull build` makes scan 5 to 7 (crystal and quadtree, 10k to 200k triangles), but a
+/// file may nest ranges that differ by a triangle, each scanned whole: a chain of 5,000 nodes over 2,048 triangles
+/// (143 KB) took 2.4 s to prepare. A node without crests draws whole as before and writes no occluder: it culls
+/// less, never wrongly.
+const CREST_SCANS_PER_TRIANGLE: u64 = 32;
 
 /// The most descendants of a hierarchy node looked at for its bounding circle (see
 /// [`SafeCuller::bounds_from_descendants`]): the crystal hierarchies of 10k and 100k vertices need at most 15.
@@ -583,18 +591,32 @@ impl SafeCuller {
         }
         c.roots = roots;
         if c.params.coarse_columns > 0 {
+            // Crests are a function of the triangle range: nodes of one range share them. The triangles scanned are
+            // bounded (see `CREST_SCANS_PER_TRIANGLE`); nodes past the bound get none.
+            let mut by_range: HashMap<[u32; 2], [u32; 2]> = HashMap::new();
+            let mut room = CREST_SCANS_PER_TRIANGLE * h.mesh.triangles.len() as u64 + u64::from(CREST_MAX);
             for id in 0..c.nodes.len() {
                 let node = c.nodes[id];
                 let [s, e] = node.triangles;
-                if node.kids[0] < node.kids[1] && e - s <= CREST_MAX {
-                    let start = c.crests.len() as u32;
-                    crests_of(
-                        &h.mesh.triangles[node.triangles[0] as usize..node.triangles[1] as usize],
-                        &h.mesh.positions,
-                        &mut c.crests,
-                    );
-                    c.nodes[id].crests = [start, c.crests.len() as u32];
+                if !(node.kids[0] < node.kids[1] && e - s <= CREST_MAX) {
+                    continue;
                 }
+                if let Some(&crests) = by_range.get(&[s, e]) {
+                    c.nodes[id].crests = crests;
+                    continue;
+                }
+                let Some(left) = room.checked_sub(u64::from(e - s)) else {
+                    continue;
+                };
+                room = left;
+                let start = c.crests.len() as u32;
+                crests_of(
+                    &h.mesh.triangles[s as usize..e as usize],
+                    &h.mesh.positions,
+                    &mut c.crests,
+                );
+                c.nodes[id].crests = [start, c.crests.len() as u32];
+                by_range.insert([s, e], c.nodes[id].crests);
             }
         }
         // Every node is tested at most once, every patch edge and every crest written at most once, and a patch has
@@ -1309,15 +1331,11 @@ mod tests {
         );
     }
 
-    /// A hierarchy as deep as it has nodes (the chain of a crafted file, which made preparing it quadratic: 80,000
-    /// nodes took 51 s): a caterpillar, each node a leaf of one triangle beside the node over the rest, under a
-    /// chain of nodes of one child each. Every vertex lies on one circle, so the search for the farthest vertex
-    /// prunes nothing. Every node's circle still holds each of its vertices, and a node whose subtree the search
-    /// takes whole has the circle of a scan of every vertex, bit for bit.
-    #[test]
-    fn circles_of_deep_hierarchies_hold_every_vertex() {
+    /// A hierarchy as deep as it has nodes: a caterpillar, each node a leaf of one triangle beside the node over the
+    /// rest, under a chain of `chain` nodes of one child each. The `leaves` triangles make a fan whose vertices all
+    /// lie on one circle.
+    fn caterpillar(leaves: u32, chain: u32) -> Hierarchy {
         use crate::hierarchy::{Mesh, Node};
-        let (leaves, chain) = (600u32, 400u32);
         let angle = |i: u32| f64::from(i) * std::f64::consts::TAU / f64::from(leaves + 1);
         let mut positions: Vec<[f64; 3]> = (0..=leaves)
             .map(|i| [3.0 + 100.0 * angle(i).cos(), -2.0 + 100.0 * angle(i).sin(), 1.0])
@@ -1353,6 +1371,18 @@ mod tests {
             build: Default::default(),
         };
         h.check_invariants().expect("a valid hierarchy");
+        h
+    }
+
+    /// A hierarchy as deep as it has nodes (the chain of a crafted file, which made preparing it quadratic: 80,000
+    /// nodes took 51 s): the [`caterpillar`] of 600 leaves under a chain of 400 nodes. Every vertex lies on one
+    /// circle, so the search for the farthest vertex prunes nothing. Every node's circle still holds each of its
+    /// vertices, and a node whose subtree the search takes whole has the circle of a scan of every vertex, bit for
+    /// bit.
+    #[test]
+    fn circles_of_deep_hierarchies_hold_every_vertex() {
+        let leaves = 600u32;
+        let h = caterpillar(leaves, 400);
         let c = SafeCuller::new(&h, SafeParams::default());
         let mut exact = 0;
         for (i, n) in h.nodes.iter().enumerate() {
@@ -1381,6 +1411,46 @@ mod tests {
         // The root's search stopped at the limit (one without it takes every node below every node: quadratic).
         let root = h.roots[0] as usize;
         assert!(c.nodes[root].radius > c.bounds(&h, [0, leaves], &Extent::of(&h, [0, leaves])).radius);
+    }
+
+    /// Crests on the [`caterpillar`] of 600 leaves under a chain of 400 nodes (a crafted file; a chain of 5,000 nodes
+    /// over 2,048 triangles took 2.4 s to prepare with coarse nodes, each node scanning its range anew): nodes of one
+    /// range share one computation, and the ranges scanned stay within `CREST_SCANS_PER_TRIANGLE` per triangle (the
+    /// caterpillar's nested ranges alone would scan 180,000 triangles).
+    #[test]
+    fn crests_are_computed_once_a_range_and_within_their_bound() {
+        let leaves = 600u32;
+        let h = caterpillar(leaves, 400);
+        let c = SafeCuller::new(
+            &h,
+            SafeParams {
+                coarse_columns: 8,
+                ..SafeParams::default()
+            },
+        );
+        let top = &c.nodes[(2 * leaves - 1) as usize];
+        assert!(top.crests[0] < top.crests[1], "the node over every leaf has crests");
+        for k in 0..400 {
+            assert_eq!(
+                c.nodes[(2 * leaves - 1 + k) as usize].crests,
+                top.crests,
+                "chain node {k}"
+            );
+        }
+        let mut computed: HashMap<[u32; 2], u32> = HashMap::new();
+        for n in &c.nodes {
+            if n.crests[0] < n.crests[1] {
+                computed.insert(n.crests, n.triangles[1] - n.triangles[0]);
+            }
+        }
+        let scanned: u64 = computed.values().map(|&t| u64::from(t)).sum();
+        let bound = CREST_SCANS_PER_TRIANGLE * u64::from(leaves) + u64::from(CREST_MAX);
+        assert!(scanned <= bound, "{scanned} triangles scanned, more than {bound}");
+        assert!(
+            computed.len() > 10,
+            "nodes within the bound have crests: {}",
+            computed.len()
+        );
     }
 
     /// Whether the first and the last quarter of the extent along `axis` of the vertices `tris` use are joined by a

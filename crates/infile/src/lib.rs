@@ -95,6 +95,26 @@ pub fn read(path: &Path) -> io::Result<Vec<u8>> {
     }
 }
 
+/// Reads the whole of `path` ([`read`]) when its first `n` bytes pass `wanted`, and else only those bytes (all of
+/// them when the file is shorter): a reader that checks a magic number does not read a file of another kind whole to
+/// refuse it. A pipe or a terminal is read whole all the same in a process that keeps pipes ([`keep_pipes`]), whose
+/// later reads want its bytes; otherwise the rest of a refused pipe is left unread.
+pub fn read_if(path: &Path, n: usize, wanted: impl FnOnce(&[u8]) -> bool) -> io::Result<Vec<u8>> {
+    if let Some(bytes) = kept(path) {
+        return Ok(bytes.to_vec());
+    }
+    let mut file = open(path)?;
+    if KEEPING.load(Ordering::SeqCst) && !file.metadata()?.is_file() {
+        return whole(file, path);
+    }
+    let mut bytes = Vec::new();
+    (&mut file).take(n as u64).read_to_end(&mut bytes)?;
+    if wanted(&bytes) {
+        file.read_to_end(&mut bytes)?;
+    }
+    Ok(bytes)
+}
+
 /// Reads the whole of `path` as UTF-8 text ([`read`]; text that is not UTF-8 is an [`io::ErrorKind::InvalidData`]
 /// error).
 pub fn read_to_string(path: &Path) -> io::Result<String> {

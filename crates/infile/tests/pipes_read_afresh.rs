@@ -44,3 +44,37 @@ fn every_read_of_a_pipe_reads_it_afresh_unless_kept() {
     assert_eq!(infile::read(&fifo).expect("read the file"), b"a regular file now");
     assert_eq!(infile::size(&fifo).expect("its size"), 18);
 }
+
+/// `read_if` reads a file of another kind no further than the bytes it was judged by (a reader checking a magic
+/// number refused a 1 MB file only once it had read it whole), and reads a wanted file or pipe whole.
+#[test]
+fn read_if_stops_at_bytes_not_wanted() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let big = dir.path().join("big.bin");
+    let mut bytes = vec![7u8; 1 << 20];
+    std::fs::write(&big, &bytes).expect("write a file");
+    assert_eq!(
+        infile::read_if(&big, 8, |h| h == b"TINCULL\x1a").expect("read"),
+        vec![7u8; 8]
+    );
+    assert_eq!(infile::read_if(&big, 8, |h| h == [7u8; 8]).expect("read"), bytes);
+    bytes[..8].copy_from_slice(b"TINCULL\x1a");
+    std::fs::write(&big, &bytes).expect("write a file");
+    assert_eq!(infile::read_if(&big, 8, |h| h == b"TINCULL\x1a").expect("read"), bytes);
+    let short = dir.path().join("short.bin");
+    std::fs::write(&short, b"TIN").expect("write a file");
+    assert_eq!(infile::read_if(&short, 8, |h| h.len() == 8).expect("read"), b"TIN");
+    let fifo = dir.path().join("fifo");
+    let writer = feed(&fifo, b"TINCULL\x1a and the rest");
+    assert_eq!(
+        infile::read_if(&fifo, 8, |h| h == b"TINCULL\x1a").expect("read"),
+        b"TINCULL\x1a and the rest"
+    );
+    writer.join().expect("writer");
+    let writer = feed(&fifo, b"NOTMAGIC");
+    assert_eq!(
+        infile::read_if(&fifo, 8, |h| h == b"TINCULL\x1a").expect("read"),
+        b"NOTMAGIC"
+    );
+    writer.join().expect("writer");
+}
