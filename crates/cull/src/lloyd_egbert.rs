@@ -101,12 +101,14 @@
 //! ends within rounding of a corner) is not over a height field — its triangles overlap in x,y, as a `.tch` from
 //! elsewhere may hold (the crate documentation) —, or its chords crowd within rounding of a corner: it is given up,
 //! and its cell edges get no occluder. Fewer occluders cull less, never wrongly: (i) and (ii) are about each
-//! occluder written. So the pieces kept are at most the chords plus 8 per corner and the work is linear in the
-//! (triangle, grid line) pairs, where 16 copies of one triangle spanning a 256 × 256 grid (a 234-byte file) asked
-//! for 2 million pieces, 107 MB. A cull is bounded too: it looks at each cell edge at most 9 times, queueing every
-//! edge at once when the drawn nodes' boxes would make it look more (overlapping boxes each spanning the grid did:
-//! 4.4 s a cull with 16,385 leaves); more occluders pending than the drawn nodes ask for cull no visible triangle,
-//! by the same argument.
+//! occluder written. So the pieces kept are at most the chords plus 8 per corner of each line (at the finest grid,
+//! about a million pieces, 104 MB, where two triangles covering the grid's square take 40 MB), and the work is linear
+//! in the (triangle, grid line) pairs; 64 copies of one triangle spanning a 256 × 256 grid (a 378-byte file) asked for
+//! 8 million pieces, 430 MB. The pieces are kept in one list sorted by cell edge once all are made (a list per edge
+//! held room for four pieces at each of the 131,584 edges: 65 MB for the two triangles). A cull is bounded too: it
+//! looks at each cell edge at most 9 times, queueing every edge at once when the drawn nodes' boxes would make it look
+//! more (overlapping boxes each spanning the grid did: 4.4 s a cull with 16,385 leaves); more occluders pending than
+//! the drawn nodes ask for cull no visible triangle, by the same argument.
 //!
 //! **(ii) holds, rounding included.** `d_min` is multiplied by `1 − 1e-12` and `d_max` by `1 + 1e-12`, far beyond
 //! the few-ulp errors of a square root of a sum of squares of correctly rounded differences.
@@ -665,12 +667,18 @@ fn box_top_hidden(horizon: &Horizon, node: &BoxNode, eye: [f64; 3], mu: f64) -> 
 fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
     let pos = &h.mesh.positions;
     let n = grid.n;
-    let mut chords: Vec<Vec<(ChordEnd, ChordEnd)>> = vec![Vec::new(); grid.edges()];
+    // Every chord piece as (cell edge, order made, piece): one list, sorted by edge once all are made (a list per
+    // edge held four pieces' room for each of 131,584 edges at the finest grid, 50 MB).
+    let mut chords: Vec<(u32, u32, ChordEnd, ChordEnd)> = Vec::new();
     let mut points: Vec<ChordEnd> = Vec::with_capacity(6);
     // Per grid line (`axis * (n + 1) + i`): chords met and pieces made so far, and whether it was given up.
     let mut met = vec![0usize; 2 * (n + 1)];
     let mut pieces = vec![0usize; 2 * (n + 1)];
     let mut given_up = vec![false; 2 * (n + 1)];
+    let line_of = |e: usize| {
+        let axis = usize::from(e >= n * (n + 1));
+        axis * (n + 1) + (e - axis * n * (n + 1)) / n
+    };
     for tri in &h.mesh.triangles {
         let p = tri.map(|v| pos[v as usize]);
         let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
@@ -749,9 +757,6 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                 pieces[line] += j1 - j0 + 1;
                 if pieces[line] > met[line] + PIECES_PER_CORNER * (n + 1) {
                     given_up[line] = true;
-                    for j in 0..n {
-                        chords[grid.edge(axis, i, j)] = Vec::new();
-                    }
                     continue;
                 }
                 for j in j0..=j1 {
@@ -796,16 +801,28 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                     if start.b.t > end.b.t {
                         continue;
                     }
-                    chords[grid.edge(axis, i, j)].push((start, end));
+                    chords.push((grid.edge(axis, i, j) as u32, chords.len() as u32, start, end));
                 }
             }
         }
     }
+    // A cell edge's pieces by their start, then their end, then the order they were made in.
+    chords.retain(|c| !given_up[line_of(c.0 as usize)]);
+    chords.sort_unstable_by(|a, b| {
+        (a.0.cmp(&b.0))
+            .then(a.2.b.t.total_cmp(&b.2.b.t))
+            .then(a.3.b.t.total_cmp(&b.3.b.t))
+            .then(a.1.cmp(&b.1))
+    });
     let mut out = Vec::new();
     let mut edge_start = Vec::with_capacity(grid.edges() + 1);
     let mut next_id = grid.corner(n, n);
-    for (e, list) in chords.iter_mut().enumerate() {
+    let mut rest = &chords[..];
+    for e in 0..grid.edges() {
         edge_start.push(out.len() as u32);
+        let here = rest.iter().take_while(|c| c.0 as usize == e).count();
+        let (list, after) = rest.split_at(here);
+        rest = after;
         if list.is_empty() {
             continue;
         }
@@ -818,11 +835,10 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
             (grid.line(1 - axis, jj), grid.corner(ix, iy))
         };
         let corners = [corner(j), corner(j + 1)];
-        list.sort_by(|a, b| a.0.b.t.total_cmp(&b.0.b.t).then(a.1.b.t.total_cmp(&b.1.b.t)));
         let mut run: Vec<Break> = Vec::new();
         let mut run_start: Option<ChordEnd> = None;
         let mut run_end: Option<ChordEnd> = None;
-        for &(s, t) in list.iter() {
+        for &(_, _, s, t) in list {
             let joins = match run_end {
                 None => false,
                 Some(re) => {

@@ -10,7 +10,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use cull::{
-    AnyCuller, Camera, CullMethod, Culler, DrawList, Hierarchy, Mesh, Node, SafeCuller, SafeParams, StoredRegion,
+    AnyCuller, Camera, CullMethod, Culler, DrawList, Grouping, Hierarchy, LloydEgbertCuller, Mesh, Node, SafeCuller,
+    SafeParams, StoredRegion,
 };
 
 /// Counts the bytes live and the most live since the last [`reset_peak`].
@@ -337,4 +338,47 @@ fn long_regions_cost_one_pass_per_cull() {
         eprintln!("long regions cull: {took:?}");
         // Measured: well under a millisecond (8 MB of regions).
     }
+}
+
+/// Regression: 64 copies of one triangle over a 1 km square, a quadtree of stored depth 8 (a file of a few hundred
+/// bytes, no height field): Lloyd & Egbert's preparation cut every grid line's 64 chords at each of the up to 256 grid
+/// corners they pass, 8 million pieces, 430 MB (16 copies: 107 MB). A line is now given up once its pieces pass its
+/// chords plus 8 a corner, so the pieces stay within about a million at this grid, whatever the file: a few times
+/// what two triangles covering the same square take (the grid's 131,584 cell edges each cut once).
+#[test]
+fn lloyd_egbert_prepares_overlapping_copies_in_bounded_memory() {
+    let _g = lock();
+    let square = |triangles: Vec<[u32; 3]>| {
+        let mesh = Mesh {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1000.0, 0.0, 10.0],
+                [0.0, 1000.0, 20.0],
+                [1000.0, 1000.0, 5.0],
+            ],
+            triangles,
+        };
+        let nt = mesh.triangles.len() as u32;
+        let mut h = hierarchy(mesh, vec![node(vec![], [0, nt], 0)], vec![0]);
+        h.build.grouping = Grouping::Quadtree {
+            built_depth: 8,
+            stored_depth: 8,
+        };
+        h
+    };
+    let (two, copies) = (square(vec![[0, 1, 2], [1, 3, 2]]), square(vec![[0, 1, 2]; 64]));
+    let (c, took, legit) = measure(|| LloydEgbertCuller::new(&two, 256));
+    eprintln!("two triangles: {took:?}, {} MB", legit / MB);
+    assert_eq!(c.occluder_count(), 2 * 256 * 257);
+    let file = copies.to_bytes().expect("encodes").len();
+    let (c, took, peak) = measure(|| LloydEgbertCuller::new(&copies, 256));
+    eprintln!("64 copies: {took:?}, {} MB, file {file} bytes", peak / MB);
+    assert_eq!(c.grid_cells(), 256);
+    // Measured: 40 MB for two triangles, 106 MB for the copies.
+    assert!(
+        peak < 4 * legit,
+        "{} MB for a file of {file} bytes, {} MB for two triangles",
+        peak / MB,
+        legit / MB
+    );
 }
