@@ -183,14 +183,19 @@ pub fn height_margin(positions: &[DVec3]) -> f64 {
     1e-7 * (1.0 + extent + lo.z.abs().max(hi.z.abs()))
 }
 
-/// Conservative regions of `nodes` over the mesh `positions`/`triangles`, for `sectors` sectors: per node, per
-/// sector, `None` (never hidden there) or the region's boundary (see the module documentation).
+/// Conservative regions of `nodes` over the mesh `positions`/`triangles`, for `sectors` sectors: per node, the sectors
+/// in which it has a region, in increasing order, each with the region's boundary (see the module documentation); a
+/// sector left out is one in which the node is never hidden.
+///
+/// A node's regions depend only on its vertex set (the vertices of its triangles), its circle and the mesh, so nodes
+/// alike in these have the same regions: callers with repeated nodes should pass each once. The work for a node is
+/// about its triangles times `log` plus `sectors` searches near it, and the result holds only the regions made.
 pub fn conservative_regions(
     positions: &[DVec3],
     triangles: &[[u32; 3]],
     nodes: &[NodeShape],
     sectors: u32,
-) -> Vec<Vec<Option<Polyline>>> {
+) -> Vec<Vec<(u32, Polyline)>> {
     use rayon::prelude::*;
     let topo = Topology::new(positions, triangles);
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -221,7 +226,10 @@ pub fn conservative_regions(
                 mu,
                 extent,
             };
-            (0..sectors).map(|i| ctx.sector_region(sectors, i)).collect()
+            // Only the sectors with a region: memory follows the regions made, not nodes × sectors.
+            (0..sectors)
+                .filter_map(|i| ctx.sector_region(sectors, i).map(|r| (i, r)))
+                .collect()
         })
         .collect()
 }

@@ -577,73 +577,156 @@ pub fn conservative_margin(h: &Hierarchy) -> (f64, [f64; 3], [f64; 3]) {
     (occlusion::conservative::height_margin(&positions), lo, hi)
 }
 
+/// The work bound of [`conservative_hierarchy`], per triangle of the mesh: nodes get regions, smallest range first,
+/// while the sum over them of their range's length plus one stays within this many times the mesh's triangles plus
+/// [`CONSERVATIVE_WORK_CONSTANT`]. Every level of a hierarchy covers the triangles at most once, so the sum is about
+/// the depth times the triangles: measured 4.09 on the hierarchy of `meshes/jacksboro-10k.obj`, 7.86 on a crater
+/// lake TIN of 100,000 vertices (10 levels), 26.9 for a quadtree of the deepest depth (16) over jacksboro-10k (at
+/// most 2 × 17 for any quadtree, whose nodes hold at least one triangle each). A file can hold far more (a chain of
+/// nodes with one child each over the same triangles), and without a bound the work would be their product.
+pub const CONSERVATIVE_WORK_PER_TRIANGLE: u64 = 64;
+
+/// The constant part of [`conservative_hierarchy`]'s work bound (see [`CONSERVATIVE_WORK_PER_TRIANGLE`]).
+pub const CONSERVATIVE_WORK_CONSTANT: u64 = 1 << 16;
+
 /// `h` with every node's regions replaced by conservative ones ([`occlusion::conservative`]): the thesis' run-time
 /// test over them never culls a visible triangle. Computed from the hierarchy's own mesh and circles (widened to
 /// cover their f32 storage), so it applies to any hierarchy, crystal or not. The proof needs every point of a node
 /// inside its circle, which a file does not promise (its circles are data): a circle that misses a vertex of its
 /// node is replaced, here and in the result, by one computed from the vertices. With fewer than 3 sectors a sector's
 /// wedge is not convex (the proof's barrier needs `cos w > 0`), so no region is made.
+///
+/// Nodes with the same triangle range and circle are computed once and share the result (a node's regions depend
+/// only on its vertices, its circle and the mesh). The work is bounded ([`CONSERVATIVE_WORK_PER_TRIANGLE`]): nodes
+/// beyond the bound, which no hierarchy that `tincull build` makes reaches, get no regions, so that both cullers
+/// (`cull`'s thesis test and `pvs`'s regions test) always call them visible, and their circle is not checked but
+/// replaced, unless it holds the whole mesh's box, by one around that box, so that it still holds their vertices.
 pub fn conservative_hierarchy(h: &Hierarchy) -> Hierarchy {
+    use std::collections::HashMap;
     let positions: Vec<glam::DVec3> = h.mesh.positions.iter().map(|&p| glam::DVec3::from_array(p)).collect();
     let order: Vec<u32> = (0..h.mesh.triangles.len() as u32).collect();
     let [ox, oy, oz] = h.origin;
     let mut out = h.clone();
-    let circles: Vec<(glam::DVec2, f64)> = h
-        .nodes
-        .iter()
-        .zip(out.nodes.iter_mut())
-        .map(|(n, stored)| {
-            let centre = glam::DVec2::new(ox + f64::from(n.centre[0]), oy + f64::from(n.centre[1]));
-            // The world centre is rounded once (relative error ε): grow the radius by far more.
-            let slack = 1e-12 * (centre.x.abs() + centre.y.abs()) + 1e-9;
-            let radius = f64::from(n.radius) + slack;
-            let points: Vec<glam::DVec2> = h.mesh.triangles[n.triangles[0] as usize..n.triangles[1] as usize]
-                .iter()
-                .flatten()
-                .map(|&v| positions[v as usize].truncate())
-                .collect();
+    let within = within_work_bound(h);
+    // The whole mesh's box, for the circles of the nodes beyond the bound.
+    let (mut lo, mut hi) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    for p in &positions {
+        lo = lo.min(p.truncate());
+        hi = hi.max(p.truncate());
+    }
+    let corners = [lo, glam::DVec2::new(hi.x, lo.y), glam::DVec2::new(lo.x, hi.y), hi];
+    let mesh_circle = tin::bounding_circle_of_points(&corners).map(|c| Circle {
+        centre: c.centre,
+        radius: c.radius * (1.0 + 1e-9) + 1e-12 * (c.centre.x.abs() + c.centre.y.abs()) + 1e-9,
+    });
+    // The circle each node's regions are computed for (`None` beyond the bound), checked once per range and stored
+    // circle (its bits): that circle, and the one to store where the stored one misses a vertex.
+    type Checked = (glam::DVec2, f64, Option<([f32; 2], f32)>);
+    let mut checked: HashMap<([u32; 2], [u32; 3]), Checked> = HashMap::new();
+    let mut circles: Vec<Option<(glam::DVec2, f64)>> = Vec::with_capacity(h.nodes.len());
+    for ((n, stored), &inside) in h.nodes.iter().zip(out.nodes.iter_mut()).zip(&within) {
+        let centre = glam::DVec2::new(ox + f64::from(n.centre[0]), oy + f64::from(n.centre[1]));
+        // The world centre is rounded once (relative error ε): grow the radius by far more.
+        let slack = 1e-12 * (centre.x.abs() + centre.y.abs()) + 1e-9;
+        let radius = f64::from(n.radius) + slack;
+        if !inside {
+            let holds_mesh = corners.iter().all(|p| p.distance(centre) * (1.0 + 1e-12) <= radius);
+            if !holds_mesh && let Some(c) = &mesh_circle {
+                (stored.centre, stored.radius) = stored_circle(c, h.origin);
+            }
+            circles.push(None);
+            continue;
+        }
+        let key = (
+            n.triangles,
+            [n.centre[0].to_bits(), n.centre[1].to_bits(), n.radius.to_bits()],
+        );
+        let &mut (centre, radius, replaced) = checked.entry(key).or_insert_with(|| {
+            let range = &h.mesh.triangles[n.triangles[0] as usize..n.triangles[1] as usize];
+            let points = || range.iter().flatten().map(|&v| positions[v as usize].truncate());
             // Inside, the computed distance grown for its own rounding (a built file's circles pass: their slack
             // above is far more).
-            if points.iter().all(|p| p.distance(centre) * (1.0 + 1e-15) <= radius) {
-                return (centre, radius);
+            if points().all(|p| p.distance(centre) * (1.0 + 1e-15) <= radius) {
+                return (centre, radius, None);
             }
-            match tin::bounding_circle_of_points(&points) {
+            match tin::bounding_circle_of_points(&points().collect::<Vec<_>>()) {
                 Some(c) => {
-                    (stored.centre, stored.radius) = stored_circle(&c, h.origin);
                     let slack = 1e-12 * (c.centre.x.abs() + c.centre.y.abs()) + 1e-9;
-                    (c.centre, c.radius * (1.0 + 1e-12) + slack)
+                    (
+                        c.centre,
+                        c.radius * (1.0 + 1e-12) + slack,
+                        Some(stored_circle(&c, h.origin)),
+                    )
                 }
-                None => (centre, radius),
+                None => (centre, radius, None),
             }
-        })
-        .collect();
-    let shapes: Vec<occlusion::NodeShape> = h
+        });
+        if let Some(c) = replaced {
+            (stored.centre, stored.radius) = c;
+        }
+        circles.push(Some((centre, radius)));
+    }
+    for node in &mut out.nodes {
+        node.regions.clear();
+    }
+    if h.sectors < 3 {
+        return out;
+    }
+    // One shape per range and circle; `of_node[i]` is node `i`'s shape.
+    let mut shape_of: HashMap<([u32; 2], [u64; 3]), usize> = HashMap::new();
+    let mut shapes: Vec<occlusion::NodeShape> = Vec::new();
+    let of_node: Vec<Option<usize>> = h
         .nodes
         .iter()
         .zip(&circles)
-        .map(|(n, &(centre, radius))| occlusion::NodeShape {
-            triangles: &order[n.triangles[0] as usize..n.triangles[1] as usize],
-            centre,
-            radius,
+        .map(|(n, circle)| {
+            let &(centre, radius) = circle.as_ref()?;
+            let key = (n.triangles, [centre.x.to_bits(), centre.y.to_bits(), radius.to_bits()]);
+            Some(*shape_of.entry(key).or_insert_with(|| {
+                shapes.push(occlusion::NodeShape {
+                    triangles: &order[n.triangles[0] as usize..n.triangles[1] as usize],
+                    centre,
+                    radius,
+                });
+                shapes.len() - 1
+            }))
         })
         .collect();
-    if h.sectors < 3 {
-        for node in &mut out.nodes {
-            node.regions.clear();
-        }
-        return out;
-    }
-    let regions = occlusion::conservative_regions(&positions, &h.mesh.triangles, &shapes, h.sectors);
-    for (node, rows) in out.nodes.iter_mut().zip(regions) {
-        node.regions = rows
+    let stored: Vec<Vec<StoredRegion>> =
+        occlusion::conservative_regions(&positions, &h.mesh.triangles, &shapes, h.sectors)
             .into_iter()
-            .enumerate()
-            .filter_map(|(i, r)| {
-                let (points, tail) = r?;
-                let origin_t = occlusion::plane_t(h.sectors, i as u32, glam::DVec2::new(ox, oy));
-                StoredRegion::from_f64(i as u16, &points, tail, origin_t, oz)
+            .map(|row| {
+                row.into_iter()
+                    .filter_map(|(i, (points, tail))| {
+                        let origin_t = occlusion::plane_t(h.sectors, i, glam::DVec2::new(ox, oy));
+                        StoredRegion::from_f64(i as u16, &points, tail, origin_t, oz)
+                    })
+                    .collect()
             })
             .collect();
+    for (node, shape) in out.nodes.iter_mut().zip(of_node) {
+        if let Some(k) = shape {
+            node.regions = stored[k].clone();
+        }
     }
     out
+}
+
+/// Which nodes of `h` [`conservative_hierarchy`] gives regions: smallest range first (then by index), while the sum
+/// of their ranges' lengths plus one stays within the bound of [`CONSERVATIVE_WORK_PER_TRIANGLE`].
+fn within_work_bound(h: &Hierarchy) -> Vec<bool> {
+    let cost = |i: usize| u64::from(h.nodes[i].triangles[1].saturating_sub(h.nodes[i].triangles[0])) + 1;
+    let bound = CONSERVATIVE_WORK_PER_TRIANGLE * h.mesh.triangles.len() as u64 + CONSERVATIVE_WORK_CONSTANT;
+    let mut by_cost: Vec<usize> = (0..h.nodes.len()).collect();
+    by_cost.sort_by_key(|&i| (cost(i), i));
+    let mut within = vec![false; h.nodes.len()];
+    let mut spent = 0u64;
+    for i in by_cost {
+        spent += cost(i);
+        if spent > bound {
+            break;
+        }
+        within[i] = true;
+    }
+    within
 }
