@@ -47,6 +47,54 @@
 //! covered at 16 has every sub-pixel covered at `R`). Dropping walls and answering "visible" are always safe, so none
 //! of this can make a verdict wrong.
 //!
+//! **The grid.** The walls are found through a uniform grid of `cols × rows` square cells of side `cell` from the
+//! mesh's lower corner `lo`. The index of a coordinate `v` along axis `a` is `I_a(v) = clamp(⌊fl(fl(v − lo_a) /
+//! cell)⌋, 0, n_a − 1)`, where `fl` is f64 rounding (to nearest, unit `u = 2^-53`) and `n_a` the cells along `a`.
+//! `I_a` is non-decreasing in `v` (each rounded operation is monotone, `cell > 0`, and `b` below stays finite: a
+//! valid mesh's coordinates are below 2^100 and `cell > 1e-155`). The query above takes index ranges
+//! by `I_a` of its region's bounds, so it looks at the cell `(I_0(x), I_1(y))` of every point `(x, y)` of its region.
+//! Each edge `pq` is registered in a superset of `G = {(I_0(x), I_1(y)) : (x, y) ∈ pq}` (real points of the
+//! segment), so a query finds every edge that meets its region. (Which walls are found is only speed and tightness,
+//! as above: the superset keeps every wall that the query means to look at.) Which cells:
+//! - By monotonicity `G` lies in the edge's index box `[c0, c1] × [r0, r1]`, the indices of its ends' min and max.
+//!   A box of `nc × nr ≤ 2 (nc + nr)` cells is registered whole: at most `2 (nc + nr)` cells, and exactly as before
+//!   this walk existed, so ordinary meshes, whose edges span a cell or two, get the same grid.
+//! - Otherwise the edge is walked in bands: `m` is the axis with more cells in the box (rows on a tie), `n` the other,
+//!   `[i0, i1]` the box's range along `m`, `[j0, j1]` along `n`, `ε = 1e-14 w` with `w = 1 + max |x|, |y|` over the
+//!   mesh. Band `i` takes `J_i = [v_lo, v_hi]`: `v_lo` is the edge's least `m` coordinate when `i = i0`, else the
+//!   larger of it and `fl(fl(lo_m + fl(cell · i)) − ε)`; `v_hi` is the edge's greatest `m` coordinate when `i = i1`,
+//!   else the smaller of it and `fl(fl(lo_m + fl(cell · (i + 1))) + ε)` (min and max are exact).
+//!   1. Every point of the edge with `I_m = i` has its `m` coordinate `v` in `J_i`. Nothing to show at `i = i0`
+//!      (below) and `i = i1` (above). Write `b = fl(fl(v − lo_m) / cell)`. Below, `i > i0 ≥ 0`: `I_m(v) = i ≥ 1`
+//!      gives `b ≥ i` (the clamp only lowers indices above `n_m − 1`), so `v − lo_m ≥ i · cell / (1 + u)^2 ≥
+//!      i · cell (1 − 2u)`. The same at the edge's greatest `m` coordinate (index `i1 ≥ i`, at most `w − 1` from 0,
+//!      like `lo_m`) gives `i · cell ≤ 2w (1 + 3u)`; so `v ≥ lo_m + i · cell − 4.1 u w`. The computed bound is at
+//!      most `lo_m + i · cell − ε + 8.1 u w` (the product errs by `≤ 2.1 u w`, the sum and the difference each by
+//!      `≤ u · 3.1 w`), below `v` because `ε ≥ 0.99e-14 w > 89 u w > 12.2 u w`. Above, `i < i1 ≤ n_m − 1`: `I_m(v) = i`
+//!      gives `b < i + 1` (the clamp only raises indices below 0, to `i = 0`). If `v ≤ lo_m` the bound, at least
+//!      `lo_m`, holds; else `v − lo_m ≤ (i + 1) cell / (1 − u)^2`, with `(i + 1) cell ≤ 2w (1 + 3u)` as before
+//!      (`i + 1 ≤ i1`), so `v ≤ lo_m + (i + 1) cell + 4.1 u w`, and the computed bound is at least `lo_m + (i + 1)
+//!      cell + ε − 8.1 u w`.
+//!   2. The edge's `n` coordinate at `v ∈ J_i` is `x_n(v) = p_n + (v − p_m) Δn / Δm` (`Δ = q − p`, `Δm ≠ 0` since
+//!      the box spans three cells or more along `m`), computed as `fl(p_n + fl(fl(v − p_m) · s))`, `s = fl(fl(Δn) /
+//!      fl(Δm))`. `s` errs by a factor within `1 ± 3.1u`, the product by `1 ± 5.1u` of an exact value of magnitude
+//!      at most `|Δn| ≤ 2w` (`v` lies between `p_m` and `q_m`), the sum by `u · 3.1 w`: the error is at most
+//!      `13.3 u w` (underflow adds less than `2^-1000`, and `w ≥ 1`). A result that is not finite (an overflowing
+//!      `s`) gives the band the whole range `[j0, j1]`.
+//!   3. Band `i` is registered in the cells `(i, j)` for `j` from `max(j0, I_n(fl(min − ε)))` to `min(j1,
+//!      I_n(fl(max + ε)))`, `min` and `max` of the two computed `x_n(v_lo)`, `x_n(v_hi)`. `x_n` is affine, so by 1.
+//!      every point of the edge in band `i` has its `n` coordinate between `x_n(v_lo)` and `x_n(v_hi)`, within
+//!      `13.3 u w` of the computed values; `fl(min − ε) ≤ min − ε + 1.1 u w` (`|min| ≤ w`) is below it, `fl(max + ε)`
+//!      above it. `I_n` is monotone and every point of the edge has its index in `[j0, j1]`: each point's cell is
+//!      registered.
+//!
+//! Size: along `m` the bands' `J_i` overlap by `2ε` at most, `|Δn / Δm| ≤ 4` (the box has at least as many cells
+//! along `m`, three or more; rounding aside), so an edge takes about `(nc + nr)(3 + 10 ε / cell)` cells:
+//! O(length / cell + 1), where a whole box would take `nc · nr` (a long diagonal sliver: a quarter of the grid). On
+//! top, the grid is coarsened (`cell` doubled) while the registrations would exceed `32` per edge plus `4096`, so the
+//! grid never holds more: memory linear in the mesh whatever its shape (no ordinary mesh comes near; a coarser grid
+//! only finds more walls per query, none fewer).
+//!
 //! **Rounding.** All geometry is in world f64 coordinates (no shift: the inputs are exact). `W = 1 + max |x|, |y|`
 //! over the mesh and the boxes; `S = (lateral extent) / (X2 − X1)` bounds the lines' slopes in the slab.
 //! - `μ = 1e-7 (1 + extent + max |z|)`: walls' tops; ten times the checker's tolerance at least, from the cells that
@@ -116,6 +164,16 @@ pub(crate) struct Scratch {
 /// eight directions.
 type Component = (u32, usize, [(f64, [f64; 2]); 8]);
 
+/// The walls' grid holds at most this many registrations per edge, plus [`GRID_ITEMS_SPARE`]: a grid that would hold
+/// more is coarsened (module docs, "The grid").
+const GRID_ITEMS_PER_EDGE: usize = 32;
+
+/// See [`GRID_ITEMS_PER_EDGE`].
+const GRID_ITEMS_SPARE: usize = 4096;
+
+/// The rounding margin of an edge's walk through the grid, relative to [`Walls::w`] (module docs, "The grid").
+const WALK_MARGIN: f64 = 1e-14;
+
 /// Largest resolution of the ray-space bitmap.
 pub const MAX_RESOLUTION: u32 = 256;
 
@@ -153,74 +211,142 @@ impl Walls {
         let area = ((hi[0] - lo[0]) * (hi[1] - lo[1])).max(1e-300);
         let cell = (area / edges.len().max(1) as f64).sqrt() * 2.0;
         let cell = if cell.is_finite() && cell > 0.0 { cell } else { 1.0 };
-        let cols = (((hi[0] - lo[0]) / cell) as usize + 1).clamp(1, 4096);
-        let rows = (((hi[1] - lo[1]) / cell) as usize + 1).clamp(1, 4096);
         let mut walls = Walls {
             pos,
             edges,
             lo: [lo[0], lo[1]],
             cell,
-            cols,
-            rows,
-            start: vec![0; cols * rows + 1],
+            cols: 1,
+            rows: 1,
+            start: Vec::new(),
             items: Vec::new(),
-            cell_top: vec![f64::NEG_INFINITY; cols * rows],
+            cell_top: Vec::new(),
             w,
             zabs,
             mu,
             reach: truth::MarginReach::new(mu, lo, hi),
         };
-        let spans: Vec<[usize; 4]> = walls
-            .edges
-            .iter()
-            .map(|&[a, b]| {
-                let (p, q) = (walls.pos[a as usize], walls.pos[b as usize]);
-                let (c0, r0) = walls.cell_of([p[0].min(q[0]), p[1].min(q[1])]);
-                let (c1, r1) = walls.cell_of([p[0].max(q[0]), p[1].max(q[1])]);
-                [c0, r0, c1, r1]
-            })
-            .collect();
-        for s in &spans {
-            for r in s[1]..=s[3] {
-                for c in s[0]..=s[2] {
-                    walls.start[r * cols + c + 1] += 1;
-                }
+        // The grid's size, coarsened while the registrations would exceed the budget (module docs, "The grid").
+        let budget = GRID_ITEMS_PER_EDGE * walls.edges.len() + GRID_ITEMS_SPARE;
+        loop {
+            walls.cols = (((hi[0] - lo[0]) / walls.cell) as usize + 1).clamp(1, 4096);
+            walls.rows = (((hi[1] - lo[1]) / walls.cell) as usize + 1).clamp(1, 4096);
+            if walls.cols * walls.rows == 1 || walls.registrations(budget) <= budget {
+                break;
             }
+            walls.cell *= 2.0;
+        }
+        let (cols, rows) = (walls.cols, walls.rows);
+        let mut start = vec![0u32; cols * rows + 1];
+        for e in 0..walls.edges.len() {
+            walls.edge_cells(e, |first, n, stride| {
+                for i in 0..n {
+                    start[first + i * stride + 1] += 1;
+                }
+            });
         }
         for i in 0..cols * rows {
-            walls.start[i + 1] += walls.start[i];
+            start[i + 1] += start[i];
         }
-        let mut fill = walls.start.clone();
-        walls.items = vec![0; walls.start[cols * rows] as usize];
-        for (e, s) in spans.iter().enumerate() {
-            for r in s[1]..=s[3] {
-                for c in s[0]..=s[2] {
-                    let k = r * cols + c;
-                    walls.items[fill[k] as usize] = e as u32;
+        let mut fill = start.clone();
+        let mut items = vec![0; start[cols * rows] as usize];
+        let mut cell_top = vec![f64::NEG_INFINITY; cols * rows];
+        for e in 0..walls.edges.len() {
+            let [a, b] = walls.edges[e];
+            let top = walls.pos[a as usize][2].max(walls.pos[b as usize][2]);
+            walls.edge_cells(e, |first, n, stride| {
+                for i in 0..n {
+                    let k = first + i * stride;
+                    items[fill[k] as usize] = e as u32;
                     fill[k] += 1;
-                    let [a, b] = walls.edges[e];
-                    let top = walls.pos[a as usize][2].max(walls.pos[b as usize][2]);
-                    walls.cell_top[k] = walls.cell_top[k].max(top);
+                    cell_top[k] = cell_top[k].max(top);
                 }
-            }
+            });
         }
+        walls.start = start;
+        walls.items = items;
+        walls.cell_top = cell_top;
         walls
     }
 
-    fn cell_of(&self, p: [f64; 2]) -> (usize, usize) {
-        let c = ((p[0] - self.lo[0]) / self.cell).floor();
-        let r = ((p[1] - self.lo[1]) / self.cell).floor();
-        let c = if c.is_finite() {
-            c.clamp(0.0, (self.cols - 1) as f64)
+    /// The grid index along `axis` (0: column, 1: row) of the coordinate `v`: `⌊(v − lo) / cell⌋` computed in f64,
+    /// clamped to the grid (`NaN`: 0). Non-decreasing in `v`; [`Walls::planar_hidden`] indexes its cells alike.
+    fn index(&self, v: f64, axis: usize) -> usize {
+        let n = if axis == 0 { self.cols } else { self.rows };
+        let i = ((v - self.lo[axis]) / self.cell).floor();
+        if i.is_finite() {
+            i.clamp(0.0, (n - 1) as f64) as usize
         } else {
-            0.0
-        };
-        let r = if r.is_finite() {
-            r.clamp(0.0, (self.rows - 1) as f64)
-        } else {
-            0.0
-        };
-        (c as usize, r as usize)
+            0
+        }
+    }
+
+    /// The grid cells edge `e` is registered in, as runs `f(first, n, stride)`: cells `first + i · stride` for
+    /// `i < n` (module docs, "The grid", for why they hold every cell of a point of the edge).
+    fn edge_cells(&self, e: usize, mut f: impl FnMut(usize, usize, usize)) {
+        let [a, b] = self.edges[e];
+        let (p, q) = (self.pos[a as usize], self.pos[b as usize]);
+        let lo = [p[0].min(q[0]), p[1].min(q[1])];
+        let hi = [p[0].max(q[0]), p[1].max(q[1])];
+        let (c0, c1) = (self.index(lo[0], 0), self.index(hi[0], 0));
+        let (r0, r1) = (self.index(lo[1], 1), self.index(hi[1], 1));
+        let (nc, nr) = (c1 - c0 + 1, r1 - r0 + 1);
+        let cols = self.cols;
+        if nc * nr <= 2 * (nc + nr) || !lo.iter().chain(&hi).all(|v| v.is_finite()) {
+            // The whole box: a few cells (or coordinates no valid mesh has).
+            for r in r0..=r1 {
+                f(r * cols + c0, nc, 1);
+            }
+            return;
+        }
+        // Bands across axis `m` (the one of more cells), each with the range of indices along `n` of the edge's
+        // points in it.
+        let m = usize::from(nr >= nc);
+        let n = 1 - m;
+        let (i0, i1, j0, j1) = if m == 1 { (r0, r1, c0, c1) } else { (c0, c1, r0, r1) };
+        let slope = (q[n] - p[n]) / (q[m] - p[m]);
+        let eps = WALK_MARGIN * self.w;
+        let across = |v: f64| p[n] + (v - p[m]) * slope;
+        for i in i0..=i1 {
+            let vlo = if i == i0 {
+                lo[m]
+            } else {
+                (self.lo[m] + self.cell * i as f64 - eps).max(lo[m])
+            };
+            let vhi = if i == i1 {
+                hi[m]
+            } else {
+                (self.lo[m] + self.cell * (i + 1) as f64 + eps).min(hi[m])
+            };
+            let (ua, ub) = (across(vlo), across(vhi));
+            let (ja, jb) = if ua.is_finite() && ub.is_finite() {
+                (
+                    self.index(ua.min(ub) - eps, n).max(j0),
+                    self.index(ua.max(ub) + eps, n).min(j1),
+                )
+            } else {
+                (j0, j1)
+            };
+            if ja <= jb {
+                if m == 1 {
+                    f(i * cols + ja, jb - ja + 1, 1);
+                } else {
+                    f(ja * cols + i, jb - ja + 1, cols);
+                }
+            }
+        }
+    }
+
+    /// The number of registrations of all edges in the current grid, or a number above `limit` once they exceed it.
+    fn registrations(&self, limit: usize) -> usize {
+        let mut total = 0usize;
+        for e in 0..self.edges.len() {
+            self.edge_cells(e, |_, n, _| total += n);
+            if total > limit {
+                break;
+            }
+        }
+        total
     }
 
     /// A fresh scratch for this mesh.
@@ -320,20 +446,7 @@ impl Walls {
         // Grid cells over the quadrilateral between s1 and s2 (plus a quarter of its width and one grid cell on each
         // side, so that pieces connect around it), column by column along the axis. Which walls are looked at only
         // decides how much is hidden: dropping walls is always safe.
-        let (lines_along, lines_lat) = if k == 0 {
-            (self.cols, self.rows)
-        } else {
-            (self.rows, self.cols)
-        };
-        let grid_index = |v: f64, axis: usize, n: usize| {
-            let i = ((v - self.lo[axis]) / self.cell).floor();
-            if i.is_finite() {
-                i.clamp(0.0, (n - 1) as f64) as usize
-            } else {
-                0
-            }
-        };
-        let (g0, g1) = (grid_index(q_al0, k, lines_along), grid_index(q_al1, k, lines_along));
+        let (g0, g1) = (self.index(q_al0, k), self.index(q_al1, k));
         for gi in g0..=g1 {
             let wa = [
                 self.lo[k] + self.cell * gi as f64,
@@ -346,10 +459,7 @@ impl Walls {
                 lat1 = lat1.max(a_hi + lam * (b_hi - a_hi));
             }
             let margin = 0.25 * (lat1 - lat0) + self.cell;
-            let (h0, h1) = (
-                grid_index(lat0 - margin, l, lines_lat),
-                grid_index(lat1 + margin, l, lines_lat),
-            );
+            let (h0, h1) = (self.index(lat0 - margin, l), self.index(lat1 + margin, l));
             for gj in h0..=h1 {
                 let (c, r) = if k == 0 { (gi, gj) } else { (gj, gi) };
                 let cell = r * self.cols + c;
@@ -702,5 +812,148 @@ mod tests {
         assert!(!walls.hidden(&cell, &open, 64, &mut sc));
         let high_cell = Box3 { ztop: 200.0, ..cell };
         assert!(!walls.hidden(&high_cell, &behind, 64, &mut sc));
+    }
+
+    /// `n` parallel diagonal slivers from `x = 0` to `x = l` (`l = n`), rising by `rise · l` (the audit's F4 mesh at
+    /// `rise = 1`), moved by `offset`.
+    fn slivers(n: u32, rise: f64, offset: [f64; 2]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let l = f64::from(n);
+        let mut pos = Vec::new();
+        for k in 0..=n {
+            let d = f64::from(k);
+            pos.push([offset[0], offset[1] + d, 0.1 * (d * 0.3).sin()]);
+            pos.push([offset[0] + l, offset[1] + rise * l + d, 0.1 * (d * 0.7).cos()]);
+        }
+        let tris = (0..n)
+            .flat_map(|k| [[2 * k, 2 * k + 1, 2 * k + 3], [2 * k, 2 * k + 3, 2 * k + 2]])
+            .collect();
+        (pos, tris)
+    }
+
+    /// Per edge, the sorted cells it is registered in.
+    fn registered(walls: &Walls) -> Vec<Vec<usize>> {
+        let mut cells = vec![Vec::new(); walls.edges.len()];
+        for c in 0..walls.cols * walls.rows {
+            for &e in &walls.items[walls.start[c] as usize..walls.start[c + 1] as usize] {
+                cells[e as usize].push(c);
+            }
+        }
+        cells
+    }
+
+    /// Checks that every sampled point of every edge lies in a cell the edge is registered in: 257 evenly spaced
+    /// points, and at every grid line the edge crosses the crossing point and its neighbours one and two ulps away
+    /// in the parameter (each point computed in f64, so within an ulp or so of the segment). Returns the number of
+    /// edges registered in fewer cells than their index box (walked).
+    fn assert_registration_covers(walls: &Walls) -> usize {
+        let cells = registered(walls);
+        let mut walked = 0;
+        for (e, &[a, b]) in walls.edges.iter().enumerate() {
+            let (p, q) = (walls.pos[a as usize], walls.pos[b as usize]);
+            let mut ts: Vec<f64> = (0..=256).map(|i| f64::from(i) / 256.0).collect();
+            for axis in 0..2 {
+                let n = if axis == 0 { walls.cols } else { walls.rows };
+                for g in 0..=n {
+                    let line = walls.lo[axis] + walls.cell * g as f64;
+                    let t = (line - p[axis]) / (q[axis] - p[axis]);
+                    if (0.0..=1.0).contains(&t) {
+                        ts.extend([
+                            t,
+                            t.next_up(),
+                            t.next_down(),
+                            t.next_up().next_up(),
+                            t.next_down().next_down(),
+                        ]);
+                    }
+                }
+            }
+            for t in ts.into_iter().filter(|t| (0.0..=1.0).contains(t)) {
+                let x = p[0] + (q[0] - p[0]) * t;
+                let y = p[1] + (q[1] - p[1]) * t;
+                let c = walls.index(y, 1) * walls.cols + walls.index(x, 0);
+                assert!(
+                    cells[e].binary_search(&c).is_ok(),
+                    "edge {e} {p:?}-{q:?}: point at t = {t} ({x}, {y}) in cell {c} not registered ({:?})",
+                    cells[e]
+                );
+            }
+            let box_cells = (walls.index(p[0].max(q[0]), 0) - walls.index(p[0].min(q[0]), 0) + 1)
+                * (walls.index(p[1].max(q[1]), 1) - walls.index(p[1].min(q[1]), 1) + 1);
+            if cells[e].len() < box_cells {
+                walked += 1;
+            }
+        }
+        walked
+    }
+
+    /// The grid registration holds every cell of every point of an edge (module docs, "The grid"), on slivers of
+    /// several slopes and places (UTM-like offsets, where rounding is coarser than the cells' fine structure), and on
+    /// random long triangles; and it walks the long edges instead of registering their whole boxes.
+    #[test]
+    fn every_point_of_an_edge_lies_in_a_registered_cell() {
+        for (rise, offset) in [
+            (1.0, [0.0, 0.0]),
+            (0.13, [0.0, 0.0]),
+            (7.5, [-300.0, 20.0]),
+            (-0.6, [0.0, 0.0]),
+            (1.0, [5e5, 5e6]),
+            (0.31, [-4e6, 3e7]),
+        ] {
+            let (pos, tris) = slivers(300, rise, offset);
+            let walls = Walls::new(&pos, &tris);
+            let walked = assert_registration_covers(&walls);
+            assert!(walked >= 300, "rise {rise}: {walked} edges walked");
+        }
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            seed = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = seed;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for round in 0..20 {
+            let scale = [1.0, 1e-3, 1e4, 3.7][round % 4];
+            let offset = [0.0, 6e5, -2.5e6][round % 3];
+            let pos: Vec<[f64; 3]> = (0..300)
+                .map(|_| {
+                    [
+                        offset + scale * 1000.0 * next(),
+                        offset + scale * 1000.0 * next(),
+                        next(),
+                    ]
+                })
+                .collect();
+            // Mostly short triangles, and some spanning the whole terrain.
+            let tris: Vec<[u32; 3]> = (0..200u32)
+                .map(|i| {
+                    let a = (next() * 300.0) as u32 % 300;
+                    let b = if i % 5 == 0 {
+                        (next() * 300.0) as u32 % 300
+                    } else {
+                        (a + 1) % 300
+                    };
+                    [a, b, (a + 2) % 300]
+                })
+                .collect();
+            let walls = Walls::new(&pos, &tris);
+            assert_registration_covers(&walls);
+        }
+    }
+
+    /// The audit's sliver mesh (8,000 diagonal slivers, a valid height field of 500 KB as a file) registered each edge
+    /// in every cell of its box: about 64 million registrations (253 MB). Walking the edges, the grid holds
+    /// O(length / cell) per edge, and never more than 32 per edge plus 4,096 (here about 525,000).
+    #[test]
+    fn long_slivers_take_few_registrations() {
+        let (pos, tris) = slivers(8_000, 1.0, [0.0, 0.0]);
+        let walls = Walls::new(&pos, &tris);
+        let (edges, items) = (walls.edges.len(), walls.items.len());
+        eprintln!(
+            "slivers: {edges} edges, {items} registrations, grid {} x {}",
+            walls.cols, walls.rows
+        );
+        assert!(items <= GRID_ITEMS_PER_EDGE * edges + GRID_ITEMS_SPARE);
+        assert!(items < 1_000_000, "{items} registrations for {edges} edges");
     }
 }
