@@ -765,9 +765,9 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                         continue;
                     }
                     let (j0, j1) = grid.cells(o, c0.b.t, c1.b.t);
-                    // The pieces of a line stay within its chords plus `PIECES_PER_CORNER` per grid corner on it, as they
-                    // do over a height field (module documentation); a line past that bound is given up, occluders and
-                    // all, so that the work and memory stay linear in the chords.
+                    // The pieces of a line stay within its chords plus `PIECES_PER_CORNER` per grid corner on it, as
+                    // they do over a height field (module documentation); a line past that bound is given up,
+                    // occluders and all, so that the work and memory stay linear in the chords.
                     met[line] += 1;
                     pieces[line] += j1 - j0 + 1;
                     if pieces[line] > met[line] + PIECES_PER_CORNER * (n + 1) {
