@@ -4,147 +4,15 @@
 //! what was measured, or checks that a deep hierarchy overflows no stack; the times are printed, not asserted (the
 //! machines that run the tests are shared: speed goals live in benchmarks).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+#[path = "common/resources.rs"]
+mod resources;
+
+use resources::{MB, Usage, chain, flat, grid_mesh, hierarchy, hierarchy_of, lock, measure, node, on_small_stack};
 
 use cull::{
     AnyCuller, Camera, CullMethod, Culler, DrawList, Grouping, Hierarchy, LloydEgbertCuller, Mesh, Node, SafeCuller,
     SafeParams, StoredRegion,
 };
-
-/// Counts the bytes live and the most live since the last [`reset_peak`].
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            let now = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-            PEAK.fetch_max(now, Ordering::Relaxed);
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            if new_size >= layout.size() {
-                let now = LIVE.fetch_add(new_size - layout.size(), Ordering::Relaxed) + new_size - layout.size();
-                PEAK.fetch_max(now, Ordering::Relaxed);
-            } else {
-                LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
-            }
-        }
-        p
-    }
-}
-
-#[global_allocator]
-static ALLOC: Counting = Counting;
-
-/// One measurement at a time: the counters are global, and the timings should not share the cores.
-static SERIAL: Mutex<()> = Mutex::new(());
-
-/// Runs `f`, returning its value, the time it took and the most bytes it held allocated at once beyond what was
-/// live before it.
-fn measure<T>(f: impl FnOnce() -> T) -> (T, Duration, usize) {
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    let start = Instant::now();
-    let out = f();
-    let took = start.elapsed();
-    (out, took, PEAK.load(Ordering::Relaxed).saturating_sub(base))
-}
-
-fn lock() -> std::sync::MutexGuard<'static, ()> {
-    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-const MB: usize = 1 << 20;
-
-/// A grid terrain of `n` × `n` squares (two triangles each) over `[0, n]²`, heights a gentle bowl with ripples,
-/// triangles row by row (so that a halving of the order is a split into bands).
-fn grid_mesh(n: u32) -> Mesh {
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (f64::from(i), f64::from(j));
-            let c = f64::from(n) * 0.5;
-            let z = 0.01 * ((x - c).powi(2) + (y - c).powi(2)) + (x * 0.7).sin() + (y * 1.3).cos();
-            positions.push([x, y, z]);
-        }
-    }
-    let mut triangles = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let v = j * (n + 1) + i;
-            triangles.push([v, v + 1, v + n + 2]);
-            triangles.push([v, v + n + 2, v + n + 1]);
-        }
-    }
-    Mesh { positions, triangles }
-}
-
-fn node(children: Vec<u32>, triangles: [u32; 2], level: u32) -> Node {
-    Node {
-        centre: [0.0; 2],
-        radius: 0.0,
-        children,
-        triangles,
-        level,
-        regions: vec![],
-    }
-}
-
-fn hierarchy(mesh: Mesh, nodes: Vec<Node>, roots: Vec<u32>) -> Hierarchy {
-    hierarchy_of(mesh, nodes, roots, 16)
-}
-
-fn hierarchy_of(mesh: Mesh, nodes: Vec<Node>, roots: Vec<u32>, sectors: u32) -> Hierarchy {
-    let nt = mesh.triangles.len() as u32;
-    let h = Hierarchy {
-        sectors,
-        origin: [0.0; 3],
-        nodes,
-        roots,
-        always_visible: [nt, nt],
-        mesh,
-        build: Default::default(),
-    };
-    h.check_invariants().expect("a valid hierarchy");
-    h
-}
-
-/// A chain of `depth` nodes of one child each over one leaf holding every triangle of `mesh`: as deep as it has
-/// nodes, every node over the same range.
-fn chain(mesh: Mesh, depth: u32) -> Hierarchy {
-    let nt = mesh.triangles.len() as u32;
-    let mut nodes = vec![node(vec![], [0, nt], 0)];
-    for k in 1..=depth {
-        nodes.push(node(vec![k - 1], [0, nt], k));
-    }
-    hierarchy(mesh, nodes, vec![depth])
-}
-
-/// Leaves of `leaf` triangles each, all roots.
-fn flat(mesh: Mesh, leaf: u32) -> Hierarchy {
-    let nt = mesh.triangles.len() as u32;
-    let nodes: Vec<Node> = (0..nt.div_ceil(leaf))
-        .map(|i| node(vec![], [i * leaf, ((i + 1) * leaf).min(nt)], 0))
-        .collect();
-    let roots = (0..nodes.len() as u32).collect();
-    hierarchy(mesh, nodes, roots)
-}
 
 fn cameras(n: u32) -> Vec<Camera> {
     let c = f64::from(n) * 0.5;
@@ -170,17 +38,6 @@ fn scrambled(mut mesh: Mesh) -> Mesh {
     mesh
 }
 
-/// Runs `f` on a thread with a 256 KiB stack: an operation recursive over the depth of a hierarchy of 100,000 levels
-/// would overflow it (and abort the test binary).
-fn on_small_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
-    std::thread::Builder::new()
-        .stack_size(256 << 10)
-        .spawn(f)
-        .expect("a thread")
-        .join()
-        .expect("no panic")
-}
-
 /// A chain of 100,000 nodes of one child each (as deep as it has nodes) over a mesh of 128 triangles: decoding and
 /// checking the file, preparing the safe culler (default, with a work budget of one unit, with coarse nodes) and the
 /// thesis' culler, and culling from five cameras all run on a 256 KiB stack (nothing recurses over the depth), in
@@ -190,7 +47,7 @@ fn a_deep_chain_needs_no_deep_stack() {
     let _g = lock();
     let bytes = chain(grid_mesh(8), 100_000).to_bytes().expect("encodes");
     let file = bytes.len();
-    let (_, took, peak) = measure(|| {
+    let (_, Usage { took, peak, .. }) = measure(|| {
         on_small_stack(move || {
             let h = Hierarchy::from_bytes(&bytes).expect("a valid file");
             let d = SafeParams::default();
@@ -244,13 +101,13 @@ fn a_wide_node_under_a_chain_stays_within_the_descendant_limit() {
         work_budget: usize::MAX,
         ..SafeParams::default()
     };
-    let (c, took, peak) = measure(|| SafeCuller::new(&h, p));
+    let (c, Usage { took, peak, .. }) = measure(|| SafeCuller::new(&h, p));
     eprintln!("wide node: {took:?}, {} MB, file {file} bytes", peak / MB);
     // Measured: about 100 ms and 33 MB for a file of 4.4 MB.
     assert!(peak < 100 * MB, "{} MB for a file of {file} bytes", peak / MB);
     let mut list = DrawList::default();
     for cam in cameras(n) {
-        let (_, took, _) = measure(|| c.cull_into(&cam, &mut list));
+        let (_, Usage { took, .. }) = measure(|| c.cull_into(&cam, &mut list));
         eprintln!("wide node cull: {took:?}");
         // Measured: at most about 110 ms (a view of every leaf).
     }
@@ -269,7 +126,7 @@ fn a_scrambled_triangle_order_keeps_a_cull_bounded() {
     let c = SafeCuller::new(&h, SafeParams::default());
     let mut list = DrawList::default();
     for cam in cameras(n) {
-        let (_, took, peak) = measure(|| c.cull_into(&cam, &mut list));
+        let (_, Usage { took, peak, .. }) = measure(|| c.cull_into(&cam, &mut list));
         assert!(list.stats.work as usize <= SafeParams::default().work_budget);
         eprintln!("scrambled cull: {took:?}, {} MB", peak / MB);
         // Measured: at most about 26 ms and 28 MB (80,000 triangles).
@@ -297,13 +154,13 @@ fn a_thousand_sectors_stay_within_eight_slots_per_region() {
         .collect();
     let h = hierarchy_of(mesh, nodes, (0..nt).collect(), 1024);
     let file = h.to_bytes().expect("encodes").len();
-    let (c, _, peak) = measure(|| Culler::new(&h));
+    let (c, Usage { peak, .. }) = measure(|| Culler::new(&h));
     eprintln!("1024 sectors: {peak} bytes, file {file}");
     // Measured: 5.5 times the file.
     assert!(peak < 8 * file, "{peak} bytes for a file of {file}");
     let mut list = DrawList::default();
     for cam in cameras(30) {
-        let (_, took, _) = measure(|| c.cull_into(&cam, &mut list));
+        let (_, Usage { took, .. }) = measure(|| c.cull_into(&cam, &mut list));
         eprintln!("1024 sectors cull: {took:?}");
     }
 }
@@ -329,12 +186,12 @@ fn long_regions_cost_one_pass_per_cull() {
         .collect();
     let h = hierarchy(mesh, nodes, (0..nt).collect());
     let file = h.to_bytes().expect("encodes").len();
-    let (c, _, peak) = measure(|| Culler::new(&h));
+    let (c, Usage { peak, .. }) = measure(|| Culler::new(&h));
     eprintln!("long regions: {peak} bytes, file {file}");
     assert!(peak < 3 * file, "{peak} bytes for a file of {file}");
     let mut list = DrawList::default();
     for cam in cameras(4) {
-        let (_, took, _) = measure(|| c.cull_into(&cam, &mut list));
+        let (_, Usage { took, .. }) = measure(|| c.cull_into(&cam, &mut list));
         eprintln!("long regions cull: {took:?}");
         // Measured: well under a millisecond (8 MB of regions).
     }
@@ -367,11 +224,11 @@ fn lloyd_egbert_prepares_overlapping_copies_in_bounded_memory() {
         h
     };
     let (two, copies) = (square(vec![[0, 1, 2], [1, 3, 2]]), square(vec![[0, 1, 2]; 64]));
-    let (c, took, legit) = measure(|| LloydEgbertCuller::new(&two, 256));
+    let (c, Usage { took, peak: legit, .. }) = measure(|| LloydEgbertCuller::new(&two, 256));
     eprintln!("two triangles: {took:?}, {} MB", legit / MB);
     assert_eq!(c.occluder_count(), 2 * 256 * 257);
     let file = copies.to_bytes().expect("encodes").len();
-    let (c, took, peak) = measure(|| LloydEgbertCuller::new(&copies, 256));
+    let (c, Usage { took, peak, .. }) = measure(|| LloydEgbertCuller::new(&copies, 256));
     eprintln!("64 copies: {took:?}, {} MB, file {file} bytes", peak / MB);
     assert_eq!(c.grid_cells(), 256);
     // Measured: 40 MB for two triangles, 106 MB for the copies.
@@ -390,12 +247,19 @@ fn lloyd_egbert_prepares_overlapping_copies_in_bounded_memory() {
 fn cell_edges_of_a_spent_budget_hold_a_block_of_lines_at_a_time() {
     let _g = lock();
     let h = flat(grid_mesh(224), 1);
-    let (_, took, spent) = measure(|| SafeCuller::new(&h, SafeParams::default()));
+    let (_, Usage { took, peak: spent, .. }) = measure(|| SafeCuller::new(&h, SafeParams::default()));
     let unlimited = SafeParams {
         work_budget: usize::MAX,
         ..SafeParams::default()
     };
-    let (_, took_unlimited, alone) = measure(|| SafeCuller::new(&h, unlimited));
+    let (
+        _,
+        Usage {
+            took: took_unlimited,
+            peak: alone,
+            ..
+        },
+    ) = measure(|| SafeCuller::new(&h, unlimited));
     eprintln!(
         "cell edges: {took:?}, {} MB; without: {took_unlimited:?}, {} MB",
         spent / MB,

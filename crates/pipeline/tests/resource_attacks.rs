@@ -5,146 +5,13 @@
 //! a slot per sector, region or not, all at once. Work is measured here as bytes allocated in all (each node's scan
 //! collected its range), memory as the most bytes live at once: counts, not clocks.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+#[path = "../../cull/tests/common/resources.rs"]
+mod resources;
 
-use cull::{Hierarchy, Mesh, Node};
+use resources::{MB, chain_over, grid_mesh, lock, measure};
+
+use cull::{Hierarchy, Node};
 use pipeline::{CONSERVATIVE_WORK_CONSTANT, CONSERVATIVE_WORK_PER_TRIANGLE, conservative_hierarchy};
-
-/// Counts the bytes live, the most live since the last [`measure`], and the bytes allocated in all.
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-static TOTAL: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(by: usize) {
-    let now = LIVE.fetch_add(by, Ordering::Relaxed) + by;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-    TOTAL.fetch_add(by, Ordering::Relaxed);
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            if new_size >= layout.size() {
-                grew(new_size - layout.size());
-            } else {
-                LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
-            }
-        }
-        p
-    }
-}
-
-#[global_allocator]
-static ALLOC: Counting = Counting;
-
-/// One measurement at a time: the counters are global.
-static SERIAL: Mutex<()> = Mutex::new(());
-
-fn lock() -> std::sync::MutexGuard<'static, ()> {
-    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// What [`measure`] saw: the most bytes live at once beyond those live before, and the bytes allocated in all.
-#[derive(Debug)]
-struct Usage {
-    peak: usize,
-    total: usize,
-}
-
-fn measure<T>(f: impl FnOnce() -> T) -> (T, Usage) {
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    let total = TOTAL.load(Ordering::Relaxed);
-    let out = f();
-    let usage = Usage {
-        peak: PEAK.load(Ordering::Relaxed).saturating_sub(base),
-        total: TOTAL.load(Ordering::Relaxed) - total,
-    };
-    (out, usage)
-}
-
-const MB: usize = 1 << 20;
-
-/// A grid terrain of `n` × `n` squares (two triangles each) over `[0, n]²`, heights a gentle bowl with ripples,
-/// triangles row by row.
-fn grid_mesh(n: u32) -> Mesh {
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (f64::from(i), f64::from(j));
-            let c = f64::from(n) * 0.5;
-            let z = 0.01 * ((x - c).powi(2) + (y - c).powi(2)) + (x * 0.7).sin() + (y * 1.3).cos();
-            positions.push([x, y, z]);
-        }
-    }
-    let mut triangles = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let v = j * (n + 1) + i;
-            triangles.push([v, v + 1, v + n + 2]);
-            triangles.push([v, v + n + 2, v + n + 1]);
-        }
-    }
-    Mesh { positions, triangles }
-}
-
-/// A node with the circle 0 (which misses its vertices, so that it is replaced) and no regions.
-fn node(children: Vec<u32>, triangles: [u32; 2], level: u32) -> Node {
-    Node {
-        centre: [0.0; 2],
-        radius: 0.0,
-        children,
-        triangles,
-        level,
-        regions: vec![],
-    }
-}
-
-/// `depth` nodes with one child each above one leaf, all over the triangles `range`; the triangles before and after
-/// it (if any) are two more root leaves, after the chain. `sectors` sectors.
-fn chain(mesh: Mesh, range: [u32; 2], depth: u32, sectors: u32) -> Hierarchy {
-    let nt = mesh.triangles.len() as u32;
-    let mut nodes = vec![node(vec![], range, 0)];
-    for l in 1..=depth {
-        nodes.push(node(vec![l - 1], range, l));
-    }
-    let mut roots = vec![depth];
-    for rest in [[0, range[0]], [range[1], nt]] {
-        if rest[0] < rest[1] {
-            roots.push(nodes.len() as u32);
-            nodes.push(node(vec![], rest, 0));
-        }
-    }
-    let h = Hierarchy {
-        sectors,
-        origin: [0.0; 3],
-        nodes,
-        roots,
-        always_visible: [nt, nt],
-        mesh,
-        build: Default::default(),
-    };
-    h.check_invariants().expect("a valid hierarchy");
-    h
-}
 
 /// The triangles of squares `i0..i1` of row `j` of [`grid_mesh`]`(n)`.
 fn squares(n: u32, j: u32, i0: u32, i1: u32) -> [u32; 2] {
@@ -172,7 +39,7 @@ fn circle_holds_its_vertices(h: &Hierarchy, n: &Node) -> bool {
 #[test]
 fn a_chain_over_the_same_triangles_is_computed_once() {
     let _guard = lock();
-    let h = chain(grid_mesh(32), [0, 2048], 1600, 16);
+    let h = chain_over(grid_mesh(32), [0, 2048], 1600, 16);
     let file = h.to_bytes().expect("serialises").len();
     let (c, usage) = measure(|| conservative_hierarchy(&h));
     eprintln!("chain of 1,600 over 2,048 triangles, file {file} bytes: {usage:?}");
@@ -190,7 +57,7 @@ fn a_chain_over_the_same_triangles_is_computed_once() {
 #[test]
 fn a_chain_at_many_sectors_holds_only_the_regions_it_makes() {
     let _guard = lock();
-    let h = chain(grid_mesh(2), [0, 8], 2000, 1024);
+    let h = chain_over(grid_mesh(2), [0, 8], 2000, 1024);
     let file = h.to_bytes().expect("serialises").len();
     let (c, usage) = measure(|| conservative_hierarchy(&h));
     eprintln!("chain of 2,000 at 1,024 sectors, file {file} bytes: {usage:?}");
@@ -207,7 +74,7 @@ fn a_chain_at_many_sectors_holds_only_the_regions_it_makes() {
 #[test]
 fn shared_regions_are_those_of_each_node_alone() {
     let _guard = lock();
-    let mut h = chain(grid_mesh(16), squares(16, 8, 7, 9), 6, 16);
+    let mut h = chain_over(grid_mesh(16), squares(16, 8, 7, 9), 6, 16);
     // Every other node keeps a circle that holds its vertices (x 7 to 9, y 8 to 9): two shapes over the same range.
     for (i, n) in h.nodes.iter_mut().enumerate().take(7) {
         if i % 2 == 1 {
@@ -252,7 +119,7 @@ fn nodes_beyond_the_work_bound_get_no_regions_and_a_circle_that_holds_them() {
     let nt = mesh.triangles.len() as u64;
     let bound = CONSERVATIVE_WORK_PER_TRIANGLE * nt + CONSERVATIVE_WORK_CONSTANT;
     let depth = 25_000; // 25,001 nodes over 4 triangles: 5 each, 125,005 in all
-    let h = chain(mesh, squares(16, 8, 7, 9), depth, 16);
+    let h = chain_over(mesh, squares(16, 8, 7, 9), depth, 16);
     let (c, usage) = measure(|| conservative_hierarchy(&h));
     eprintln!("chain of 25,000 over 4 of 512 triangles: {usage:?}");
     let with: Vec<bool> = c.nodes.iter().map(|n| !n.regions.is_empty()).collect();
