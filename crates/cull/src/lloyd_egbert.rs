@@ -139,7 +139,7 @@ const ERR: f64 = 1e-14;
 /// Times the grid's cell edges that one cull may look at before it queues them all ([`CellEdges::queue_cells`]).
 const LOOKS_PER_EDGE: usize = 8;
 
-/// Grid lines whose occluders are made together ([`occluders`]: one pass over the triangles a block).
+/// Grid lines whose occluders are made together ([`occluders`]: the chord pieces held at once are a block's).
 const LINES_PER_BLOCK: usize = 64;
 
 /// Chord pieces allowed per grid corner on a grid line beyond one per chord, before the line is given up (see the
@@ -674,7 +674,7 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
     // block's are made. Grid line `axis * (n + 1) + i` holds cell edges `line * n .. line * n + n` (`Grid::edge`),
     // so the blocks' edges follow one another. A block at a time, the pieces held are a block's (a list per cell
     // edge held 65 MB for two triangles at the finest grid, one list of them all 54 MB for 100,000 triangles, where
-    // the one safe culler took 33 MB), for one more pass over the triangles a block.
+    // the one safe culler took 33 MB), and each block reads only the triangles listed for it.
     let lines = 2 * (n + 1);
     let mut chords: Vec<(u32, u32, ChordEnd, ChordEnd)> = Vec::new();
     let mut points: Vec<ChordEnd> = Vec::with_capacity(6);
@@ -685,15 +685,45 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
     let mut out = Vec::new();
     let mut edge_start = Vec::with_capacity(grid.edges() + 1);
     let mut next_id = grid.corner(n, n);
-    for block in (0..lines).step_by(LINES_PER_BLOCK) {
-        let block = block..(block + LINES_PER_BLOCK).min(lines);
-        chords.clear();
-        for tri in &h.mesh.triangles {
-            let p = tri.map(|v| pos[v as usize]);
-            let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
-            if !(area != 0.0 && area.is_finite()) {
+    // A triangle's extent along `axis` and the lines `first ..= last` of that axis it may meet (one more each side).
+    let span = |p: &[[f64; 3]; 3], axis: usize| {
+        let lo = p[0][axis].min(p[1][axis]).min(p[2][axis]);
+        let hi = p[0][axis].max(p[1][axis]).max(p[2][axis]);
+        let first = (((lo - grid.min[axis]) / grid.cell).floor().max(0.0) as usize).saturating_sub(1);
+        let last = ((((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize).saturating_add(1)).min(n);
+        (lo, hi, first, last)
+    };
+    // The triangles with an area in x,y that each block may meet, in their order (a triangle is in one or two blocks
+    // of each axis, unless it is as wide as many lines).
+    let mut in_block: Vec<Vec<u32>> = vec![Vec::new(); lines.div_ceil(LINES_PER_BLOCK)];
+    for (t, tri) in h.mesh.triangles.iter().enumerate() {
+        let p = tri.map(|v| pos[v as usize]);
+        let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        if !(area != 0.0 && area.is_finite()) {
+            continue;
+        }
+        // Blocks come in increasing order, axis 0's before axis 1's: a block shared by both is listed once.
+        let mut listed = None;
+        for axis in 0..2 {
+            let (_, _, first, last) = span(&p, axis);
+            if first > last {
                 continue;
             }
+            let base = axis * (n + 1);
+            for b in (base + first) / LINES_PER_BLOCK..=(base + last) / LINES_PER_BLOCK {
+                if listed != Some(b) {
+                    in_block[b].push(t as u32);
+                    listed = Some(b);
+                }
+            }
+        }
+    }
+    for (b, block_triangles) in in_block.iter_mut().enumerate() {
+        let block = b * LINES_PER_BLOCK..((b + 1) * LINES_PER_BLOCK).min(lines);
+        chords.clear();
+        for t in std::mem::take(block_triangles) {
+            let tri = h.mesh.triangles[t as usize];
+            let p = tri.map(|v| pos[v as usize]);
             for axis in 0..2 {
                 // The lines `i` of this axis in the block.
                 let (b0, b1) = (block.start.max(axis * (n + 1)), block.end.min((axis + 1) * (n + 1)));
@@ -701,10 +731,7 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                     continue;
                 }
                 let o = 1 - axis;
-                let lo = p[0][axis].min(p[1][axis]).min(p[2][axis]);
-                let hi = p[0][axis].max(p[1][axis]).max(p[2][axis]);
-                let first = (((lo - grid.min[axis]) / grid.cell).floor().max(0.0) as usize).saturating_sub(1);
-                let last = ((((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize).saturating_add(1)).min(n);
+                let (lo, hi, first, last) = span(&p, axis);
                 let (first, last) = (first.max(b0 - axis * (n + 1)), last.min(b1 - 1 - axis * (n + 1)));
                 for i in first..=last {
                     let x = grid.line(axis, i);
