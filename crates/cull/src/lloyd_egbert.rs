@@ -710,9 +710,10 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
                 continue;
             }
             let base = axis * (n + 1);
-            for b in (base + first) / LINES_PER_BLOCK..=(base + last) / LINES_PER_BLOCK {
+            let (b0, b1) = ((base + first) / LINES_PER_BLOCK, (base + last) / LINES_PER_BLOCK);
+            for (b, list) in in_block.iter_mut().enumerate().take(b1 + 1).skip(b0) {
                 if listed != Some(b) {
-                    in_block[b].push(t as u32);
+                    list.push(t as u32);
                     listed = Some(b);
                 }
             }
