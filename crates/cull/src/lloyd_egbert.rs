@@ -103,12 +103,11 @@
 //! and its cell edges get no occluder. Fewer occluders cull less, never wrongly: (i) and (ii) are about each
 //! occluder written. So a line keeps at most its chords plus 8 pieces per corner, and the work is linear in the
 //! (triangle, grid line) pairs, where 64 copies of one triangle spanning a 256 × 256 grid (a 378-byte file) asked for
-//! 8 million pieces, 430 MB. The lines are taken in blocks of 64, one pass over the triangles a block, so that the
-//! pieces held at once are a block's: at most 64 × (chords + 8 × 257) at the finest grid, 13 MB for the copies and
-//! 17 MB for two triangles covering the grid's square (a list per cell edge held 65 MB for these). A cull is bounded
-//! too: it looks at each cell edge at most 9 times, queueing every edge at once when the drawn nodes' boxes would make
-//! it look more (overlapping boxes each spanning the grid did: 4.4 s a cull with 16,385 leaves); more occluders
-//! pending than the drawn nodes ask for cull no visible triangle, by the same argument.
+//! 8 million pieces, 430 MB. The lines of one axis are taken at a time (one pass over the triangles an axis), so that
+//! the pieces held at once are an axis's. A cull is bounded too: it looks at each cell edge at most 9 times, queueing
+//! every edge at once when the drawn nodes' boxes would make it look more (overlapping boxes each spanning the grid
+//! did: 4.4 s a cull with 16,385 leaves); more occluders pending than the drawn nodes ask for cull no visible
+//! triangle, by the same argument.
 //!
 //! **(ii) holds, rounding included.** `d_min` is multiplied by `1 − 1e-12` and `d_max` by `1 + 1e-12`, far beyond
 //! the few-ulp errors of a square root of a sum of squares of correctly rounded differences.
@@ -138,9 +137,6 @@ const ERR: f64 = 1e-14;
 
 /// Times the grid's cell edges that one cull may look at before it queues them all ([`CellEdges::queue_cells`]).
 const LOOKS_PER_EDGE: usize = 8;
-
-/// Grid lines whose occluders are made together ([`occluders`]: the chord pieces held at once are a block's).
-const LINES_PER_BLOCK: usize = 64;
 
 /// Chord pieces allowed per grid corner on a grid line beyond one per chord, before the line is given up (see the
 /// module documentation, "Bounded preparation").
@@ -670,202 +666,159 @@ fn box_top_hidden(horizon: &Horizon, node: &BoxNode, eye: [f64; 3], mu: f64) -> 
 fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
     let pos = &h.mesh.positions;
     let n = grid.n;
-    // The chord pieces of a block of grid lines as (cell edge, order made, piece): one list, sorted by edge once the
-    // block's are made. Grid line `axis * (n + 1) + i` holds cell edges `line * n .. line * n + n` (`Grid::edge`),
-    // so the blocks' edges follow one another. A block at a time, the pieces held are a block's (a list per cell
-    // edge held 65 MB for two triangles at the finest grid, one list of them all 54 MB for 100,000 triangles, where
-    // the one safe culler took 33 MB), and each block reads only the triangles listed for it.
+    // The chord pieces of each cell edge of one axis's grid lines (edge `e` in `chords[e - axis n (n + 1)]`), the lists
+    // reused for the other axis: one pass over the triangles an axis, and the pieces held at once are an axis's (lists
+    // for every cell edge held 65 MB for two triangles at the finest grid, 40 MB now; blocks of 64 lines, each reading
+    // only the triangles listed for it, held less but took three times as long over 2 million triangles, whose
+    // vertices are read again at every pass).
     let lines = 2 * (n + 1);
-    let mut chords: Vec<(u32, u32, ChordEnd, ChordEnd)> = Vec::new();
+    let mut chords: Vec<Vec<(ChordEnd, ChordEnd)>> = vec![Vec::new(); (n + 1) * n];
     let mut points: Vec<ChordEnd> = Vec::with_capacity(6);
-    // Per grid line: chords met and pieces made so far, and whether it was given up.
+    // Per grid line (`axis * (n + 1) + i`): chords met and pieces made so far, and whether it was given up.
     let mut met = vec![0usize; lines];
     let mut pieces = vec![0usize; lines];
     let mut given_up = vec![false; lines];
     let mut out = Vec::new();
     let mut edge_start = Vec::with_capacity(grid.edges() + 1);
     let mut next_id = grid.corner(n, n);
-    // A triangle's extent along `axis` and the lines `first ..= last` of that axis it may meet (one more each side).
-    let span = |p: &[[f64; 3]; 3], axis: usize| {
-        let lo = p[0][axis].min(p[1][axis]).min(p[2][axis]);
-        let hi = p[0][axis].max(p[1][axis]).max(p[2][axis]);
-        let first = (((lo - grid.min[axis]) / grid.cell).floor().max(0.0) as usize).saturating_sub(1);
-        let last = ((((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize).saturating_add(1)).min(n);
-        (lo, hi, first, last)
-    };
-    // The triangles with an area in x,y that each block may meet, in their order (a triangle is in one or two blocks
-    // of each axis, unless it is as wide as many lines).
-    let mut in_block: Vec<Vec<u32>> = vec![Vec::new(); lines.div_ceil(LINES_PER_BLOCK)];
-    for (t, tri) in h.mesh.triangles.iter().enumerate() {
-        let p = tri.map(|v| pos[v as usize]);
-        let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
-        if !(area != 0.0 && area.is_finite()) {
-            continue;
-        }
-        // Blocks come in increasing order, axis 0's before axis 1's: a block shared by both is listed once.
-        let mut listed = None;
-        for axis in 0..2 {
-            let (_, _, first, last) = span(&p, axis);
-            if first > last {
+    for axis in 0..2 {
+        let axis_lines = axis * (n + 1)..(axis + 1) * (n + 1);
+        chords.iter_mut().for_each(Vec::clear);
+        for tri in &h.mesh.triangles {
+            let p = tri.map(|v| pos[v as usize]);
+            let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+            if !(area != 0.0 && area.is_finite()) {
                 continue;
             }
-            let base = axis * (n + 1);
-            let (b0, b1) = ((base + first) / LINES_PER_BLOCK, (base + last) / LINES_PER_BLOCK);
-            for (b, list) in in_block.iter_mut().enumerate().take(b1 + 1).skip(b0) {
-                if listed != Some(b) {
-                    list.push(t as u32);
-                    listed = Some(b);
-                }
-            }
-        }
-    }
-    for (b, block_triangles) in in_block.iter_mut().enumerate() {
-        let block = b * LINES_PER_BLOCK..((b + 1) * LINES_PER_BLOCK).min(lines);
-        chords.clear();
-        for t in std::mem::take(block_triangles) {
-            let tri = h.mesh.triangles[t as usize];
-            let p = tri.map(|v| pos[v as usize]);
-            for axis in 0..2 {
-                // The lines `i` of this axis in the block.
-                let (b0, b1) = (block.start.max(axis * (n + 1)), block.end.min((axis + 1) * (n + 1)));
-                if b0 >= b1 {
+            let o = 1 - axis;
+            let lo = p[0][axis].min(p[1][axis]).min(p[2][axis]);
+            let hi = p[0][axis].max(p[1][axis]).max(p[2][axis]);
+            let first = (((lo - grid.min[axis]) / grid.cell).floor().max(0.0) as usize).saturating_sub(1);
+            let last = ((((hi - grid.min[axis]) / grid.cell).ceil().max(0.0) as usize).saturating_add(1)).min(n);
+            for i in first..=last {
+                let x = grid.line(axis, i);
+                let line = axis * (n + 1) + i;
+                if !(lo <= x && x <= hi) || given_up[line] {
                     continue;
                 }
-                let o = 1 - axis;
-                let (lo, hi, first, last) = span(&p, axis);
-                let (first, last) = (first.max(b0 - axis * (n + 1)), last.min(b1 - 1 - axis * (n + 1)));
-                for i in first..=last {
-                    let x = grid.line(axis, i);
-                    let line = axis * (n + 1) + i;
-                    if !(lo <= x && x <= hi) || given_up[line] {
-                        continue;
+                points.clear();
+                for (k, m) in [(0usize, 1usize), (1, 2), (2, 0)] {
+                    let (mut va, mut vb) = (tri[k], tri[m]);
+                    if va > vb {
+                        std::mem::swap(&mut va, &mut vb);
                     }
-                    points.clear();
-                    for (k, m) in [(0usize, 1usize), (1, 2), (2, 0)] {
-                        let (mut va, mut vb) = (tri[k], tri[m]);
-                        if va > vb {
-                            std::mem::swap(&mut va, &mut vb);
-                        }
-                        let (a, b) = (pos[va as usize], pos[vb as usize]);
-                        let (da, db) = (a[axis] - x, b[axis] - x);
-                        if da == 0.0 {
-                            points.push(ChordEnd {
-                                b: Break {
-                                    t: a[o],
-                                    z: a[2],
-                                    dt: 0.0,
-                                    dz: 0.0,
-                                },
-                                source: (0, u64::from(va)),
-                            });
-                        }
-                        if db == 0.0 {
-                            points.push(ChordEnd {
-                                b: Break {
-                                    t: b[o],
-                                    z: b[2],
-                                    dt: 0.0,
-                                    dz: 0.0,
-                                },
-                                source: (0, u64::from(vb)),
-                            });
-                        }
-                        if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
-                            let s = (x - a[axis]) / (b[axis] - a[axis]);
-                            points.push(ChordEnd {
-                                b: Break {
-                                    t: a[o] + s * (b[o] - a[o]),
-                                    z: a[2] + s * (b[2] - a[2]),
-                                    dt: ERR * (a[o].abs() + b[o].abs()),
-                                    dz: ERR * (a[2].abs() + b[2].abs()),
-                                },
-                                source: (1, (u64::from(va) << 32) | u64::from(vb)),
-                            });
-                        }
+                    let (a, b) = (pos[va as usize], pos[vb as usize]);
+                    let (da, db) = (a[axis] - x, b[axis] - x);
+                    if da == 0.0 {
+                        points.push(ChordEnd {
+                            b: Break {
+                                t: a[o],
+                                z: a[2],
+                                dt: 0.0,
+                                dz: 0.0,
+                            },
+                            source: (0, u64::from(va)),
+                        });
                     }
-                    let (Some(&c0), Some(&c1)) = (
-                        points.iter().min_by(|a, b| a.b.t.total_cmp(&b.b.t)),
-                        points.iter().max_by(|a, b| a.b.t.total_cmp(&b.b.t)),
-                    ) else {
+                    if db == 0.0 {
+                        points.push(ChordEnd {
+                            b: Break {
+                                t: b[o],
+                                z: b[2],
+                                dt: 0.0,
+                                dz: 0.0,
+                            },
+                            source: (0, u64::from(vb)),
+                        });
+                    }
+                    if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
+                        let s = (x - a[axis]) / (b[axis] - a[axis]);
+                        points.push(ChordEnd {
+                            b: Break {
+                                t: a[o] + s * (b[o] - a[o]),
+                                z: a[2] + s * (b[2] - a[2]),
+                                dt: ERR * (a[o].abs() + b[o].abs()),
+                                dz: ERR * (a[2].abs() + b[2].abs()),
+                            },
+                            source: (1, (u64::from(va) << 32) | u64::from(vb)),
+                        });
+                    }
+                }
+                let (Some(&c0), Some(&c1)) = (
+                    points.iter().min_by(|a, b| a.b.t.total_cmp(&b.b.t)),
+                    points.iter().max_by(|a, b| a.b.t.total_cmp(&b.b.t)),
+                ) else {
+                    continue;
+                };
+                if !(c0.b.t.is_finite() && c1.b.t.is_finite() && c0.b.z.is_finite() && c1.b.z.is_finite()) {
+                    continue;
+                }
+                let (j0, j1) = grid.cells(o, c0.b.t, c1.b.t);
+                // The pieces of a line stay within its chords plus `PIECES_PER_CORNER` per grid corner on it, as
+                // they do over a height field (module documentation); a line past that bound is given up,
+                // occluders and all, so that the work and memory stay linear in the chords.
+                met[line] += 1;
+                pieces[line] += j1 - j0 + 1;
+                if pieces[line] > met[line] + PIECES_PER_CORNER * (n + 1) {
+                    given_up[line] = true;
+                    let at = (line - axis_lines.start) * n;
+                    chords[at..at + n].iter_mut().for_each(Vec::clear);
+                    continue;
+                }
+                for j in j0..=j1 {
+                    let (r0, r1) = (grid.line(o, j), grid.line(o, j + 1));
+                    let clip = |r: f64, end: ChordEnd, ix: usize, iy: usize| -> Option<ChordEnd> {
+                        if c0.b.t == c1.b.t {
+                            return (r == c0.b.t).then_some(end);
+                        }
+                        let (lo_z, hi_z) = (c0.b.z.min(c1.b.z), c0.b.z.max(c1.b.z));
+                        let k = (c1.b.z - c0.b.z) / (c1.b.t - c0.b.t);
+                        let z = (c0.b.z + (r - c0.b.t) * k).clamp(lo_z, hi_z);
+                        let dtm = c0.b.dt.max(c1.b.dt);
+                        let dzm = c0.b.dz.max(c1.b.dz);
+                        let dz = dzm
+                            + ((hi_z - lo_z + 2.0 * dzm) * dtm / (c1.b.t - c0.b.t)).min(hi_z - lo_z)
+                            + ERR * (c0.b.z.abs() + c1.b.z.abs());
+                        Some(ChordEnd {
+                            b: Break { t: r, z, dt: 0.0, dz },
+                            source: (2, u64::from(grid.corner(ix, iy))),
+                        })
+                    };
+                    // Corner indices of a point at `t = line(o, jj)` on line `i` of `axis`.
+                    let corner = |jj: usize| if axis == 0 { (i, jj) } else { (jj, i) };
+                    // A chord is cut at a grid corner only when its computed ends lie on either side of the corner
+                    // by more than their `δt`, so that the true chord surely passes it (module documentation, (i)).
+                    let passes = |r: f64| c0.b.t + c0.b.dt < r && r < c1.b.t - c1.b.dt;
+                    let start = if !passes(r0) {
+                        Some(c0)
+                    } else {
+                        let (ix, iy) = corner(j);
+                        clip(r0, c0, ix, iy)
+                    };
+                    let end = if !passes(r1) {
+                        Some(c1)
+                    } else {
+                        let (ix, iy) = corner(j + 1);
+                        clip(r1, c1, ix, iy)
+                    };
+                    let (Some(start), Some(end)) = (start, end) else {
                         continue;
                     };
-                    if !(c0.b.t.is_finite() && c1.b.t.is_finite() && c0.b.z.is_finite() && c1.b.z.is_finite()) {
+                    if start.b.t > end.b.t {
                         continue;
                     }
-                    let (j0, j1) = grid.cells(o, c0.b.t, c1.b.t);
-                    // The pieces of a line stay within its chords plus `PIECES_PER_CORNER` per grid corner on it, as
-                    // they do over a height field (module documentation); a line past that bound is given up,
-                    // occluders and all, so that the work and memory stay linear in the chords.
-                    met[line] += 1;
-                    pieces[line] += j1 - j0 + 1;
-                    if pieces[line] > met[line] + PIECES_PER_CORNER * (n + 1) {
-                        given_up[line] = true;
-                        continue;
-                    }
-                    for j in j0..=j1 {
-                        let (r0, r1) = (grid.line(o, j), grid.line(o, j + 1));
-                        let clip = |r: f64, end: ChordEnd, ix: usize, iy: usize| -> Option<ChordEnd> {
-                            if c0.b.t == c1.b.t {
-                                return (r == c0.b.t).then_some(end);
-                            }
-                            let (lo_z, hi_z) = (c0.b.z.min(c1.b.z), c0.b.z.max(c1.b.z));
-                            let k = (c1.b.z - c0.b.z) / (c1.b.t - c0.b.t);
-                            let z = (c0.b.z + (r - c0.b.t) * k).clamp(lo_z, hi_z);
-                            let dtm = c0.b.dt.max(c1.b.dt);
-                            let dzm = c0.b.dz.max(c1.b.dz);
-                            let dz = dzm
-                                + ((hi_z - lo_z + 2.0 * dzm) * dtm / (c1.b.t - c0.b.t)).min(hi_z - lo_z)
-                                + ERR * (c0.b.z.abs() + c1.b.z.abs());
-                            Some(ChordEnd {
-                                b: Break { t: r, z, dt: 0.0, dz },
-                                source: (2, u64::from(grid.corner(ix, iy))),
-                            })
-                        };
-                        // Corner indices of a point at `t = line(o, jj)` on line `i` of `axis`.
-                        let corner = |jj: usize| if axis == 0 { (i, jj) } else { (jj, i) };
-                        // A chord is cut at a grid corner only when its computed ends lie on either side of the corner
-                        // by more than their `δt`, so that the true chord surely passes it (module documentation, (i)).
-                        let passes = |r: f64| c0.b.t + c0.b.dt < r && r < c1.b.t - c1.b.dt;
-                        let start = if !passes(r0) {
-                            Some(c0)
-                        } else {
-                            let (ix, iy) = corner(j);
-                            clip(r0, c0, ix, iy)
-                        };
-                        let end = if !passes(r1) {
-                            Some(c1)
-                        } else {
-                            let (ix, iy) = corner(j + 1);
-                            clip(r1, c1, ix, iy)
-                        };
-                        let (Some(start), Some(end)) = (start, end) else {
-                            continue;
-                        };
-                        if start.b.t > end.b.t {
-                            continue;
-                        }
-                        chords.push((grid.edge(axis, i, j) as u32, chords.len() as u32, start, end));
-                    }
+                    chords[grid.edge(axis, i, j) - axis_lines.start * n].push((start, end));
                 }
             }
         }
-        // A cell edge's pieces by their start, then their end, then the order they were made in.
-        chords.retain(|c| !given_up[c.0 as usize / n]);
-        chords.sort_unstable_by(|a, b| {
-            (a.0.cmp(&b.0))
-                .then(a.2.b.t.total_cmp(&b.2.b.t))
-                .then(a.3.b.t.total_cmp(&b.3.b.t))
-                .then(a.1.cmp(&b.1))
-        });
-        let mut rest = &chords[..];
-        for e in block.start * n..block.end * n {
+        for e in axis_lines.start * n..axis_lines.end * n {
             edge_start.push(out.len() as u32);
-            let here = rest.iter().take_while(|c| c.0 as usize == e).count();
-            let (list, after) = rest.split_at(here);
-            rest = after;
-            if list.is_empty() {
+            let list = &mut chords[e - axis_lines.start * n];
+            if list.is_empty() || given_up[e / n] {
                 continue;
             }
+            // By start, then end (a stable sort: then in the order made).
+            list.sort_by(|a, b| a.0.b.t.total_cmp(&b.0.b.t).then(a.1.b.t.total_cmp(&b.1.b.t)));
             let axis = usize::from(e >= n * (n + 1));
             let i = (e - axis * n * (n + 1)) / n;
             let x = grid.line(axis, i);
@@ -878,7 +831,7 @@ fn occluders(h: &Hierarchy, grid: &Grid) -> (Vec<Occluder>, Vec<u32>) {
             let mut run: Vec<Break> = Vec::new();
             let mut run_start: Option<ChordEnd> = None;
             let mut run_end: Option<ChordEnd> = None;
-            for &(_, _, s, t) in list {
+            for &(s, t) in list.iter() {
                 let joins = match run_end {
                     None => false,
                     Some(re) => {
