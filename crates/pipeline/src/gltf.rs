@@ -1,6 +1,6 @@
 //! glTF 2.0 export of a hierarchy: binary `.glb`, or `.gltf` JSON with a `.bin` beside it.
 //!
-//! What is written (JSON by hand with `serde_json`, the binary buffer little-endian):
+//! What is written (JSON with `serde_json`, written straight from the hierarchy; the binary buffer little-endian):
 //! - **Buffer** (one): positions (f32 VEC3, relative to the hierarchy's local origin), normals (f32 VEC3, per vertex,
 //!   area-weighted, unit length), then the triangle indices (u32) in hierarchy order, in three buffer views
 //!   (0 positions, 1 normals, 2 indices). Triangle `t` of the hierarchy is indices `3t .. 3t+3` of buffer view 2, so
@@ -28,11 +28,13 @@
 //!
 //! [`gltf_files`] returns the bytes of the files; the caller writes them (the CLI through its one writer).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use cull::{Hierarchy, Mesh, Node};
-use serde::Deserialize;
-use serde_json::{Value, json};
+use cull::{BuildInfo, Hierarchy, Mesh, Node};
+use serde::ser::SerializeSeq;
+use serde::{Deserialize, Serialize, Serializer};
+use serde_json::Value;
 
 use crate::ExportError;
 use crate::palette::{ORPHAN_COLOUR, group_colour};
@@ -48,8 +50,10 @@ const UNSIGNED_INT: u32 = 5125;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
-/// The glTF JSON document (with the buffer's `uri` when given, for `.gltf`) and the binary buffer.
-pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8>)> {
+/// The glTF JSON document and the binary buffer of `h` (with the buffer's `uri` when given, for `.gltf`). The
+/// document is written as it is serialised, straight from the hierarchy: no JSON value tree is built, so it takes
+/// little memory beyond the text it writes.
+pub fn to_gltf<'a>(h: &'a Hierarchy, buffer_uri: Option<&str>) -> Result<(Document<'a>, Vec<u8>)> {
     let nv = h.mesh.positions.len();
     let nt = h.mesh.triangles.len();
     if nv == 0 || nt == 0 {
@@ -90,40 +94,53 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
     let vbytes = 12 * nv;
     let ibytes = 12 * nt;
 
-    let mut accessors = vec![
-        json!({"bufferView": 0, "componentType": FLOAT, "count": nv, "type": "VEC3", "min": min, "max": max}),
-        json!({"bufferView": 1, "componentType": FLOAT, "count": nv, "type": "VEC3"}),
-    ];
+    let vec3 = |view, min, max| Accessor {
+        buffer_view: view,
+        byte_offset: None,
+        component_type: FLOAT,
+        count: nv,
+        kind: "VEC3",
+        min,
+        max,
+    };
+    let mut accessors = vec![vec3(0, Some(min), Some(max)), vec3(1, None, None)];
     let mut meshes = Vec::new();
     let mut materials = Vec::new();
     let mut add_mesh = |name: String, [s, e]: [u32; 2], colour: [f64; 3]| -> usize {
         let a = accessors.len();
-        accessors.push(json!({
-            "bufferView": 2,
-            "byteOffset": 12 * s as usize,
-            "componentType": UNSIGNED_INT,
-            "count": 3 * (e - s) as usize,
-            "type": "SCALAR",
-        }));
+        accessors.push(Accessor {
+            buffer_view: 2,
+            byte_offset: Some(12 * s as usize),
+            component_type: UNSIGNED_INT,
+            count: 3 * (e - s) as usize,
+            kind: "SCALAR",
+            min: None,
+            max: None,
+        });
         let m = materials.len();
-        let linear = colour.map(srgb_to_linear);
-        materials.push(json!({
-            "name": name,
-            "pbrMetallicRoughness": {
-                "baseColorFactor": [linear[0], linear[1], linear[2], 1.0],
-                "metallicFactor": 0.0,
-                "roughnessFactor": 1.0,
+        let [r, g, b] = colour.map(srgb_to_linear);
+        materials.push(Material {
+            name: name.clone(),
+            pbr_metallic_roughness: Pbr {
+                base_color_factor: [r, g, b, 1.0],
+                metallic_factor: 0.0,
+                roughness_factor: 1.0,
             },
-        }));
-        meshes.push(json!({
-            "name": name,
-            "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": a, "material": m, "mode": 4}],
-        }));
+        });
+        meshes.push(GltfMesh {
+            name,
+            primitives: [Primitive {
+                attributes: Attributes { position: 0, normal: 1 },
+                indices: a,
+                material: m,
+                mode: TRIANGLES,
+            }],
+        });
         meshes.len() - 1
     };
 
     let leaves = h.leaf_ranges();
-    let mut leaf_mesh = std::collections::HashMap::new();
+    let mut leaf_mesh = HashMap::new();
     for (i, &range) in leaves.iter().enumerate() {
         if range[1] > range[0] {
             let m = add_mesh(format!("group_{i}"), range, group_colour(i));
@@ -131,105 +148,114 @@ pub fn to_gltf(h: &Hierarchy, buffer_uri: Option<&str>) -> Result<(Value, Vec<u8
         }
     }
     let av = h.always_visible;
-    let av_mesh = (av[1] > av[0]).then(|| add_mesh("always_visible".into(), av, ORPHAN_COLOUR));
+    let always_visible_mesh = (av[1] > av[0]).then(|| add_mesh("always_visible".into(), av, ORPHAN_COLOUR));
 
-    let mut nodes = Vec::with_capacity(h.nodes.len() + 2);
-    let mut root_children: Vec<usize> = h.roots.iter().map(|&r| r as usize + 1).collect();
-    if av_mesh.is_some() {
-        root_children.push(h.nodes.len() + 1);
-    }
-    // glTF is +Y up, the terrain +Z up: node 0 turns it by −90° about +x, `(x, y, z) → (x, z, −y)`, after moving it
-    // to its origin (glTF applies the rotation first, so the translation is the origin turned the same way).
-    let half = std::f32::consts::FRAC_1_SQRT_2;
-    nodes.push(json!({
-        "name": "terrain",
-        "rotation": [-half, 0.0, 0.0, half],
-        "translation": [o[0], o[2], -o[1]],
-        "children": root_children,
-    }));
-    for (i, n) in h.nodes.iter().enumerate() {
-        let mut extras =
-            serde_json::to_value(n).map_err(ExportError::json(format!("cannot encode hierarchy node {i}")))?;
-        extras["index"] = json!(i);
-        let mut node = json!({ "extras": { "tincull": extras } });
-        if n.children.is_empty() {
-            match leaf_mesh.get(&n.triangles) {
-                Some(&(g, m)) => {
-                    node["name"] = json!(format!("group_{g}"));
-                    node["mesh"] = json!(m);
-                }
-                None => node["name"] = json!(format!("node_{i}")),
-            }
-        } else {
-            node["name"] = json!(format!("node_{i}"));
-            node["children"] = json!(n.children.iter().map(|&c| c as usize + 1).collect::<Vec<_>>());
-        }
-        nodes.push(node);
-    }
-    if let Some(m) = av_mesh {
-        nodes.push(json!({"name": "always_visible", "mesh": m}));
-    }
-
-    let mut buffer = json!({"byteLength": bin.len()});
-    if let Some(uri) = buffer_uri {
-        buffer["uri"] = json!(uri);
-    }
-    let doc = json!({
-        "asset": {"version": "2.0", "generator": concat!("tincull ", env!("CARGO_PKG_VERSION"))},
-        "scene": 0,
-        "scenes": [{
-            "name": "tincull hierarchy",
-            "nodes": [0],
-            "extras": {"tincull": {
-                "version": EXTRAS_VERSION,
-                "sectors": h.sectors,
-                "origin": h.origin,
-                "roots": h.roots,
-                "always_visible": h.always_visible,
-                "triangles": nt,
-                "vertices": nv,
-                "node_offset": 1,
-                "index_buffer_view": 2,
-                "build": h.build,
-            }},
+    let doc = Document {
+        asset: Asset {
+            version: "2.0",
+            generator: concat!("tincull ", env!("CARGO_PKG_VERSION")),
+        },
+        scene: 0,
+        scenes: [Scene {
+            name: "tincull hierarchy",
+            nodes: [0],
+            extras: Extras {
+                tincull: SceneCull {
+                    version: EXTRAS_VERSION,
+                    sectors: h.sectors,
+                    origin: h.origin,
+                    roots: &h.roots,
+                    always_visible: h.always_visible,
+                    triangles: nt,
+                    vertices: nv,
+                    node_offset: 1,
+                    index_buffer_view: 2,
+                    build: &h.build,
+                },
+            },
         }],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "accessors": accessors,
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": vbytes, "target": ARRAY_BUFFER},
-            {"buffer": 0, "byteOffset": vbytes, "byteLength": vbytes, "target": ARRAY_BUFFER},
-            {"buffer": 0, "byteOffset": 2 * vbytes, "byteLength": ibytes, "target": ELEMENT_ARRAY_BUFFER},
+        nodes: Nodes {
+            h,
+            leaf_mesh,
+            always_visible_mesh,
+        },
+        meshes,
+        materials,
+        accessors,
+        buffer_views: [
+            BufferView {
+                buffer: 0,
+                byte_offset: 0,
+                byte_length: vbytes,
+                target: ARRAY_BUFFER,
+            },
+            BufferView {
+                buffer: 0,
+                byte_offset: vbytes,
+                byte_length: vbytes,
+                target: ARRAY_BUFFER,
+            },
+            BufferView {
+                buffer: 0,
+                byte_offset: 2 * vbytes,
+                byte_length: ibytes,
+                target: ELEMENT_ARRAY_BUFFER,
+            },
         ],
-        "buffers": [buffer],
-    });
+        buffers: [Buffer {
+            byte_length: bin.len(),
+            uri: buffer_uri.map(str::to_owned),
+        }],
+    };
     Ok((doc, bin))
 }
 
 /// The binary glTF (`.glb`) bytes of `h`.
 pub fn to_glb(h: &Hierarchy) -> Result<Vec<u8>> {
     let (doc, mut bin) = to_gltf(h, None)?;
-    let mut json = serde_json::to_vec(&doc).map_err(ExportError::json("cannot encode the glTF document"))?;
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
     while bin.len() % 4 != 0 {
         bin.push(0);
     }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let json_len = json_length(&doc, false)?.next_multiple_of(4);
+    let total = 12 + 8 + json_len + 8 + bin.len();
     let total = u32::try_from(total).map_err(|_| ExportError::TooLargeForGlb)?;
     let mut out = Vec::with_capacity(total as usize);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
     out.extend_from_slice(&total.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    // Both fit: each is less than `total`.
+    out.extend_from_slice(&(json_len as u32).to_le_bytes());
     out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
+    serde_json::to_writer(&mut out, &doc).map_err(ExportError::json("cannot encode the glTF document"))?;
+    out.resize(20 + json_len, b' ');
     out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
     Ok(out)
+}
+
+/// The length of `doc`'s JSON text (`pretty` or compact), counted without keeping it: the text is then written once
+/// into a buffer of its size, never into one that grows by copies.
+fn json_length(doc: &Document<'_>, pretty: bool) -> Result<usize> {
+    /// A writer that keeps only the count of the bytes written to it.
+    struct Count(usize);
+    impl std::io::Write for Count {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            self.0 += buf.len();
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let mut count = Count(0);
+    if pretty {
+        serde_json::to_writer_pretty(&mut count, doc)
+    } else {
+        serde_json::to_writer(&mut count, doc)
+    }
+    .map_err(ExportError::json("cannot encode the glTF document"))?;
+    Ok(count.0)
 }
 
 /// The files of `h` as glTF for `path`: the `.glb` alone when `path` ends in `.glb` (any case), else the `.gltf`
@@ -241,8 +267,9 @@ pub fn gltf_files(h: &Hierarchy, path: &Path) -> Result<Vec<(PathBuf, Vec<u8>)>>
     }
     let (bin_path, uri) = bin_path(path)?;
     let (doc, bin) = to_gltf(h, Some(&uri))?;
-    let text = serde_json::to_string_pretty(&doc).map_err(ExportError::json("cannot encode the glTF document"))?;
-    Ok(vec![(path.to_path_buf(), text.into_bytes()), (bin_path, bin)])
+    let mut text = Vec::with_capacity(json_length(&doc, true)?);
+    serde_json::to_writer_pretty(&mut text, &doc).map_err(ExportError::json("cannot encode the glTF document"))?;
+    Ok(vec![(path.to_path_buf(), text), (bin_path, bin)])
 }
 
 /// Whether `path` asks for binary glTF (`.glb`, any case).
@@ -355,6 +382,226 @@ pub fn hierarchy_from_gltf_json(doc: &Value, bin: &[u8]) -> Result<Hierarchy> {
     };
     h.check_invariants()?;
     Ok(h)
+}
+
+/// glTF primitive mode: triangles.
+const TRIANGLES: u32 = 4;
+
+/// The glTF JSON document [`to_gltf`] makes, borrowing the hierarchy: serialise it (with `serde_json`) to get the
+/// text, or to a [`serde_json::Value`] to edit it.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Document<'a> {
+    asset: Asset,
+    scene: u32,
+    scenes: [Scene<'a>; 1],
+    nodes: Nodes<'a>,
+    meshes: Vec<GltfMesh>,
+    materials: Vec<Material>,
+    accessors: Vec<Accessor>,
+    buffer_views: [BufferView; 3],
+    buffers: [Buffer; 1],
+}
+
+/// The document's `asset`.
+#[derive(Serialize)]
+struct Asset {
+    version: &'static str,
+    generator: &'static str,
+}
+
+/// The one scene, with the hierarchy's own fields in `extras.tincull`.
+#[derive(Serialize)]
+struct Scene<'a> {
+    name: &'static str,
+    nodes: [u32; 1],
+    extras: Extras<SceneCull<'a>>,
+}
+
+/// An `extras` object holding tincull's data.
+#[derive(Serialize)]
+struct Extras<T> {
+    tincull: T,
+}
+
+/// The scene's `extras.tincull` (see the module docs).
+#[derive(Serialize)]
+struct SceneCull<'a> {
+    version: u32,
+    sectors: u32,
+    origin: [f64; 3],
+    roots: &'a [u32],
+    always_visible: [u32; 2],
+    triangles: usize,
+    vertices: usize,
+    node_offset: u32,
+    index_buffer_view: u32,
+    build: &'a BuildInfo,
+}
+
+/// A hierarchy node's `extras.tincull`: its index and the node's own fields, as in the `.tch` JSON form.
+#[derive(Serialize)]
+struct NodeCull<'a> {
+    index: usize,
+    #[serde(flatten)]
+    node: &'a Node,
+}
+
+/// The document's nodes, written one at a time from the hierarchy when serialised (see the module docs).
+struct Nodes<'a> {
+    h: &'a Hierarchy,
+    /// Leaf group number and mesh index of each non-empty leaf range.
+    leaf_mesh: HashMap<[u32; 2], (usize, usize)>,
+    /// The always-visible triangles' mesh, when there are any.
+    always_visible_mesh: Option<usize>,
+}
+
+/// One glTF node.
+#[derive(Serialize)]
+struct GltfNode<'a> {
+    name: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rotation: Option<[f32; 4]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    translation: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    children: Vec<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mesh: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    extras: Option<Extras<NodeCull<'a>>>,
+}
+
+impl Serialize for Nodes<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let h = self.h;
+        let n = h.nodes.len();
+        let mut seq = serializer.serialize_seq(Some(n + 1 + usize::from(self.always_visible_mesh.is_some())))?;
+        let mut children: Vec<usize> = h.roots.iter().map(|&r| r as usize + 1).collect();
+        if self.always_visible_mesh.is_some() {
+            children.push(n + 1);
+        }
+        // glTF is +Y up, the terrain +Z up: node 0 turns it by −90° about +x, `(x, y, z) → (x, z, −y)`, after moving
+        // it to its origin (glTF applies the rotation first, so the translation is the origin turned the same way).
+        let half = std::f32::consts::FRAC_1_SQRT_2;
+        let o = h.origin;
+        seq.serialize_element(&GltfNode {
+            name: "terrain".into(),
+            rotation: Some([-half, 0.0, 0.0, half]),
+            translation: Some([o[0], o[2], -o[1]]),
+            children,
+            mesh: None,
+            extras: None,
+        })?;
+        for (index, node) in h.nodes.iter().enumerate() {
+            let leaf = if node.children.is_empty() {
+                self.leaf_mesh.get(&node.triangles)
+            } else {
+                None
+            };
+            seq.serialize_element(&GltfNode {
+                name: match leaf {
+                    Some((g, _)) => format!("group_{g}"),
+                    None => format!("node_{index}"),
+                },
+                rotation: None,
+                translation: None,
+                children: node.children.iter().map(|&c| c as usize + 1).collect(),
+                mesh: leaf.map(|&(_, m)| m),
+                extras: Some(Extras {
+                    tincull: NodeCull { index, node },
+                }),
+            })?;
+        }
+        if let Some(m) = self.always_visible_mesh {
+            seq.serialize_element(&GltfNode {
+                name: "always_visible".into(),
+                rotation: None,
+                translation: None,
+                children: Vec::new(),
+                mesh: Some(m),
+                extras: None,
+            })?;
+        }
+        seq.end()
+    }
+}
+
+/// A glTF mesh of one primitive.
+#[derive(Serialize)]
+struct GltfMesh {
+    name: String,
+    primitives: [Primitive; 1],
+}
+
+/// A triangle primitive over the shared POSITION and NORMAL accessors.
+#[derive(Serialize)]
+struct Primitive {
+    attributes: Attributes,
+    indices: usize,
+    material: usize,
+    mode: u32,
+}
+
+/// A primitive's vertex attributes: accessor indices.
+#[derive(Serialize)]
+#[serde(rename_all = "UPPERCASE")]
+struct Attributes {
+    position: usize,
+    normal: usize,
+}
+
+/// A group's material.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Material {
+    name: String,
+    pbr_metallic_roughness: Pbr,
+}
+
+/// A material's metallic-roughness model (linear colour).
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Pbr {
+    base_color_factor: [f64; 4],
+    metallic_factor: f64,
+    roughness_factor: f64,
+}
+
+/// A glTF accessor.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Accessor {
+    buffer_view: u32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    byte_offset: Option<usize>,
+    component_type: u32,
+    count: usize,
+    #[serde(rename = "type")]
+    kind: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    min: Option<[f32; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max: Option<[f32; 3]>,
+}
+
+/// A glTF buffer view.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct BufferView {
+    buffer: u32,
+    byte_offset: usize,
+    byte_length: usize,
+    target: u32,
+}
+
+/// The one glTF buffer (its `uri` for `.gltf`).
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Buffer {
+    byte_length: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    uri: Option<String>,
 }
 
 /// Unit vertex normals: the area-weighted sum of the incident triangles' normals (straight up when degenerate).

@@ -20,6 +20,12 @@ fn write_gltf(h: &Hierarchy, path: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
+/// The glTF document of `h` as a JSON value (to read back or damage) and its buffer.
+fn gltf_value(h: &Hierarchy) -> (serde_json::Value, Vec<u8>) {
+    let (doc, bin) = to_gltf(h, None).expect("glTF");
+    (serde_json::to_value(&doc).expect("a JSON value"), bin)
+}
+
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
@@ -133,7 +139,7 @@ fn glb_reimports_to_the_same_triangles_and_hierarchy() {
     let blob = g.blob.clone().expect("a BIN chunk");
     check_reimport(&h, &g.document, &blob);
     // The culling data in extras: the same hierarchy (f32 positions), the same thesis culls.
-    let (doc, bin) = to_gltf(&h, None).expect("gltf");
+    let (doc, bin) = gltf_value(&h);
     let back = hierarchy_from_gltf_json(&doc, &bin).expect("rebuilt from extras");
     assert_eq!(back.nodes, h.nodes);
     assert_eq!(back.roots, h.roots);
@@ -243,7 +249,7 @@ fn a_damaged_gltf_document_names_the_element_at_fault() {
     use pipeline::ExportError;
     use serde_json::json;
     let h = bundled("jacksboro-2k.obj");
-    let (doc, bin) = to_gltf(&h, None).expect("glTF");
+    let (doc, bin) = gltf_value(&h);
     let back = hierarchy_from_gltf_json(&doc, &bin).expect("the document reads back");
     assert_eq!((&back.nodes, &back.mesh.triangles), (&h.nodes, &h.mesh.triangles));
     let scene = "/scenes/0/extras/tincull";
@@ -338,7 +344,7 @@ fn damageable() -> &'static (Hierarchy, serde_json::Value, Vec<u8>, Vec<String>)
     static DOC: std::sync::OnceLock<(Hierarchy, serde_json::Value, Vec<u8>, Vec<String>)> = std::sync::OnceLock::new();
     DOC.get_or_init(|| {
         let h = bundled("jacksboro-2k.obj");
-        let (doc, bin) = to_gltf(&h, None).expect("glTF");
+        let (doc, bin) = gltf_value(&h);
         let mut pointers = Vec::new();
         scalar_pointers(&doc, String::new(), &mut pointers);
         pointers.retain(|p| p.contains("/extras/"));

@@ -61,6 +61,7 @@ fn regions_and_gltf_of_a_deep_chain_need_no_deep_stack() {
             };
             assert!(p.compute(&cell).expect("a PVS").tests >= 1);
             let (doc, bin) = pipeline::gltf::to_gltf(&h, None).expect("glTF");
+            let doc = serde_json::to_value(&doc).expect("a JSON value");
             let back = pipeline::gltf::hierarchy_from_gltf_json(&doc, &bin).expect("read back");
             assert_eq!(back.nodes.len(), h.nodes.len());
         })
