@@ -162,6 +162,39 @@ fn render_map_orbit_and_eye_compare() {
     let diff = viewer::read_png(&dir.path().join("eye-diff.png")).unwrap();
     assert_eq!(diff.count([255, 0, 0, 255]), differing);
     assert!(j["frame_ms_culled"].as_f64().unwrap() > 0.0);
+
+    // A pitched picture reaches further round than its field at the corners: a --cull-fov narrower than what it
+    // reaches is said (the culler hides terrain at the picture's edges), one as wide is not.
+    let reach = (viewer::camera::culling_hfov_deg(90.0, -30.0, 128.0 / 96.0) * 10.0).ceil() / 10.0;
+    assert!(reach > 120.0, "{reach}");
+    for (field, warned) in [
+        ("90", true),
+        ("120", true),
+        (&*format!("{reach}"), false),
+        ("360", false),
+    ] {
+        let out = tincull(&[
+            "render",
+            p(&tch),
+            "--out",
+            p(&eyeimg),
+            "--view",
+            "eye",
+            "--eye",
+            &eye,
+            "--pitch",
+            "-30",
+            "--size",
+            "128x96",
+            "--cull-fov",
+            field,
+            "-q",
+        ]);
+        ok(&out);
+        let err = String::from_utf8_lossy(&out.stderr);
+        let said = format!("--cull-fov {field}: this picture (--fov 90, --pitch -30, 128x96) reaches {reach} degrees");
+        assert_eq!(err.contains(&said), warned, "--cull-fov {field}:\n{err}");
+    }
 }
 
 #[test]

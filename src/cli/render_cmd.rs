@@ -214,6 +214,27 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         if let Some(h) = &terrain.hierarchy {
             super::culling_args::warn_if_no_regions(&args.input, h, args.method, out);
         }
+        // `--cull-fov` is the culler's field as given; an eye picture that reaches further round (pitched, its
+        // corners do) loses terrain at its edges: said, not changed (a narrow field may be what is being looked at).
+        if let (Some(field), ViewKind::Eye) = (args.cull_fov, view) {
+            let [w, h] = args.size;
+            let needed = viewer::camera::culling_hfov_deg(
+                options.fov_deg,
+                args.pitch.unwrap_or(0.0),
+                f64::from(w) / f64::from(h),
+            );
+            if field < needed {
+                out.warn(format!(
+                    "--cull-fov {}: this picture (--fov {}, --pitch {}, {w}x{h}) reaches {} degrees of azimuth round \
+                     the yaw; the culler hides terrain at its edges (--cull-fov {} or more culls nothing it shows)",
+                    tin::compact_number(field),
+                    tin::compact_number(options.fov_deg),
+                    tin::compact_number(args.pitch.unwrap_or(0.0)),
+                    tin::compact_number((needed * 10.0).ceil() / 10.0),
+                    tin::compact_number((needed * 10.0).ceil() / 10.0),
+                ));
+            }
+        }
     } else if args.cull_fov.is_some() {
         bail!(
             "--cull-fov: this render culls nothing (culling needs a hierarchy, and --eye with --view eye or orbit, or \
