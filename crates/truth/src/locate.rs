@@ -37,6 +37,52 @@ pub(crate) fn plane_height(corners: &[DVec3; 3], p: DVec2) -> f64 {
     a.z + beta * (b.z - a.z) + gamma * (c.z - a.z)
 }
 
+/// [`plane_height`] at a point `p` of the closed triangle `corners` (the caller checks that exactly), with a bound on
+/// its rounding error: `(height, error)`, the exact height of the triangle's plane at `p` within `error` of `height`.
+/// `None` when the triangle is too near degenerate for a bound: its computed doubled area is not above twice the
+/// bound on its own rounding (a triangle whose corners are collinear but for a few ulps, whose plane's height swings
+/// by kilometres with the last bits of `p`).
+///
+/// Proof, with `E = 2⁻⁵³` (the unit roundoff: `fl(x ∘ y) = (x ∘ y)(1 + θ)`, `|θ| ≤ E`) and exact `U = b − a`,
+/// `V = c − a`, `W = p − a` (x,y), `D = U × V`, `N_b = W × V`, `N_c = U × W` (`X × Y = X.x Y.y − X.y Y.x`), so that the
+/// exact height is `h = a.z + β Δ_b + γ Δ_c` with `β = N_b / D`, `γ = N_c / D`, `Δ_b = b.z − a.z`, `Δ_c = c.z − a.z`:
+///
+/// 1. Each computed cross product rounds its two differences, its two products and their difference:
+///    `|fl(X × Y) − X × Y| ≤ γ₄ (|X.x Y.y| + |X.y Y.x|)`, `γ₄ = 4E / (1 − 4E)`. The sums `S` of those two magnitudes,
+///    computed from the rounded terms, are at least the exact ones times `(1 − E)⁵`, so `8 E S` (computed, itself
+///    rounded by a few `E` relative) bounds that error: `e_D`, `e_b`, `e_c` below.
+/// 2. With `d = |fl(D)| > 2 (e_D + max(e_b, e_c))` (else `None`) and `|β| ≤ 1` (`p` is in the closed triangle, so
+///    `β, γ ∈ [0, 1]`): `|Ñ_b / D̃ − β| = |(Ñ_b − N_b) − β (D̃ − D)| / d ≤ (e_b + e_D) / d = r < 1/2`, so
+///    `|Ñ_b / D̃| < 1.5` and the division adds at most `1.5 E`: `|β̃ − β| ≤ r + 2E = e_β`; the same for `γ`.
+/// 3. `h̃ = fl(fl(a.z + fl(β̃ Δ̃_b)) + fl(γ̃ Δ̃_c))` with `Δ̃ = Δ (1 + θ)`: each product is off by at most
+///    `e_β |Δ_b| + 1.5 · 2.01 E |Δ_b|` (and the same with `γ`, `Δ_c`), the two sums by `E` of their values, at most
+///    `E (|a.z| + 1.5 |Δ_b|)` and `E (|a.z| + 1.5 |Δ_b| + 1.5 |Δ_c|)` (times `1 + E`). In all
+///    `|h̃ − h| ≤ e_β |Δ_b| + e_γ |Δ_c| + 8 E (|a.z| + |Δ_b| + |Δ_c|)`; the bound returned uses the computed `|Δ̃|`
+///    (`|Δ| ≤ |Δ̃| (1 + 2E)`, covered by the factor `1 + 4E`) and twice that last term, and is widened by a relative
+///    `1e-6`, far more than the few roundings of its own evaluation.
+pub(crate) fn plane_height_bounded(corners: &[DVec3; 3], p: DVec2) -> Option<(f64, f64)> {
+    const E: f64 = f64::EPSILON / 2.0;
+    let [a, b, c] = *corners;
+    let u = (b - a).truncate();
+    let v = (c - a).truncate();
+    let w = p - a.truncate();
+    let e_d = 8.0 * E * ((u.x * v.y).abs() + (u.y * v.x).abs());
+    let e_b = 8.0 * E * ((w.x * v.y).abs() + (w.y * v.x).abs());
+    let e_c = 8.0 * E * ((u.x * w.y).abs() + (u.y * w.x).abs());
+    let d = u.perp_dot(v).abs();
+    // A NaN goes on to a NaN error, refused below.
+    if d <= 2.0 * (e_d + e_b.max(e_c)) {
+        return None;
+    }
+    let e_beta = (e_b + e_d) / d + 2.0 * E;
+    let e_gamma = (e_c + e_d) / d + 2.0 * E;
+    let (dz_b, dz_c) = ((b.z - a.z).abs(), (c.z - a.z).abs());
+    let error = ((e_beta * dz_b + e_gamma * dz_c) * (1.0 + 4.0 * E) + 8.0 * E * (a.z.abs() + 2.0 * (dz_b + dz_c)))
+        * (1.0 + 1e-6);
+    let height = plane_height(corners, p);
+    (height.is_finite() && error.is_finite()).then_some((height, error))
+}
+
 /// Whether `p` lies in the closed triangle with corners `c` (counter-clockwise in x,y; exact).
 #[inline]
 pub(crate) fn corners_contain(c: &[DVec3; 3], p: DVec2) -> bool {
@@ -492,5 +538,62 @@ mod tests {
             ground_heights(&positions, tin.triangles(), &notch),
             vec![None, Some(0.0), Some(0.0)]
         );
+    }
+
+    proptest::proptest! {
+        /// [`plane_height_bounded`] against the exact height: corners at integer coordinates (some triangles nearly
+        /// flat: the third corner on the line through the first two but for a unit or two, or exactly on it), the
+        /// point at barycentric weights in 256ths, so its x,y is exact and its height is exactly
+        /// `a.z + (w_b Δ_b + w_c Δ_c) / 256`. The bound holds whenever a height is given, a height is given for every
+        /// triangle that is not nearly flat, and there its bound is tiny.
+        #[test]
+        fn the_plane_height_bound_holds(
+            a in proptest::array::uniform3(-4096i32..4096),
+            b in proptest::array::uniform3(-4096i32..4096),
+            c in proptest::array::uniform3(-4096i32..4096),
+            along in -8i32..8,
+            off in proptest::array::uniform2(-2i32..=2),
+            flat in proptest::bool::ANY,
+            w in (0u32..=256, 0u32..=256),
+            scale in 0u32..3,
+        ) {
+            let f = |p: [i32; 3]| DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+            let (a, b) = (f(a), f(b));
+            let c = if flat {
+                // On the line a-b (`along` steps of b - a) but for `off`.
+                let d = b - a;
+                DVec3::new(
+                    a.x + f64::from(along) * d.x + f64::from(off[0]),
+                    a.y + f64::from(along) * d.y + f64::from(off[1]),
+                    f64::from(c[2]),
+                )
+            } else {
+                f(c)
+            };
+            // Coordinates far from the origin too (UTM-like), where differences of nearby corners are still exact.
+            let shift = DVec3::new(f64::from(scale) * 500_000.0, f64::from(scale) * 4_000_000.0, 0.0);
+            let (a, b, c) = (a + shift, b + shift, c + shift);
+            let (wb, wc) = if w.0 + w.1 > 256 { (256 - w.0, 256 - w.1) } else { w };
+            let p = a.truncate() + (b - a).truncate() * (f64::from(wb) / 256.0) + (c - a).truncate() * (f64::from(wc) / 256.0);
+            // The weights are exact in 256ths and every coordinate below 2^25: p is exact.
+            let exact = a.z + ((b.z - a.z) * f64::from(wb) + (c.z - a.z) * f64::from(wc)) / 256.0;
+            let area = (b - a).truncate().perp_dot((c - a).truncate());
+            let corners = if area < 0.0 { [a, c, b] } else { [a, b, c] };
+            match plane_height_bounded(&corners, p) {
+                Some((height, error)) => {
+                    proptest::prop_assert!(
+                        (height - exact).abs() <= error,
+                        "height {height}, exact {exact}, error bound {error}"
+                    );
+                    if !flat {
+                        proptest::prop_assert!(error <= 1e-6 * (1.0 + a.z.abs() + b.z.abs() + c.z.abs()));
+                    }
+                }
+                None => {
+                    let sides = (b - a).truncate().length() * (c - a).truncate().length();
+                    proptest::prop_assert!(area.abs() <= 1e-6 * sides, "no height for a triangle of area {area}");
+                }
+            }
+        }
     }
 }

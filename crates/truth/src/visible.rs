@@ -25,7 +25,13 @@
 //! triangle's plane at the rounded x,y, computed as the walk computes it: a sample interpolated in 3-D lands off its
 //! plane by the slope times the rounding of x,y, which on a near-vertical face at UTM-sized coordinates exceeds the
 //! walk's tolerance and would bury it (regression test
-//! `a_cliff_face_at_utm_coordinates_is_not_buried_by_its_own_samples`, `tests/checker_attacks.rs`).
+//! `a_cliff_face_at_utm_coordinates_is_not_buried_by_its_own_samples`, `tests/checker_attacks.rs`). That height is
+//! then lowered by a proven bound on its rounding (`locate::plane_height_bounded`), so that a sample is never above
+//! the terrain point it stands for: a segment from a lower start lies below the one from the true point all along its
+//! length, so a visible sample makes a visible point. A sample whose rounded x,y falls outside its triangle (exact
+//! test) is skipped, and so is every sample of a triangle too near degenerate for a bound: there the plane's height
+//! swings with the last bits of x,y, and a sample once floated a kilometre above a sliver whose corners are collinear
+//! but for a few ulps (regression test `a_sliver_of_collinear_corners_has_no_floating_samples`).
 //!
 //! Choices:
 //!
@@ -49,7 +55,7 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use tin::Tin;
 
-use crate::locate::{Locator, plane_height};
+use crate::locate::{Locator, corners_contain, plane_height, plane_height_bounded};
 use crate::walk::{EPS_REL, Outcome, edge_blocks, segment_clear, tolerance, walk_outcome};
 
 /// Largest angle (degrees) that neighbouring grid samples of a triangle may subtend from the eye.
@@ -234,7 +240,7 @@ impl<'a> GroundTruth<'a> {
             [0.0, 0.5, 0.5],
             [0.5, 0.0, 0.5],
         ];
-        if fixed.iter().any(|&b| f(sample_at(&c, b))) {
+        if fixed.iter().filter_map(|&b| sample_at(&c, b)).any(&mut f) {
             return true;
         }
         let whole = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -254,11 +260,22 @@ fn levels_wanted(c: &[DVec3; 3], eye: DVec3) -> f64 {
 }
 
 /// The sample of the triangle with corners `c` at barycentric coordinates `b`: x,y nudged toward the centroid (each
-/// weight at least [`NUDGE`]), height that of the triangle's plane there as the walk computes it.
-fn sample_at(c: &[DVec3; 3], b: [f64; 3]) -> DVec3 {
+/// weight at least [`NUDGE`]), height that of the triangle's plane there as the walk computes it, lowered by the bound
+/// on its rounding; `None` when the rounded x,y is not in the closed triangle or the triangle is too near degenerate
+/// for a bound (module documentation).
+fn sample_at(c: &[DVec3; 3], b: [f64; 3]) -> Option<DVec3> {
     let w = b.map(|x| (1.0 - 3.0 * NUDGE) * x + NUDGE);
     let xy = c[0].truncate() * w[0] + c[1].truncate() * w[1] + c[2].truncate() * w[2];
-    xy.extend(plane_height(c, xy))
+    if !corners_contain(c, xy) {
+        return None;
+    }
+    let (height, error) = plane_height_bounded(c, xy)?;
+    // `next_down` undoes the rounding of the difference: the sample is never above the plane.
+    Some(xy.extend(if error > 0.0 {
+        (height - error).next_down()
+    } else {
+        height
+    }))
 }
 
 /// Calls `f` on the grid samples of the part of the triangle `c` whose corners have barycentric coordinates `part`,
@@ -300,7 +317,7 @@ fn grid_samples(
                     continue;
                 }
             }
-            if f(sample_at(c, at([i as f64 * inv, j as f64 * inv, k as f64 * inv]))) {
+            if sample_at(c, at([i as f64 * inv, j as f64 * inv, k as f64 * inv])).is_some_and(&mut *f) {
                 return true;
             }
         }

@@ -516,6 +516,85 @@ fn a_cliff_face_at_utm_coordinates_is_not_buried_by_its_own_samples() {
     assert!(bad.is_empty(), "visible cliff triangles called hidden: {bad:?}");
 }
 
+/// Regression: a triangle whose corners are collinear but for a few ulps (a diagonal of a DEM grid, once a mesh's
+/// diagonals were flipped: the audit's `flipped diagonals` stress case) is a cliff of zero width, and its plane's
+/// height at a sample's rounded x,y swung by kilometres: samples floated 1.2 km above its highest corner, were seen
+/// over the terrain in front, and the safe culler was charged with false culls of a hidden triangle (in 24 of 60
+/// views of the flipped `jacksboro-2k`). The same corners here, in a strip of quads between rows parallel to the
+/// sliver, with a 1,000 m ridge between it and an eye at 480 m: no sample of any triangle rises above its highest
+/// corner (a sample may sink below its lowest, lowered by the bound on its rounding), and the sliver is hidden.
+#[test]
+fn a_sliver_of_collinear_corners_has_no_floating_samples() {
+    // The sliver's corners as the flipped mesh held them (M lies on A-B but for the rounding of its decimals).
+    let a = DVec3::new(9310.625, 28015.634, 599.0);
+    let m = DVec3::new(9608.565, 27737.333, 472.0);
+    let b = DVec3::new(9906.505, 27459.032, 618.0);
+    let along = b - a;
+    let n = DVec2::new(-along.y, along.x).normalize();
+    assert!(
+        tin::orient2d(m.truncate(), a.truncate(), b.truncate()) > 0.0,
+        "M is left of A-B, barely"
+    );
+    // Rows of three points (at A, M and B along the line) offset by `t` metres across it, each at its height.
+    let rows: [(f64, f64); 5] = [
+        (-300.0, 600.0),
+        (0.0, 0.0),
+        (300.0, 470.0),
+        (600.0, 1000.0),
+        (900.0, 470.0),
+    ];
+    let mut positions = Vec::new();
+    for &(t, z) in &rows {
+        if t == 0.0 {
+            positions.extend([a, m, b]);
+        } else {
+            for p in [a, m, b] {
+                positions.push((p.truncate() + t * n).extend(z));
+            }
+        }
+    }
+    let at = |row: u32, k: u32| 3 * row + k;
+    // The sliver (M, A, B), the strip behind it fanned from the long edge, and quads in front.
+    let mut triangles = vec![[at(1, 1), at(1, 0), at(1, 2)]];
+    triangles.extend([
+        [at(0, 0), at(0, 1), at(1, 0)],
+        [at(0, 1), at(1, 2), at(1, 0)],
+        [at(0, 1), at(0, 2), at(1, 2)],
+    ]);
+    for row in 1..4 {
+        for k in 0..2 {
+            triangles.push([at(row, k), at(row, k + 1), at(row + 1, k + 1)]);
+            triangles.push([at(row, k), at(row + 1, k + 1), at(row + 1, k)]);
+        }
+    }
+    // Every triangle counter-clockwise, as `Tin::from_parts` wants them.
+    for t in &mut triangles {
+        let [p, q, r] = t.map(|i| positions[i as usize].truncate());
+        if tin::orient2d(p, q, r) < 0.0 {
+            t.swap(1, 2);
+        }
+    }
+    let tin = Tin::from_parts(positions.clone(), triangles).expect("a height field");
+    assert!(tin.validate().is_height_field());
+    let gt = GroundTruth::new(&tin);
+    let mid = 0.5 * (a + b).truncate();
+    let eyes = [
+        (mid + 1500.0 * n).extend(480.0),
+        (mid + 1500.0 * n).extend(3000.0),
+        (mid - 900.0 * n).extend(700.0),
+    ];
+    for eye in eyes {
+        for t in 0..tin.num_triangles() {
+            let c = tin.corners(t);
+            let hi = c.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+            for p in gt.samples(eye, t) {
+                assert!(p.z <= hi, "triangle {t}: sample {p:?} above its highest corner, {hi}");
+            }
+        }
+    }
+    assert!(!gt.triangle_visible(eyes[0], 0), "the sliver is behind the ridge");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 1024, ..ProptestConfig::default() })]
 
