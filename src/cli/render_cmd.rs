@@ -224,14 +224,14 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
                 f64::from(w) / f64::from(h),
             );
             if field < needed {
+                let reach = tin::compact_number((needed * 10.0).ceil() / 10.0);
                 out.warn(format!(
-                    "--cull-fov {}: this picture (--fov {}, --pitch {}, {w}x{h}) reaches {} degrees of azimuth round \
-                     the yaw; the culler hides terrain at its edges (--cull-fov {} or more culls nothing it shows)",
+                    "--cull-fov {}: this picture (--fov {}, --pitch {}, {w}x{h}) reaches {reach} degrees of azimuth \
+                     round the yaw; the culler hides terrain at its edges (--cull-fov {reach} or more culls nothing it \
+                     shows)",
                     tin::compact_number(field),
                     tin::compact_number(options.fov_deg),
                     tin::compact_number(args.pitch.unwrap_or(0.0)),
-                    tin::compact_number((needed * 10.0).ceil() / 10.0),
-                    tin::compact_number((needed * 10.0).ceil() / 10.0),
                 ));
             }
         }
