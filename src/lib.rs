@@ -14,6 +14,7 @@
 //! | the whole build from a TIN to a hierarchy, grouped OBJ/MTL and JSON exports, the group palette | [`pipeline`] (also [`export`]) |
 //! | evaluation against ground truth, sweeps, the stability suite, failure maps | [`eval`] ([`evaluate`], [`sweep`], [`stress`]) |
 //! | from-region visibility: the PVS of viewcells (Koltun et al. 2001, adapted) and its binary form | [`pvs`] |
+//! | tiled builds: the plan, one tile's job, the merge of the tiles' hierarchies | [`tiles`] |
 //! | wgpu renders and the interactive viewer (feature `viewer`, on by default) | `viewer` |
 //! | the command line | [`cli`] |
 //!
@@ -28,6 +29,7 @@ pub use horizon;
 pub use occlusion;
 pub use pipeline;
 pub use pvs;
+pub use tiles;
 pub use tin;
 pub use truth;
 #[cfg(feature = "viewer")]

@@ -524,7 +524,7 @@ fn cull_above_ground() {
     // the ground (0 m above it, as --above-ground reports it) is not.
     let on = json(&["cull", s(&tch), "--eye", "10000,12000,0", "--above-ground", "--json"]);
     let ground = on["eye"][2].as_f64().expect("z");
-    ok(&["cull", s(&tch), "--eye", &format!("10000,12000,{ground}"), "-q"]);
+    ok(&["cull", s(&tch), "--eye", &format!("10000,12000,{ground}"), "--json"]);
     let below = format!("10000,12000,{}", ground - 0.01);
     fails_with(&["cull", s(&tch), "--eye", &below], "eye 1 (--eye) at x 10000, y 12000");
     fails_with(
@@ -593,7 +593,7 @@ fn cull_above_ground() {
             far.display()
         ),
     );
-    ok(&["cull", s(&tch), "--eyes", s(&far), "-q"]);
+    ok(&["cull", s(&tch), "--eyes", s(&far), "--json"]);
     fails_with(
         &[
             "eval",

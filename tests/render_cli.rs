@@ -195,6 +195,35 @@ fn render_map_orbit_and_eye_compare() {
         let said = format!("--cull-fov {field}: this picture (--fov 90, --pitch -30, 128x96) reaches {reach} degrees");
         assert_eq!(err.contains(&said), warned, "--cull-fov {field}:\n{err}");
     }
+    // A perspective picture is drawn at most 150 degrees wide: a wider --fov draws the same picture, and says so.
+    let eye_at = |fov: &str, img: &Path| {
+        let out = tincull(&[
+            "render",
+            p(&tch),
+            "--out",
+            p(img),
+            "--view",
+            "eye",
+            "--eye",
+            &eye,
+            "--size",
+            "64x48",
+            "--fov",
+            fov,
+            "-q",
+        ]);
+        ok(&out);
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let wide = dir.path().join("wide.png");
+    let widest = dir.path().join("widest.png");
+    assert!(!eye_at("150", &widest).contains("--fov"));
+    let err = eye_at("170", &wide);
+    assert!(
+        err.contains("--fov 170: an eye picture is drawn at most 150 degrees wide; this one is drawn at 150"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&wide).unwrap(), std::fs::read(&widest).unwrap());
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! both groupings.
 
 mod common;
-use common::{fails_with, mesh, ok, s};
+use common::{fails_with, json, mesh, ok, s};
 
 #[test]
 fn quadtree_build_eval_and_cull() {
@@ -290,6 +290,15 @@ fn quadtree_build_eval_and_cull() {
     ] {
         fails_with(&["cull", s(&crystal), flag, value, "--eye", eye], message);
     }
+    // `failmap` takes the same parameters, and refuses them where its method does not use them.
+    let map = ["failmap", s(&crystal), "--cell-size", "4000", "--json"];
+    fails_with(
+        &[&map[..], &["--method", "thesis", "--columns", "64"]].concat(),
+        "--columns 64 is a parameter of the `safe` and `lloyd-egbert` cullers",
+    );
+    let captured = |v: serde_json::Value| v["occlusion_captured_mean"].as_f64().expect("captured");
+    let spent = captured(json(&[&map[..], &["--work-budget", "1"]].concat()));
+    assert!(spent < captured(json(&map)), "{spent}");
 }
 
 /// `build --grouping quadtree --no-regions`: no horizons, no regions, the quadtree build's cells; the safe culler

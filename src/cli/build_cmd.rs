@@ -16,18 +16,18 @@ use super::{Output, OutputArgs};
 use pipeline::export::to_json;
 
 use super::files::Outputs;
-use pipeline::{BuildParams, BuildReport, Grouping, QuadtreeParams, build, build_without_regions};
+use pipeline::{BuildError, BuildParams, BuildReport, Grouping, QuadtreeParams, build, build_without_regions};
 
 /// Parameters that may also come from a TOML file (`--config`); the command line wins.
 #[derive(Debug, Default, Clone, Args, Deserialize)]
 pub struct ParamArgs {
-    /// Number of sectors [default: 16].
+    /// Number of sectors, at least 4 [default: 16].
     #[arg(long)]
     pub sectors: Option<u32>,
-    /// Subsectors per sector [default: 4].
+    /// Subsectors per sector, at least 1, with sectors × subsectors at most 1024 [default: 4].
     #[arg(long)]
     pub subsectors: Option<u32>,
-    /// Crystal seeds of the first pass [default: one per 200 triangles].
+    /// Crystal seeds of the first pass, at least 1 [default: one per 200 triangles].
     #[arg(long)]
     pub seeds: Option<usize>,
     /// Seed of the random generator [default: 1].
@@ -45,20 +45,22 @@ pub struct FixedParamArgs {
     /// Orphan passes after the first [default: 10].
     #[arg(long)]
     pub orphan_passes: Option<u32>,
-    /// Groups smaller than this many triangles are merged or freed to the always-visible set [default: 30].
+    /// Groups smaller than this many triangles (at least 1) are merged or freed to the always-visible set [default:
+    /// 30].
     #[arg(long)]
     pub min_group: Option<usize>,
-    /// A merge whose bounding circle covers more than this fraction of the terrain's area is not made [default: 0.25].
+    /// A merge whose bounding circle covers more than this fraction of the terrain's area (positive) is not made
+    /// [default: 0.25].
     #[arg(long)]
     pub max_expanse: Option<f64>,
-    /// Radius (m) of the horizon undersampling fix [default: off].
+    /// Radius (m, positive) of the horizon undersampling fix [default: off].
     #[arg(long, value_name = "RADIUS")]
     pub undersampling: Option<f64>,
     /// How triangles are grouped into nodes: `crystal` (the thesis) or `quadtree` (Stewart's 1997 baseline: square
     /// cells over the footprint) [default: crystal].
     #[arg(long, value_name = "KIND", value_parser = ["crystal", "quadtree"])]
     pub grouping: Option<String>,
-    /// Quadtree: finest depth (root = 0) [default: cells of about 128 triangles].
+    /// Quadtree: finest depth (root = 0), at most 16 [default: cells of about 128 triangles].
     #[arg(long, value_name = "D", conflicts_with = "cell_size")]
     pub depth: Option<u32>,
     /// Quadtree: finest cell side in metres, instead of --depth (`--cell` is an older name; `cell_size` or `cell` in
@@ -135,14 +137,6 @@ impl ParamArgs {
             .or(from_file.fixed.max_expanse)
             .unwrap_or(d.crystal.max_expanse);
         p.crystal.rng_seed = self.rng_seed.or(from_file.rng_seed).unwrap_or(d.crystal.rng_seed);
-        if let Some(r) = p.undersampling
-            && !(r.is_finite() && r > 0.0)
-        {
-            anyhow::bail!(
-                "the undersampling radius must be positive and finite, got {}",
-                tin::compact_number(r)
-            );
-        }
         // The depth and the cell size are one choice (the finest level): either on the command line replaces both of
         // the file's.
         let (depth, cell) = if self.fixed.depth.is_some() || self.fixed.cell_size.is_some() {
@@ -204,7 +198,6 @@ impl ParamArgs {
                          quadtree's cells are fixed by its depth"
                     );
                 }
-                quadtree.validate()?;
                 p.grouping = Grouping::Quadtree(quadtree);
             }
             Some(other) => {
@@ -215,12 +208,33 @@ impl ParamArgs {
                 anyhow::bail!("{given}: unknown grouping {other:?}; expected crystal or quadtree")
             }
         }
-        // A value out of range is named with the file it may come from (the build checks them again).
-        if let Some(path) = file {
-            p.validate()
-                .with_context(|| format!("the parameters of the command line and {}", path.display()))?;
-        }
+        // A value out of range is named by its flag, and by the file it may come from (the build checks them again).
+        p.validate().map_err(|e| {
+            let flag = flag_of(&e);
+            let named = match file {
+                Some(path) => format!("{flag} (or its key in {})", path.display()),
+                None => flag,
+            };
+            anyhow::Error::new(e).context(named)
+        })?;
         Ok(p)
+    }
+}
+
+/// The flag (or flags) whose value [`BuildParams::validate`] refused with `e`: the keys of a `--config` file are the
+/// same names with underscores.
+fn flag_of(e: &BuildError) -> String {
+    use horizon::HorizonError as H;
+    match e {
+        BuildError::Horizon(H::TooFewSectors { .. }) => "--sectors".into(),
+        BuildError::Horizon(H::NoSubsectors) => "--subsectors".into(),
+        BuildError::Horizon(H::TooManySubsectors { .. }) => "--sectors and --subsectors".into(),
+        BuildError::Horizon(H::InvalidRadius { .. }) => "--undersampling".into(),
+        BuildError::Crystal(crystal::CrystalError::InvalidParams { field, .. }) => {
+            format!("--{}", field.replace('_', "-"))
+        }
+        BuildError::Quadtree(_) => "--depth or --cell-size".into(),
+        _ => "the build parameters".into(),
     }
 }
 

@@ -76,6 +76,7 @@ pub fn parse_method(s: &str) -> Result<CullMethod, String> {
 
 /// Runs `tincull cull`.
 pub fn run(args: &CullArgs, out: Output) -> Result<()> {
+    out.require_a_result(false, "give --json")?;
     super::eval_cmd::check_fov(args.fov)?;
     let yaw = args.yaw.unwrap_or(0.0);
     if !yaw.is_finite() {

@@ -19,6 +19,9 @@ pub struct FailmapArgs {
     /// their false culls are).
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
+    /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
+    #[command(flatten)]
+    pub safe: super::culling_args::SafeArgs,
     /// Eye height above the ground at each cell centre (m, 0 to 10,000 km: the exact checker's reach, as for `eval`).
     #[arg(long, default_value_t = 2.0)]
     pub eye_height: f64,
@@ -41,6 +44,8 @@ pub struct FailmapArgs {
 /// Runs `tincull failmap`.
 pub fn run(args: &FailmapArgs) -> Result<()> {
     let mut out: Output = args.output.into();
+    args.safe.check_method(args.method)?;
+    let params = args.safe.params()?;
     ensure!(
         args.cell_size.is_finite() && args.cell_size > 0.0,
         "--cell-size must be a positive length, got {}",
@@ -88,7 +93,7 @@ pub fn run(args: &FailmapArgs) -> Result<()> {
     let (cols, rows) = failmap::grid_size(&tin, args.cell_size)?;
     let bar = out.progress((cols * rows) as u64, "cells");
     let advance = Output::monotone(&bar);
-    let map = failmap::compute(&h, args.method, &tin, args.eye_height, args.cell_size, &advance)?;
+    let map = failmap::compute(&h, args.method, params, &tin, args.eye_height, args.cell_size, &advance)?;
     bar.finish_and_clear();
     ensure!(
         map.scored().next().is_some(),

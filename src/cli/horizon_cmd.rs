@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use horizon::{HorizonField, HorizonOptions, HorizonPoint, SectorConfig};
 use serde_json::json;
@@ -65,14 +65,7 @@ pub fn compute_with_progress(
 /// Runs `tincull horizon`.
 pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
     let config = SectorConfig::new(args.sectors, args.subsectors)?;
-    if let Some(r) = args.undersampling
-        && !(r.is_finite() && r > 0.0)
-    {
-        anyhow::bail!(
-            "--undersampling radius must be positive and finite, got {}",
-            tin::compact_number(r)
-        );
-    }
+    horizon::check_undersampling_radius(args.undersampling).context("--undersampling")?;
     // With --verify the exit status is a result (non-zero on a mismatch).
     out.require_a_result(
         args.export_json.is_some() || args.verify,

@@ -191,8 +191,8 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         ));
     } else {
         out.say(format!(
-            "  regions       none (built with --no-regions, or the terrain hides nothing); visibility data {bytes} bytes \
-             ({per_triangle:.2} per triangle)"
+            "  regions       none (built with --no-regions, or a --max-bytes budget that no level fits, or the terrain \
+             hides nothing); visibility data {bytes} bytes ({per_triangle:.2} per triangle)"
         ));
     }
     out.say(format!(

@@ -62,8 +62,9 @@ impl Cli {
 pub enum Command {
     /// The main job: build and evaluate the bundled default terrain, print a report and write out/.
     Demo(demo_cmd::DemoArgs),
-    /// Describe a terrain mesh (counts, bounding box, relief, height-field check, triangle quality) or a hierarchy
-    /// (.tch: its mesh and the height-field check of it, nodes, visibility data and build parameters).
+    /// Describe a terrain mesh (counts, bounding box, relief, height-field check, triangle quality), a hierarchy
+    /// (.tch: its mesh and the height-field check of it, nodes, visibility data and build parameters) or a PVS file
+    /// (.pvs: its parameters and every viewcell's PVS).
     Info(info::InfoArgs),
     /// Turn a DEM grid (.npy, .asc, .hgt, .png, .tif) into a simplified TIN by greedy insertion, written as OBJ.
     Tin(tin_cmd::TinArgs),
@@ -73,8 +74,8 @@ pub enum Command {
     Horizon(horizon_cmd::HorizonArgs),
     /// Build the occlusion hierarchy of a terrain: horizons, regions, crystal groups, merge hierarchy (.tch).
     Build(build_cmd::BuildArgs),
-    /// Run the culler of a hierarchy for one or many viewpoints: triangle ranges to draw, counts, timing (the median
-    /// of 15 culls after a warm-up, each viewpoint).
+    /// Run the culler of a hierarchy for one or many viewpoints: triangles and ranges drawn, counts, timing (the
+    /// median of 15 culls after a warm-up, each viewpoint); the ranges themselves with --json.
     Cull(cull_cmd::CullArgs),
     /// Evaluate every culling method against ground truth from seeded viewpoints: false culls, occlusion captured.
     ///

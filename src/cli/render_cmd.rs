@@ -18,7 +18,8 @@ use super::{Output, OutputArgs};
 /// Arguments of `tincull render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// A hierarchy (.tch) or a terrain mesh (.obj; coloured by height, no culling).
+    /// A hierarchy (.tch), or a terrain mesh (.obj) or DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to
+    /// --dem-vertices (both coloured by height, no culling).
     pub input: PathBuf,
     /// Culling method for a viewpoint: `safe` or `lloyd-egbert` (never cull a visible triangle), `thesis` or
     /// `stewart` (not conservative).
@@ -208,6 +209,16 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
     ];
     if let Some((_, why)) = unused.iter().find(|(given, _)| *given) {
         bail!("{why} (this render: --view {view_name})");
+    }
+    // A perspective picture is drawn at most `MAX_RENDER_HFOV_DEG` wide: a wider --fov is drawn at that, and said.
+    let widest = f64::from(viewer::camera::MAX_RENDER_HFOV_DEG);
+    if let Some(fov) = args.fov.filter(|&f| f > widest) {
+        out.warn(format!(
+            "--fov {}: an eye picture is drawn at most {} degrees wide; this one is drawn at {}",
+            tin::compact_number(fov),
+            tin::compact_number(widest),
+            tin::compact_number(widest)
+        ));
     }
     if culls {
         args.safe.check_method(args.method)?;

@@ -118,9 +118,9 @@ pub struct TileBuildArgs {
     /// Build every tile of the plan.
     #[arg(long)]
     pub all: bool,
-    /// Threads [default: --threads, else all cores]: a single tile's build uses them (up to the machine's cores);
-    /// several tiles are built at once on them, at most one thread per tile, with a warning above the machine's cores
-    /// (each running tile holds its own memory).
+    /// Threads [default: --threads, else `RAYON_NUM_THREADS`, else one per core]: a single tile's build uses them (up
+    /// to the machine's cores); several tiles are built at once on them, at most one thread per tile, with a warning
+    /// above the machine's cores (each running tile holds its own memory).
     #[arg(long)]
     pub jobs: Option<usize>,
     /// Output flags.

@@ -18,7 +18,8 @@ const DEFAULT_SCREENSHOT_AFTER: u32 = 10;
 /// Arguments of `tincull view`.
 #[derive(Debug, Args)]
 pub struct ViewArgs {
-    /// A hierarchy (.tch) or a terrain mesh (.obj).
+    /// A hierarchy (.tch), or a terrain mesh (.obj) or DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to
+    /// --dem-vertices.
     pub input: PathBuf,
     /// Culling method at start (switchable in the side panel): `safe`, `thesis`, `stewart` or `lloyd-egbert`.
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]

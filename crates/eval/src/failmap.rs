@@ -11,7 +11,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{Result, ensure};
-use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
+use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy, SafeParams};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use tin::Tin;
@@ -64,11 +64,12 @@ pub fn grid_size(tin: &Tin, cell: f64) -> Result<(usize, usize)> {
     Ok((cols as usize, rows as usize))
 }
 
-/// Scores the culler `method` over `h` (whose mesh is `tin`) from every cell. `progress` gets the number of cells
-/// done.
+/// Scores the culler `method` (with the horizon cullers' run-time `params`) over `h` (whose mesh is `tin`) from every
+/// cell. `progress` gets the number of cells done.
 pub fn compute(
     h: &Hierarchy,
     method: CullMethod,
+    params: SafeParams,
     tin: &Tin,
     eye_height: f64,
     cell: f64,
@@ -83,7 +84,7 @@ pub fn compute(
     let (cols, rows) = grid_size(tin, cell)?;
     let b = tin.bbox();
     let truth = GroundTruth::new(tin);
-    let culler = AnyCuller::new(h, method);
+    let culler = AnyCuller::with_params(h, method, params);
     let n = tin.num_triangles();
     let done = AtomicU64::new(0);
     // Row 0 is the northern edge, as in the image.

@@ -265,11 +265,18 @@ impl ViewerApp {
             watch(
                 ui.add(
                     egui::Slider::new(&mut p.work_budget, 100..=2_000_000)
+                        .clamping(egui::SliderClamping::Edits)
                         .logarithmic(true)
                         .text("work budget (units)"),
                 ),
             );
-            watch(ui.add(egui::Slider::new(&mut p.coarse_columns, 0..=64).text("coarse columns (0: off)")));
+            watch(
+                ui.add(
+                    egui::Slider::new(&mut p.coarse_columns, 0..=64)
+                        .clamping(egui::SliderClamping::Edits)
+                        .text("coarse columns (0: off)"),
+                ),
+            );
         }
         if let_go && *p != self.model.safe && p.check().is_ok() {
             self.model.set_safe(*p);
@@ -326,7 +333,14 @@ impl ViewerApp {
             if let Grouping::Quadtree(q) = &mut p.grouping {
                 ui.label("finest depth (0 = auto)");
                 let mut depth = q.depth.unwrap_or(0);
-                if ui.add(egui::DragValue::new(&mut depth).range(0..=16)).changed() {
+                if ui
+                    .add(
+                        egui::DragValue::new(&mut depth)
+                            .range(0..=16)
+                            .clamp_existing_to_range(false),
+                    )
+                    .changed()
+                {
                     q.depth = (depth > 0).then_some(depth);
                     q.cell = None;
                 }
@@ -346,29 +360,53 @@ impl ViewerApp {
             }
             if !*without_regions {
                 ui.label("sectors");
-                ui.add(egui::DragValue::new(&mut p.sectors).range(4..=1024));
+                ui.add(
+                    egui::DragValue::new(&mut p.sectors)
+                        .range(4..=1024)
+                        .clamp_existing_to_range(false),
+                );
                 ui.end_row();
                 ui.label("subsectors");
-                ui.add(egui::DragValue::new(&mut p.subsectors).range(1..=64));
+                ui.add(
+                    egui::DragValue::new(&mut p.subsectors)
+                        .range(1..=256)
+                        .clamp_existing_to_range(false),
+                );
                 ui.end_row();
             }
             if matches!(p.grouping, Grouping::Crystal) {
                 ui.label("seeds (0 = default)");
                 let mut seeds = p.crystal.seeds.unwrap_or(0);
-                if ui.add(egui::DragValue::new(&mut seeds).range(0..=1_000_000)).changed() {
+                if ui
+                    .add(
+                        egui::DragValue::new(&mut seeds)
+                            .range(0..=1_000_000)
+                            .clamp_existing_to_range(false),
+                    )
+                    .changed()
+                {
                     p.crystal.seeds = (seeds > 0).then_some(seeds);
                 }
                 ui.end_row();
                 ui.label("orphan passes");
-                ui.add(egui::DragValue::new(&mut p.crystal.orphan_passes).range(0..=100));
+                ui.add(
+                    egui::DragValue::new(&mut p.crystal.orphan_passes)
+                        .range(0..=100)
+                        .clamp_existing_to_range(false),
+                );
                 ui.end_row();
                 ui.label("min group");
-                ui.add(egui::DragValue::new(&mut p.crystal.min_group).range(1..=100_000));
+                ui.add(
+                    egui::DragValue::new(&mut p.crystal.min_group)
+                        .range(1..=100_000)
+                        .clamp_existing_to_range(false),
+                );
                 ui.end_row();
                 ui.label("max expanse");
                 ui.add(
                     egui::DragValue::new(&mut p.crystal.max_expanse)
                         .range(0.001..=1.0)
+                        .clamp_existing_to_range(false)
                         .speed(0.005),
                 );
                 ui.end_row();
