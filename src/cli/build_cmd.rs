@@ -245,7 +245,7 @@ pub struct BuildArgs {
     #[command(flatten)]
     pub mesh: MeshArgs,
     /// Output hierarchy file (.tch; `-` for standard output, instead of the report, when it is not a terminal).
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// Build parameters.
     #[command(flatten)]

@@ -40,7 +40,7 @@ pub struct PvsArgs {
     #[arg(long, value_name = "M")]
     pub cell_size: Option<f64>,
     /// Seed of the random cells of `--check` and of their interior sample points [default: 1].
-    #[arg(long)]
+    #[arg(long, value_name = "SEED")]
     pub view_seed: Option<u64>,
     /// Absolute height band of the cell: `z0,z1` (m).
     #[arg(long, value_name = "Z0,Z1", value_parser = parse_pair, allow_hyphen_values = true,

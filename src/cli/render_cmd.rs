@@ -29,7 +29,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub safe: super::culling_args::SafeArgs,
     /// The PNG to write.
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// The view: map (top-down), orbit (oblique overview) or eye (what a camera at --eye sees).
     #[arg(long, default_value = "map", value_parser = ["map", "orbit", "eye"])]

@@ -47,7 +47,7 @@ pub struct SweepArgs {
     pub classes: Vec<ViewpointClass>,
     /// Seed of the viewpoint generator, and of each viewpoint's yaw below 360° (`--fov`), as for `eval`
     /// (`--rng-seed` seeds the grouping).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_name = "SEED")]
     pub view_seed: u64,
     /// Horizontal field of view in degrees (360 = all around).
     #[arg(long, default_value_t = 360.0)]
@@ -66,7 +66,7 @@ pub struct SweepArgs {
     /// The CSV file of results; combinations already in it are skipped (it must have been written with the same mesh,
     /// build options, the grouping among them, and evaluation options, else it is refused; `--viewpoints` is part of
     /// each line's key, as the swept values are, so a run with another count adds its own lines beside the others).
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// Output flags.
     #[command(flatten)]

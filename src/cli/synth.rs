@@ -16,7 +16,7 @@ use super::{Output, OutputArgs};
 pub struct SynthArgs {
     /// Output file: an OBJ mesh (`-`: to standard output), or with `.npy` the terrain's height grid (f64, a JSON
     /// sidecar with its spacing and position beside it), e.g. the input of `tiles plan`.
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// Number of vertices, 4 to 2^31 (exact; for a `.npy` grid, the nearest square number of samples).
     #[arg(long, default_value_t = 10_000, value_parser = parse_vertices)]

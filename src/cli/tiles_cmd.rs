@@ -63,7 +63,7 @@ pub struct PlanArgs {
     #[arg(long, value_enum)]
     pub up: Option<UpArg>,
     /// The plan to write (JSON); tiles write their hierarchies to `<plan stem>.tiles/` beside it.
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// Largest tile side, in sample intervals (a mesh: whole metres) [default: 512 samples; a mesh: 512 times its
     /// mean vertex spacing, the side of a square of its area over its vertices]
@@ -134,7 +134,7 @@ pub struct MergeArgs {
     /// The plan whose tiles were built.
     pub plan: PathBuf,
     /// The merged hierarchy (.tch; `-` for standard output, instead of the report, when it is not a terminal).
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// Output flags.
     #[command(flatten)]

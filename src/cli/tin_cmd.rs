@@ -20,7 +20,7 @@ pub struct TinArgs {
     /// (.tif, .tiff; geographic CRSs are converted to metres like .hgt).
     pub dem: PathBuf,
     /// Output OBJ file (`-` for standard output).
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
     /// Stop at this many vertices (with --max-error: at whichever is reached first).
     #[arg(long)]
