@@ -11,11 +11,12 @@ use super::Output;
 use super::cull_cmd::parse_point;
 
 /// Warns that `method` culls nothing in `h`, read from `path`, when it is a region test (`thesis`, `stewart`) and the
-/// file holds no regions (built with `--no-regions`).
+/// file holds no regions (built with `--no-regions`, or nothing hid anything from its vertices).
 pub fn warn_if_no_regions(path: &Path, h: &cull::Hierarchy, method: CullMethod, out: Output) {
     if matches!(method, CullMethod::Thesis | CullMethod::Stewart) && !h.has_regions() {
         out.warn(format!(
-            "{} holds no regions (built with --no-regions?): `{method}` culls nothing in it",
+            "{} holds no regions (built with --no-regions, or the terrain hid nothing from its vertices in the \
+             build): `{method}` culls nothing in it",
             path.display()
         ));
     }
