@@ -138,6 +138,45 @@ fn compile_example(dir: &Path) -> PathBuf {
     exe
 }
 
+/// The header compiles as strict C99 and as C++ (98 and 17), with every warning an error, as the README says.
+#[test]
+fn the_header_is_c99_and_cplusplus() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let src = dir.path().join("header.c");
+    std::fs::write(
+        &src,
+        "#include \"tincull_cull.h\"\nint main(void) { return TC_ABI_VERSION > 0 ? 0 : 1; }\n",
+    )
+    .expect("write the source");
+    for (compiler, lang, std) in [
+        ("cc", "c", "-std=c99"),
+        ("c++", "c++", "-std=c++98"),
+        ("c++", "c++", "-std=c++17"),
+    ] {
+        let out = Command::new(compiler)
+            .args([
+                "-x",
+                lang,
+                std,
+                "-pedantic-errors",
+                "-Wall",
+                "-Wextra",
+                "-Werror",
+                "-fsyntax-only",
+                "-I",
+            ])
+            .arg(crate_dir().join("include"))
+            .arg(&src)
+            .output()
+            .unwrap_or_else(|e| panic!("the system compiler `{compiler}` runs: {e}"));
+        assert!(
+            out.status.success(),
+            "{compiler} {std}:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
 #[test]
 fn c_example_prints_the_rust_ranges() {
     let h = bundled_hierarchy();
