@@ -319,11 +319,14 @@ fn warn_of_earlier_files(plan: &Plan, plan_path: &Path, dir: &Path, out: Output)
         .collect();
     earlier.sort();
     if let Some(first) = earlier.first() {
+        let (files, remain) = match earlier.len() {
+            1 => ("1 file".to_string(), "remains"),
+            n => (count(n, "file"), "remain"),
+        };
         out.warn(format!(
-            "{}: {} of an earlier plan remain (first {first}); this plan does not read them: remove them once their \
-             tiles are not needed",
+            "{}: {files} of an earlier plan {remain} (first {first}); this plan does not read them: remove them once \
+             their tiles are not needed",
             dir.display(),
-            count(earlier.len(), "file")
         ));
     }
 }
@@ -627,6 +630,7 @@ fn merge(args: &MergeArgs, out: Output) -> Result<()> {
         let shown: Vec<String> = missing.iter().take(20).map(usize::to_string).collect();
         let more = match missing.len() {
             1 => String::new(),
+            2 => format!(", nor tile {}", shown[1]),
             n if n <= 20 => format!(", nor tiles {}", shown[1..].join(", ")),
             n => format!(", nor {} more tiles ({}, ...)", n - 1, shown[1..].join(", ")),
         };

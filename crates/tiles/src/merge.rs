@@ -113,6 +113,15 @@ struct TileNodes {
     tri_base: u32,
 }
 
+/// Where a tile's vertices, grouped triangles and orphans begin in the merged mesh's lists, before the orphans are
+/// appended to the grouped triangles (a shared vertex is the first tile's that added it).
+struct TileStarts {
+    tile: usize,
+    vertex: usize,
+    triangle: usize,
+    orphan: usize,
+}
+
 /// Merges the tiles' hierarchies into one (see the module docs), reading them one at a time with `load(i)` (tile `i`
 /// of `plan`), in Morton order of the tile grid, each dropped before the next is read: memory is the merged
 /// hierarchy and one tile's mesh, not every tile's as well.
@@ -130,6 +139,8 @@ pub fn merge_with(
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut orphans: Vec<[u32; 3]> = Vec::new();
     let mut kept: Vec<TileNodes> = Vec::with_capacity(order.len());
+    // Where each tile's vertices, grouped triangles and orphans begin (in the order merged), to name a tile by them.
+    let mut starts: Vec<TileStarts> = Vec::with_capacity(order.len());
     let mut build: Option<BuildInfo> = None;
     let mut seeds = 0;
     for &i in &order {
@@ -143,6 +154,12 @@ pub fn merge_with(
         }
         // Only a vertex on the tile's boundary can be another tile's too: the others are added as they are.
         let shared = boundary_vertices(&t.mesh.triangles, t.mesh.positions.len());
+        starts.push(TileStarts {
+            tile: i,
+            vertex: positions.len(),
+            triangle: triangles.len(),
+            orphan: orphans.len(),
+        });
         let mut remap: Vec<u32> = Vec::with_capacity(t.mesh.positions.len());
         for (p, shared) in t.mesh.positions.iter().zip(shared) {
             let mut add = || {
@@ -200,13 +217,14 @@ pub fn merge_with(
     // proof allows. Such a vertex and such an edge both lie on the joined mesh's border (the edge has its one
     // triangle in its tile, the vertex's side edges theirs in the other), so only the triangles with a border edge
     // are searched: every crack between tiles is among theirs, and one found among them is one of the whole mesh.
-    let border: Vec<[u32; 3]> = tin
+    let (border_ids, border): (Vec<usize>, Vec<[u32; 3]>) = tin
         .triangles()
         .iter()
         .zip(tin.neighbours())
-        .filter(|(_, n)| n.contains(&tin::NO_NEIGHBOUR))
-        .map(|(t, _)| *t)
-        .collect();
+        .enumerate()
+        .filter(|(_, (_, n))| n.contains(&tin::NO_NEIGHBOUR))
+        .map(|(k, (t, _))| (k, *t))
+        .unzip();
     let cracks = tin::find_cracks(tin.positions(), &border, 1);
     if let Some(&[v, t]) = cracks.first.first() {
         let point = |v: u32| {
@@ -214,12 +232,24 @@ pub fn merge_with(
             format!("({}, {}, {})", p.x, p.y, p.z)
         };
         let corners = border[t as usize].map(point);
+        // The tile that added a vertex or a triangle: the last whose start is not past it.
+        let tile_of = |start: fn(&TileStarts) -> usize, k: usize| {
+            let i = starts[starts.partition_point(|s| start(s) <= k) - 1].tile;
+            format!("tile {i}, {}", plan.tiles[i].output.display())
+        };
+        let k = border_ids[t as usize];
+        let triangle_tile = if k < grouped as usize {
+            tile_of(|s| s.triangle, k)
+        } else {
+            tile_of(|s| s.orphan, k - grouped as usize)
+        };
         return Err(TilesError::Parameter(format!(
             "the tiles do not join into one terrain (plan and build them again): {} vertices lie on an edge of a \
-             neighbouring tile's triangle at another height than the edge's (a crack), the first at {} on the \
-             triangle {}; were the tiles built from this plan?",
+             neighbouring tile's triangle at another height than the edge's (a crack), the first at {} ({}) on the \
+             triangle {} ({triangle_tile}); were the tiles built from this plan?",
             cracks.count,
             point(v),
+            tile_of(|s| s.vertex, v as usize),
             corners.join(", ")
         )));
     }

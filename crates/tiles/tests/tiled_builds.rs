@@ -604,12 +604,17 @@ fn a_tile_from_another_max_error_is_refused_as_a_crack() {
             (plan.check_built_tile(i, &t).is_ok() && t.mesh.positions != tiles[i].mesh.positions).then_some((i, t))
         })
         .expect("a tile that differs between the two plans");
-    tiles[foreign.0] = foreign.1;
+    let i = foreign.0;
+    tiles[i] = foreign.1;
     let e = tiles::merge(&plan, &tiles).expect_err("a crack").to_string();
     assert!(
         e.contains("(a crack)") && e.contains("plan and build them again"),
         "{e}"
     );
+    // Every crack is between the foreign tile and a neighbour: the message names it (the vertex's or the
+    // triangle's tile) and its file, to be built again.
+    let named = format!("tile {i}, {}", plan.tiles[i].output.display());
+    assert!(e.contains(&named), "{e}");
 }
 
 /// Writes `grid` over the plan's DEM (`terrain.npy` beside `path`).
