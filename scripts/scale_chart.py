@@ -57,12 +57,31 @@ def series(rows, key):
     return [p[0] for p in pts], [p[1] for p in pts]
 
 
+def read_table(path):
+    """The rows of a `scripts/scale` table, by source then vertices; exits naming the file and line at fault."""
+    name = sys.argv[0]
+    try:
+        with path.open(newline="") as f:
+            reader = csv.DictReader(f)
+            rows = list(reader)
+            columns = reader.fieldnames or []
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        sys.exit(f"{name}: cannot read {path}: {getattr(e, 'strerror', None) or e}")
+    missing = [c for c in ("source", "vertices", "threads") if c not in columns]
+    if missing:
+        sys.exit(f"{name}: {path} is not a scripts/scale table (no column {', '.join(missing)})")
+    for line, r in enumerate(rows, start=2):
+        if not (r["vertices"] or "").isdigit():
+            sys.exit(f"{name}: {path}, line {line}: vertices {r['vertices']!r} is not a count")
+    order = list(SOURCES)
+    return sorted(rows, key=lambda r: (order.index(r["source"]) if r["source"] in order else len(order),
+                                       int(r["vertices"])))
+
+
 def main():
     path = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/scale/scale.csv")
     png = Path(sys.argv[2] if len(sys.argv) > 2 else "docs/scale.png")
-    order = list(SOURCES)
-    rows = sorted(csv.DictReader(path.open()),
-                  key=lambda r: (order.index(r["source"]) if r["source"] in order else len(order), int(r["vertices"])))
+    rows = read_table(path)
     fig, (ax_t, ax_o, ax_m) = plt.subplots(1, 3, figsize=(18, 8.5))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     exponents = []
@@ -106,8 +125,11 @@ def main():
     fig.suptitle("tincull at scale: solid = synthetic (synth --rng-seed 1), dashed = N43W123 (tin --vertices N); "
                  "16×4 sectors", fontsize=10)
     fig.tight_layout()
-    png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=110)
+    try:
+        png.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(png, dpi=110)
+    except OSError as e:
+        sys.exit(f"{sys.argv[0]}: cannot write {png}: {e.strerror or e}")
     print(f"wrote {png}")
 
     def cell(r, key, fmt):

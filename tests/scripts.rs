@@ -14,10 +14,10 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A directory holding only links to `bash` and `awk`, for `PATH`.
+/// A directory holding only links to `bash`, `awk` and `dirname`, for `PATH`.
 fn minimal_path() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("tempdir");
-    for tool in ["bash", "awk"] {
+    for tool in ["bash", "awk", "dirname"] {
         let found = ["/usr/bin", "/bin"]
             .iter()
             .map(|d| Path::new(d).join(tool))
@@ -29,8 +29,12 @@ fn minimal_path() -> tempfile::TempDir {
 }
 
 fn script(name: &str, arg: &str, path: &Path) -> Output {
+    script_with(name, &[arg], path)
+}
+
+fn script_with(name: &str, args: &[&str], path: &Path) -> Output {
     Command::new(root().join("scripts").join(name))
-        .arg(arg)
+        .args(args)
         .env("PATH", path)
         .env("TINCULL_SKIP_INSTALL", "1")
         .current_dir(root())
@@ -77,16 +81,103 @@ fn every_script_has_help_and_refuses_arguments_it_does_not_take() {
             assert!(stdout.lines().count() >= 2, "scripts/{name} {help}:\n{stdout}");
             assert!(!stdout.contains("#!/"), "scripts/{name} {help}:\n{stdout}");
         }
+        let out = script(name, "--bogus", path.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "scripts/{name} --bogus:\n{stderr}");
+        let expected = if name == "fuzz" {
+            // Its first argument is SECONDS.
+            "scripts/fuzz: SECONDS takes a whole number, not '--bogus'".to_string()
+        } else {
+            format!("scripts/{name}: unknown argument --bogus")
+        };
+        assert!(stderr.contains(&expected), "scripts/{name} --bogus:\n{stderr}");
         if !takes_arguments {
-            let out = script(name, "--bogus", path.path());
-            let stderr = String::from_utf8_lossy(&out.stderr);
-            assert_eq!(out.status.code(), Some(2), "scripts/{name} --bogus:\n{stderr}");
-            assert!(
-                stderr.contains(&format!("scripts/{name}: unknown argument --bogus")),
-                "scripts/{name} --bogus:\n{stderr}"
-            );
+            let out = script_with(name, &["--help", "x"], path.path());
+            assert_eq!(out.status.code(), Some(2), "scripts/{name} --help x");
         }
     }
+}
+
+/// Arguments of the measuring scripts are checked before any work: a flag without its value, a value of the wrong
+/// kind, a second working directory and a missing `TINCULL_BIN` are refused with exit 2 and a message, and a refused
+/// `scripts/scale` leaves the table it would have replaced as it was.
+#[test]
+fn the_measuring_scripts_check_their_arguments_first() {
+    let path = minimal_path();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let table = dir.path().join("scale.csv");
+    std::fs::write(&table, "source,vertices\nsynth,10\n").expect("write");
+    let out_dir = dir.path().to_str().expect("utf-8 path");
+    let cases: &[(&str, &[&str], &str)] = &[
+        ("scale", &["--vertices"], "scripts/scale: --vertices needs a value"),
+        ("scale", &["--out"], "scripts/scale: --out needs a value"),
+        (
+            "scale",
+            &["--vertices", "abc", "--out", out_dir],
+            "scripts/scale: --vertices takes counts separated by commas, not 'abc'",
+        ),
+        (
+            "scale",
+            &["--sources", "moon", "--out", out_dir],
+            "scripts/scale: unknown source 'moon' in --sources",
+        ),
+        (
+            "scale",
+            &["--quick", "--vertices", "10"],
+            "not with --vertices or --sources",
+        ),
+        ("hunt", &["--out"], "scripts/hunt: --out needs a value"),
+        ("soak", &["--seed"], "scripts/soak: --seed needs a value"),
+        (
+            "soak",
+            &["--runs", "x"],
+            "scripts/soak: --runs takes a whole number, not 'x'",
+        ),
+        (
+            "soak",
+            &["--seconds", "0"],
+            "scripts/soak: --seconds must be at least 1",
+        ),
+        ("soak", &["--runs", "3", "--seconds", "9"], "give one"),
+        ("fuzz", &["0"], "scripts/fuzz: SECONDS must be at least 1"),
+        ("fuzz", &["5", "nope"], "scripts/fuzz: unknown target nope"),
+        ("tiles-safety", &["a", "b"], "scripts/tiles-safety: unknown argument b"),
+        (
+            "tiles-figures",
+            &["a", "b"],
+            "scripts/tiles-figures: unknown argument b",
+        ),
+    ];
+    for (name, args, expected) in cases {
+        let out = script_with(name, args, path.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "scripts/{name} {args:?}:\n{stderr}");
+        assert!(stderr.contains(expected), "scripts/{name} {args:?}:\n{stderr}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(&table).expect("read"),
+        "source,vertices\nsynth,10\n",
+        "a refused scripts/scale left the table as it was"
+    );
+
+    // A TINCULL_BIN that is no binary is named before any run (soak made a failed run of each, in a tight loop).
+    let missing = dir.path().join("no-such-tincull");
+    let out = Command::new(root().join("scripts/soak"))
+        .args(["--runs", "2"])
+        .env("PATH", path.path())
+        .env("TINCULL_BIN", &missing)
+        .current_dir(root())
+        .output()
+        .expect("the script runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "scripts/soak: {} is not an executable tincull binary",
+            missing.display()
+        )),
+        "{stderr}"
+    );
 }
 
 /// `scripts/tiles/dask_tiles.py` run by `python3` with the given extra arguments, `PYTHONPATH` set to `pythonpath`.
@@ -120,6 +211,29 @@ fn the_dask_driver_explains_a_missing_dask_and_refuses_no_workers() {
     assert!(!stderr.contains("Traceback"), "{stderr}");
     assert!(stderr.contains("error: Dask is not installed"), "{stderr}");
     assert!(stderr.contains("scripts/tiles/requirements.txt"), "{stderr}");
+
+    // What `tiles plan --json` prints is not the plan; a merged file in a missing folder is refused before any tile.
+    let report = dir.path().join("report.json");
+    std::fs::write(&report, r#"{"tiles": 2}"#).expect("write the report");
+    let out = dask_driver(&fake, &report, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("not a tincull plan (its `tiles` is no list"),
+        "{stderr}"
+    );
+    let out = Command::new("python3")
+        .arg(root().join("scripts/tiles/dask_tiles.py"))
+        .arg(&plan)
+        .arg("-o")
+        .arg(dir.path().join("no-such-folder/x.tch"))
+        .args(["--tincull", env!("CARGO_BIN_EXE_tincull")])
+        .env("PYTHONPATH", &fake)
+        .output()
+        .expect("python3 runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(stderr.contains("x.tch: its folder does not exist"), "{stderr}");
 
     let out = dask_driver(&fake, &plan, &["--workers", "0"]);
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -64,7 +64,7 @@ def main():
     p.add_argument("-o", "--out", required=True, help="the merged hierarchy (.tch)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler; without it a local cluster starts")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster [2]")
-    p.add_argument("--threads", type=int, default=0, help="threads of each tile job [all cores of its worker]")
+    p.add_argument("--threads", type=int, default=0, help="threads of each tile job [0: one per core of the machine it runs on]")
     p.add_argument("--retries", type=int, default=2, help="retries of a failed tile job [2]")
     p.add_argument("--tincull", help="the tincull binary [$CARGO_TARGET_DIR or target/, release/tincull there, else on PATH]")
     args = p.parse_args()
@@ -82,9 +82,17 @@ def main():
     out = os.path.abspath(args.out)
     try:
         with open(plan) as f:
-            tiles = len(json.load(f)["tiles"])
-    except (OSError, ValueError, KeyError) as e:
+            listed = json.load(f)["tiles"]
+    except (OSError, ValueError, KeyError, TypeError) as e:
         sys.exit(f"error: {args.plan}: not a readable tincull plan: {e}")
+    if not isinstance(listed, list):
+        sys.exit(f"error: {args.plan}: not a tincull plan (its `tiles` is no list; `tiles plan -o` writes the plan)")
+    tiles = len(listed)
+    # What the merge would refuse after every tile was built: refused first.
+    if os.path.isdir(out):
+        sys.exit(f"error: {args.out}: is a directory (-o names the merged .tch file)")
+    if not os.path.isdir(os.path.dirname(out)):
+        sys.exit(f"error: {args.out}: its folder does not exist")
 
     try:
         from dask.distributed import Client, LocalCluster, as_completed
@@ -99,7 +107,10 @@ def main():
     start = time.time()
     cluster = None
     if args.scheduler:
-        client = Client(args.scheduler)
+        try:
+            client = Client(args.scheduler)
+        except (OSError, ValueError) as e:
+            sys.exit(f"error: no Dask scheduler at {args.scheduler}: {e}")
     else:
         cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
         client = Client(cluster)
