@@ -153,6 +153,25 @@ fn a_y_up_mesh_gets_a_hint() {
     for key in ["bbox", "import", "relief", "slivers"] {
         assert_eq!(read[key], orig[key], "{key}");
     }
+    // `--up y` given for a file that is z-up already is named as such (the hint told to give it), whether the
+    // rotated mesh fails or reads.
+    fails_with(
+        &["info", s(&mesh("jacksboro-2k.obj")), "--up", "y"],
+        "the file looks z-up already; leave out --up y",
+    );
+    let flat = dir.path().join("flat.obj");
+    std::fs::write(
+        &flat,
+        "v 0 0 0\nv 100 0 1\nv 100 100 2\nv 0 100 3\nv 50 50 1\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
+    )
+    .expect("fixture");
+    let out = run(&["info", s(&flat), "--up", "y"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("the file looks z-up already; leave out --up y"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("give --up y"), "{stderr}");
     let grid = dir.path().join("g.asc");
     std::fs::write(
         &grid,
@@ -707,6 +726,15 @@ fn bad_input_gives_clear_errors() {
         warned.contains("short.obj: dropped 2 vertices that no face uses"),
         "{warned}"
     );
+    assert!(!warned.contains("line break"), "{warned}");
+    // Cut within its last line, a file may still read (`10.` is a number, a face may have lost nothing): a file that
+    // does not end with a line break, as every OBJ writer ends one, is named with a warning.
+    let cut = write("cut10.obj", "v 0 0 0\nv 10 0 1\nv 0 10 2\nv 10 10 3.");
+    let warned = String::from_utf8_lossy(&ok(&["info", s(&cut)]).stderr).into_owned();
+    assert!(
+        warned.contains("cut10.obj: the file does not end with a line break, as a file cut short would not"),
+        "{warned}"
+    );
     fails_with(
         &["info", s(&write("foreign.obj", "\u{0}\u{1}binary garbage\n"))],
         "foreign.obj",
@@ -1011,6 +1039,29 @@ fn threads_sets_the_worker_count() {
     let c = dir.path().join("c.tch");
     fails_with(&["build", s(&m), "-o", s(&c), "--threads", "0"], "--threads");
     assert!(!c.exists());
+    // The environment's count is read as --threads' default; one rayon would ignore is refused, not ignored.
+    let with_env = |value: &str| {
+        bin()
+            .args(["build", s(&m), "-o", s(&c), "--json", "-q"])
+            .env("RAYON_NUM_THREADS", value)
+            .output()
+            .expect("the binary runs")
+    };
+    let out = with_env("2");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(v["threads"], 2, "{v}");
+    std::fs::remove_file(&c).expect("remove");
+    for bad in ["abc", "-3", "1.5"] {
+        let out = with_env(bad);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "RAYON_NUM_THREADS={bad}");
+        assert!(
+            stderr.contains(&format!("RAYON_NUM_THREADS={bad}: not a number of worker threads")),
+            "{stderr}"
+        );
+        assert!(!c.exists());
+    }
 }
 
 /// Byte-identical outputs at any thread count, on the 10k mesh (large enough for the parallel sorts, checks and
@@ -1674,6 +1725,17 @@ fn demo_refuses_dash_as_its_out_dir() {
         0,
         "nothing created"
     );
+    // A dangling symbolic link is named as one (it said "cannot create it: File exists").
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("out");
+        std::os::unix::fs::symlink(dir.path().join("nowhere"), &link).expect("symlink");
+        fails_with(
+            &["demo", s(&m), "--out-dir", s(&link), "--viewpoints", "1", "-q"],
+            "a symbolic link to nothing (its target does not exist); give a directory",
+        );
+        assert!(!dir.path().join("nowhere").exists());
+    }
 }
 
 /// `view` checks what it would write and the method before a window opens: a screenshot over the input (which once
@@ -1756,4 +1818,24 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         "the input is untouched"
     );
     assert!(!typo.exists() && !missing.exists());
+}
+
+/// `stress` names the file and the case when one of its cases fails on a mesh that builds (a square of 1e-30 m, whose
+/// moved copies are degenerate), and a `--dem-dir` that is a file as such.
+#[test]
+fn stress_errors_name_the_file_and_the_case() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let tiny = dir.path().join("tiny.obj");
+    std::fs::write(&tiny, "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nv 1e-30 1e-30 1\n").expect("fixture");
+    let out = run(&["stress", s(&tiny), "--quick", "--viewpoints", "1", "--json"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{}: stress case `", tiny.display())),
+        "{stderr}"
+    );
+    fails_with(
+        &["stress", s(&mesh("jacksboro-2k.obj")), "--dem-dir", s(&tiny), "--json"],
+        "tiny.obj: not a folder (--dem-dir names the folder of the DEMs)",
+    );
 }

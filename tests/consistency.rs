@@ -462,7 +462,7 @@ fn stress_does_not_read_developer_data_by_default() {
             "--dem-dir",
             "/nonexistent-dir",
         ],
-        "crater_lake.npy",
+        "/nonexistent-dir: no such folder (--dem-dir names the folder of the DEMs)",
     );
 }
 

@@ -176,6 +176,15 @@ fn errors_name_what_is_wrong() {
         &["tiles", "merge", s(&plan), "-o", s(&dir.path().join("m.tch"))],
         &format!("run `tincull tiles build {} --all`", plan.display()),
     );
+    // A plan named like its own tiles' folder (`y.tiles` would hold the tiles of `y.tiles`) is refused before any
+    // work, leaving nothing behind (it said "is a directory" of a path where nothing was).
+    let npy = dir.path().join("t.npy");
+    let clash = dir.path().join("y.tiles");
+    fails_with(
+        &["tiles", "plan", s(&npy), "-o", s(&clash), "--tile", "20"],
+        "which would be this very path; name the plan otherwise",
+    );
+    assert!(!clash.exists());
     // A tile's file that is not a hierarchy: the merge names the tile and its file, and writes nothing.
     let outputs = tile_outputs(&plan);
     for path in &outputs {
@@ -534,6 +543,11 @@ fn a_malformed_plan_is_refused_naming_the_tile() {
         &["tiles", "merge", s(&edited), "-o", s(&merged)],
         "tile 0 is malformed: its index is 3",
     );
+    // A key no plan has (a typo in a hand edit) is named, as a `--config` file's is.
+    edit(&|v| v["bogus"] = serde_json::json!(1));
+    fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "unknown field `bogus`");
+    edit(&|v| v["tiles"][0]["outptu"] = serde_json::json!("x.tch"));
+    fails_with(&["tiles", "build", s(&edited), "--tile", "0"], "unknown field `outptu`");
     edit(&|v| v["version"] = serde_json::json!(99));
     fails_with(
         &["tiles", "build", s(&edited), "--tile", "0"],
@@ -901,4 +915,58 @@ fn a_plan_without_regions_culls_as_the_one_with_them() {
         fails_with(&args, message);
     }
     assert!(!refused.exists() && !dir.path().join("refused.tiles").exists());
+}
+
+/// `--max-expanse inf` (no limit on merges) survives every text form it is written in: a plan holding it builds and
+/// merges (JSON has no number for infinity: it was written `null`, which the tile jobs could not read), and a build's
+/// `--export-json` reads back.
+#[test]
+fn an_unlimited_expanse_is_kept_in_plans_and_exports() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let npy = dir.path().join("t.npy");
+    ok(&["synth", "--vertices", "900", "--rng-seed", "2", "-o", s(&npy), "-q"]);
+    let plan = dir.path().join("plan.json");
+    ok(&[
+        "tiles",
+        "plan",
+        s(&npy),
+        "-o",
+        s(&plan),
+        "--tile",
+        "16",
+        "--max-error",
+        "0.5",
+        "--max-expanse",
+        "inf",
+        "-q",
+    ]);
+    let text = std::fs::read_to_string(&plan).expect("plan");
+    assert!(text.contains(r#""max_expanse": "inf""#), "{text}");
+    ok(&["tiles", "build", s(&plan), "--all", "-q"]);
+    let merged = dir.path().join("m.tch");
+    ok(&["tiles", "merge", s(&plan), "-o", s(&merged), "-q"]);
+    let info = String::from_utf8_lossy(&ok(&["info", s(&merged)]).stdout).into_owned();
+    assert!(info.contains("max expanse inf"), "{info}");
+
+    let exported = dir.path().join("h.json");
+    let tch = dir.path().join("h.tch");
+    ok(&[
+        "build",
+        s(&npy),
+        "-o",
+        s(&tch),
+        "--max-expanse",
+        "inf",
+        "--export-json",
+        s(&exported),
+        "-q",
+    ]);
+    let text = std::fs::read_to_string(&exported).expect("export");
+    assert!(
+        text.contains(r#""max_expanse":"inf""#),
+        "{}",
+        &text[..text.len().min(400)]
+    );
+    let h = tincull::pipeline::export::from_json(&text).expect("the export reads back");
+    assert_eq!(h.build.max_expanse, f64::INFINITY);
 }

@@ -9,6 +9,7 @@ use cull::{AnyCuller, Camera, CullMethod, DrawList};
 use serde_json::json;
 
 use super::culling_args::{Eyes, SafeArgs};
+use super::values::parse_point;
 use super::{Output, OutputArgs};
 use eval::evaluate::timed_cull;
 
@@ -48,22 +49,6 @@ pub struct CullArgs {
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// Parses `x,y,z`.
-pub fn parse_point(s: &str) -> Result<[f64; 3], String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    if parts.len() != 3 {
-        return Err(format!("expected x,y,z, got {s:?}"));
-    }
-    let mut p = [0.0; 3];
-    for (v, text) in p.iter_mut().zip(&parts) {
-        *v = text.parse::<f64>().map_err(|_| format!("{text:?} is not a number"))?;
-        if !v.is_finite() {
-            return Err(format!("{text:?} is not finite"));
-        }
-    }
-    Ok(p)
 }
 
 /// Parses a culling method name.

@@ -8,7 +8,7 @@ use clap::Args;
 use cull::{CullMethod, MAX_COLUMNS_PER_FACE, MAX_PATCH, SafeParams, SafeParamsError};
 
 use super::Output;
-use super::cull_cmd::parse_point;
+use super::values::parse_point;
 
 /// Warns that `method` culls nothing in `h`, read from `path`, when it is a region test (`thesis`, `stewart`) and the
 /// file holds no regions (built with `--no-regions`, or nothing hid anything from its vertices).

@@ -55,6 +55,12 @@ pub fn run(args: &DemoArgs, out: Output) -> Result<()> {
     if args.out_dir.exists() && !args.out_dir.is_dir() {
         anyhow::bail!("--out-dir {}: exists and is not a directory", args.out_dir.display());
     }
+    if !args.out_dir.exists() && args.out_dir.is_symlink() {
+        anyhow::bail!(
+            "--out-dir {}: a symbolic link to nothing (its target does not exist); give a directory",
+            args.out_dir.display()
+        );
+    }
     // The folders made here are removed again if the demo fails or is interrupted (they are then empty: the outputs
     // are all or nothing). Made, and the outputs checked, before the terrain is read.
     let new_dirs = outfile::NewDir::create_all(&args.out_dir)

@@ -187,10 +187,8 @@ fn parse_z_scale(s: &str) -> Result<f64, String> {
 }
 
 fn parse_spacing(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s.split_once(',').ok_or_else(|| format!("expected dx,dy, got {s:?}"))?;
-    let parse = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
-    let (dx, dy) = (parse(a)?, parse(b)?);
-    if !(dx.is_finite() && dy.is_finite() && dx > 0.0 && dy > 0.0) {
+    let [dx, dy] = super::values::numbers(s, "dx,dy")?;
+    if !(dx > 0.0 && dy > 0.0) {
         return Err(format!("spacing must be positive and finite, got {s:?}"));
     }
     Ok((dx, dy))
@@ -288,23 +286,29 @@ pub fn warn_about_dem_file(path: &std::path::Path, opts: &tin::DemOptions, out: 
     }
 }
 
-/// Warns when a mesh looks modelled with y up ([`y_up_hint`]).
-pub fn warn_if_y_up(tin: &Tin, path: &std::path::Path, out: Output) {
-    if let Some(hint) = y_up_hint(tin.bbox().size().to_array(), path) {
+/// Warns when a mesh, as read with `up`, looks modelled with y up ([`y_up_hint`]).
+pub fn warn_if_y_up(tin: &Tin, path: &std::path::Path, up: UpArg, out: Output) {
+    if let Some(hint) = y_up_hint(tin.bbox().size().to_array(), path, up) {
         out.warn(hint);
     }
 }
 
-/// A hint when a mesh of extents `size` (x, y, z) looks modelled with y up (as many 3-D tools export OBJ): read z-up,
-/// its "north-south" extent is under a quarter of both its east-west extent and its "relief". tincull reads z as
-/// height; only a hint, since a narrow strip of steep terrain looks the same.
-fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path) -> Option<String> {
-    (y < 0.25 * x.min(z)).then(|| {
-        format!(
+/// A hint when a mesh of extents `size` (x, y, z), as read with `up`, looks modelled with y up (as many 3-D tools
+/// export OBJ): its "north-south" extent is under a quarter of both its east-west extent and its "relief". tincull
+/// reads z as height; only a hint, since a narrow strip of steep terrain looks the same. Read with `--up y`, such a
+/// mesh was z-up in its file.
+fn y_up_hint([x, y, z]: [f64; 3], path: &std::path::Path, up: UpArg) -> Option<String> {
+    (y < 0.25 * x.min(z)).then(|| match up {
+        UpArg::Z => format!(
             "{}: extents x {x:.1}, y {y:.1}, z {z:.1}: the mesh looks y-up; tincull takes z as height: give --up y \
              to read it y-up (rotated to z up), or export it with z up",
             path.display()
-        )
+        ),
+        UpArg::Y => format!(
+            "{}: extents x {x:.1}, y {y:.1}, z {z:.1} once rotated by --up y: the file looks z-up already; leave out \
+             --up y",
+            path.display()
+        ),
     })
 }
 
@@ -543,7 +547,10 @@ impl MeshArgs {
         let spinner = out.spinner("reading mesh");
         let (tin, report) = tin::read_obj(&self.mesh, &opts).map_err(|e| {
             // A y-up mesh usually fails as vertical walls: say why, from the file's extents.
-            match read_extents(&self.mesh).and_then(|size| y_up_hint(size, &self.mesh)) {
+            // The file's extents as read with `up` (rotated to z up: (x, y, z) -> (x, -z, y)).
+            let up = self.import.up.unwrap_or_default();
+            let read = |[x, y, z]: [f64; 3]| if up == UpArg::Y { [x, z, y] } else { [x, y, z] };
+            match read_extents(&self.mesh).and_then(|size| y_up_hint(read(size), &self.mesh, up)) {
                 Some(hint) => anyhow::anyhow!("{e}\n{hint}"),
                 None => e.into(),
             }
@@ -569,7 +576,14 @@ impl MeshArgs {
                 report.unreferenced_dropped
             ));
         }
-        warn_if_y_up(&tin, &self.mesh, out);
+        if report.unterminated {
+            out.warn(format!(
+                "{}: the file does not end with a line break, as a file cut short would not: its last line may be \
+                 cut (check its size against the original's)",
+                self.mesh.display()
+            ));
+        }
+        warn_if_y_up(&tin, &self.mesh, self.import.up.unwrap_or_default(), out);
         Ok((tin, report, None))
     }
 

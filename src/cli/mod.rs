@@ -21,6 +21,7 @@ mod sweep_cmd;
 mod synth;
 mod tiles_cmd;
 mod tin_cmd;
+pub mod values;
 #[cfg(feature = "viewer")]
 mod view_cmd;
 
@@ -144,6 +145,15 @@ pub fn run(cli: Cli) -> Result<()> {
             .num_threads(usize::from(n))
             .build_global()
             .map_err(|e| anyhow::anyhow!("--threads {n}: {e}"))?;
+    } else if let Some(value) = std::env::var_os("RAYON_NUM_THREADS") {
+        // rayon silently ignores a value it cannot read (and takes 0 for one per core): refused, as a bad --threads.
+        let text = value.to_string_lossy();
+        if text.trim().parse::<u16>().is_err() {
+            anyhow::bail!(
+                "RAYON_NUM_THREADS={text}: not a number of worker threads (a whole number, 0 for one per core; or \
+                 leave the variable unset)"
+            );
+        }
     }
     match cli.command {
         Command::Demo(args) => demo_cmd::run(&args, args.output.into()),

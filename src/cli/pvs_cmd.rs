@@ -15,6 +15,7 @@ use serde_json::{Value, json};
 
 use super::culling_args::EVAL_REACH;
 use super::files::Outputs;
+use super::values::{parse_pair, parse_rect};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull pvs`.
@@ -69,32 +70,6 @@ pub struct PvsArgs {
     /// Output flags.
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// Parses `x0,y0,x1,y1`.
-pub fn parse_rect(s: &str) -> Result<[f64; 4], String> {
-    let v = parse_numbers(s, 4)?;
-    Ok([v[0], v[1], v[2], v[3]])
-}
-
-/// Parses `a,b`.
-pub fn parse_pair(s: &str) -> Result<[f64; 2], String> {
-    let v = parse_numbers(s, 2)?;
-    Ok([v[0], v[1]])
-}
-
-fn parse_numbers(s: &str, n: usize) -> Result<Vec<f64>, String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    if parts.len() != n {
-        return Err(format!("expected {n} comma-separated numbers, got {s:?}"));
-    }
-    parts
-        .iter()
-        .map(|t| match t.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(format!("{t:?} is not a finite number")),
-        })
-        .collect()
 }
 
 /// Refuses, for `--check`, a band of heights whose sample points lie farther than [`EVAL_REACH`] above or below the

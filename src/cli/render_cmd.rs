@@ -9,10 +9,10 @@ use clap::Args;
 use serde_json::json;
 use viewer::{ColourMode, Gpu, RenderOptions, Terrain, ViewKind};
 
-use super::cull_cmd::parse_point;
 use super::files::Outputs;
 use super::mesh_input::ImportArgs;
-use super::pvs_cmd::{parse_pair, parse_rect};
+use super::values::parse_point;
+use super::values::{parse_pair, parse_rect};
 use super::{Output, OutputArgs};
 
 /// Arguments of `tincull render`.

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 
 use super::mesh_input::MeshArgs;
@@ -37,6 +37,12 @@ pub fn run(args: &StressArgs, out: Output) -> Result<()> {
     out.require_a_result(false, "give --json")?;
     let (tin, _) = args.mesh.load(out)?;
     if let Some(dir) = &args.dem_dir
+        && !dir.is_dir()
+    {
+        let what = if dir.exists() { "not a folder" } else { "no such folder" };
+        anyhow::bail!("{}: {what} (--dem-dir names the folder of the DEMs)", dir.display());
+    }
+    if let Some(dir) = &args.dem_dir
         && !dir.join("crater_lake.npy").exists()
     {
         anyhow::bail!(
@@ -50,9 +56,13 @@ pub fn run(args: &StressArgs, out: Output) -> Result<()> {
         dem_dir: args.dem_dir.clone(),
     };
     let spinner = out.spinner("stress");
+    // The case under way, for an error: the suite moves and scales the mesh, which may break a mesh that builds.
+    let case = std::cell::RefCell::new(String::new());
     let report = run_suite(&tin, &args.mesh.mesh.display().to_string(), &opts, &|name| {
         spinner.set_message(format!("case: {name}"));
-    })?;
+        *case.borrow_mut() = name.to_string();
+    })
+    .with_context(|| format!("{}: stress case `{}`", args.mesh.mesh.display(), case.borrow()))?;
     spinner.finish_and_clear();
     out.say(report.table());
     out.say(format!("{:.1} s in all", report.seconds));

@@ -134,6 +134,9 @@ pub fn run(args: &SynthArgs, out: Output) -> Result<()> {
 fn parse_vertices(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if (4..=1 << 31).contains(&n) => Ok(n),
-        _ => Err(format!("{s:?}: a synthetic terrain has 4 to 2^31 vertices")),
+        Ok(_) => Err(format!("{s:?}: a synthetic terrain has 4 to 2^31 vertices")),
+        Err(_) => Err(format!(
+            "{s:?} is not a whole number (a synthetic terrain has 4 to 2^31 vertices)"
+        )),
     }
 }

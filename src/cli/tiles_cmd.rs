@@ -158,6 +158,13 @@ fn plan(args: &PlanArgs, out: Output) -> Result<()> {
     }
     files.check(&args.out)?;
     super::files::refuse_other_format(&args.out, "a tiling plan (JSON)", "json")?;
+    if args.out.extension().is_some_and(|e| e == "tiles") {
+        bail!(
+            "{}: the plan's tiles go into the folder `<plan name without extension>.tiles` beside it, which would be \
+             this very path; name the plan otherwise (such as plan.json)",
+            args.out.display()
+        );
+    }
     let params = args.params.resolve(args.config.as_deref())?;
     if args.no_regions {
         super::build_cmd::check_no_regions(&params)?;

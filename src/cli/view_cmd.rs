@@ -10,7 +10,7 @@ use viewer::app::{RebuildParams, ScreenshotRequest, Source, Startup, ViewerOptio
 
 use super::Output;
 use super::build_cmd::ParamArgs;
-use super::cull_cmd::parse_point;
+use super::values::parse_point;
 
 /// Frames drawn before a screenshot, by default.
 const DEFAULT_SCREENSHOT_AFTER: u32 = 10;

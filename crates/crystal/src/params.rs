@@ -19,7 +19,8 @@ pub struct CrystalParams {
     /// Smallest group kept; smaller groups are merged with a small group they collided with, or orphaned.
     pub min_group: usize,
     /// Largest parent node allowed in the hierarchy: its circumscribed circle's area as a fraction of the terrain's
-    /// area (sum of triangle areas in x,y). `inf` disables the limit.
+    /// area (sum of triangle areas in x,y). `inf` disables the limit (written `"inf"` in JSON: see [`cull::limit`]).
+    #[serde(with = "cull::limit")]
     pub max_expanse: f64,
     /// Seed of the random generator that places the seeds.
     pub rng_seed: u64,

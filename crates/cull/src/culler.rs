@@ -262,6 +262,11 @@ pub struct Culler {
 
 impl Culler {
     /// Prepares a culler for `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded file does).
+    ///
+    /// # Panics
+    ///
+    /// A hierarchy that breaks those invariants (built or changed in code: its fields are public) may make it panic,
+    /// exhaust memory or never return; [`crate::AnyCuller::checked`] checks one first.
     pub fn new(h: &Hierarchy) -> Culler {
         let s = h.sectors as usize;
         let mut roots = h.roots.clone();
@@ -879,9 +884,15 @@ mod tests {
         }
     }
 
+    /// Every culler serves several threads at once (each with its own draw list), as `AnyCuller`'s docs say.
     #[test]
-    fn culler_is_send_and_sync() {
+    fn cullers_are_send_and_sync() {
         fn check<T: Send + Sync>() {}
         check::<Culler>();
+        check::<crate::SafeCuller>();
+        check::<crate::LloydEgbertCuller>();
+        check::<crate::AnyCuller>();
+        check::<DrawList>();
+        check::<Hierarchy>();
     }
 }

@@ -92,6 +92,10 @@ impl StoredRegion {
     }
 
     /// Height of the boundary at plane coordinate `t` (relative to the origin), in f64.
+    ///
+    /// # Panics
+    ///
+    /// When the region has no points (every region of a hierarchy that passes [`Hierarchy::check_invariants`] has).
     pub fn height_at(&self, t: f64) -> f64 {
         let pts = &self.points;
         let i = pts.partition_point(|p| f64::from(p[0]) <= t).saturating_sub(1);
@@ -105,7 +109,8 @@ impl StoredRegion {
         }
     }
 
-    /// Whether `(t, z)` (relative to the origin) is strictly inside the region; the boundary is outside.
+    /// Whether `(t, z)` (relative to the origin) is strictly inside the region; the boundary is outside. Panics, as
+    /// [`StoredRegion::height_at`], for a region without points (which [`Hierarchy::check_invariants`] refuses).
     pub fn contains(&self, t: f64, z: f64) -> bool {
         t > f64::from(self.points[0][0]) && z < self.height_at(t)
     }
@@ -150,7 +155,8 @@ pub struct BuildInfo {
     pub orphan_passes: u32,
     /// Minimum group size (`u32::MAX` for any larger one).
     pub min_group: u32,
-    /// Expanse limit as a fraction of the terrain area.
+    /// Expanse limit as a fraction of the terrain area (infinite for none: `"inf"` in JSON, see [`crate::limit`]).
+    #[serde(with = "crate::limit")]
     pub max_expanse: f64,
     /// Seed of the random generator.
     pub rng_seed: u64,

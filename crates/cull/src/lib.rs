@@ -53,6 +53,7 @@ pub mod error;
 pub mod file;
 pub mod hierarchy;
 pub mod horizon;
+pub mod limit;
 pub mod lloyd_egbert;
 pub mod method;
 pub mod safe;

@@ -438,6 +438,11 @@ fn key(d: f64) -> u64 {
 impl LloydEgbertCuller {
     /// Prepares the culler for `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded file does)
     /// with `columns_per_face` horizon columns per 90° face (rounded up to a power of two, 2 to 65536).
+    ///
+    /// # Panics
+    ///
+    /// A hierarchy that breaks those invariants (built or changed in code: its fields are public) may make it panic,
+    /// exhaust memory or never return; [`crate::AnyCuller::checked`] checks one first.
     pub fn new(h: &Hierarchy, columns_per_face: usize) -> LloydEgbertCuller {
         let start = Instant::now();
         let pos = &h.mesh.positions;

@@ -104,6 +104,9 @@ impl std::fmt::Display for CullMethod {
 }
 
 /// A culler of any [`CullMethod`].
+///
+/// Every culler is `Send + Sync` and culls through `&self`: one culler may serve several threads at once, each with
+/// its own [`DrawList`].
 #[derive(Clone, Debug)]
 pub enum AnyCuller {
     /// The safe culler.
@@ -118,13 +121,18 @@ pub enum AnyCuller {
 
 impl AnyCuller {
     /// Prepares `method` over `h` (the safe culler with [`SafeParams::default`]), whatever the grouping; see
-    /// [`AnyCuller::checked`] for the check of [`CullMethod::check`].
+    /// [`AnyCuller::checked`] for the checks of [`Hierarchy::check_invariants`] and [`CullMethod::check`].
+    ///
+    /// # Panics
+    ///
+    /// As the cullers' own constructors, for a hierarchy that breaks [`Hierarchy::check_invariants`] (every loaded
+    /// file keeps them; one built or changed in code may not).
     pub fn new(h: &Hierarchy, method: CullMethod) -> AnyCuller {
         AnyCuller::with_params(h, method, SafeParams::default())
     }
 
     /// Prepares `method` over `h`; `safe` are the safe culler's parameters (`lloyd-egbert` takes its horizon columns
-    /// per face from them; the other methods have none).
+    /// per face from them; the other methods have none). Panics as [`AnyCuller::new`] does.
     pub fn with_params(h: &Hierarchy, method: CullMethod, safe: SafeParams) -> AnyCuller {
         match method {
             CullMethod::Safe => AnyCuller::Safe(SafeCuller::new(h, safe)),
@@ -134,8 +142,10 @@ impl AnyCuller {
         }
     }
 
-    /// Prepares `method` over `h` after [`CullMethod::check`].
+    /// Prepares `method` over `h` after [`Hierarchy::check_invariants`] (for a hierarchy built or changed in code;
+    /// a loaded file has passed it) and [`CullMethod::check`].
     pub fn checked(h: &Hierarchy, method: CullMethod) -> Result<AnyCuller, HierarchyError> {
+        h.check_invariants()?;
         method.check(h)?;
         Ok(AnyCuller::new(h, method))
     }

@@ -525,6 +525,11 @@ fn node_of(range: [u32; 2], extent: &Extent, centre: [f64; 2], r2: f64) -> TreeN
 impl SafeCuller {
     /// Prepares the safe culler for `h` (which must satisfy [`Hierarchy::check_invariants`], as every loaded file
     /// does).
+    ///
+    /// # Panics
+    ///
+    /// A hierarchy that breaks those invariants (built or changed in code: its fields are public) may make it panic,
+    /// exhaust memory or never return; [`crate::AnyCuller::checked`] checks one first.
     pub fn new(h: &Hierarchy, params: SafeParams) -> SafeCuller {
         let params = SafeParams {
             columns_per_face: params

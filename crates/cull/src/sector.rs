@@ -7,7 +7,8 @@
 use std::f64::consts::TAU;
 
 /// The unit centre direction `r_i` of sector `i` of `sectors`, as `[x, y]`: azimuth `2π(2i + 1) / (2s)`, with the
-/// exact values at multiples of 45° (the horizon stage uses the same directions, bit for bit).
+/// exact values at multiples of 45° (the horizon stage uses the same directions, bit for bit). `sectors` must be at
+/// least 1 (NaN for 0).
 pub fn sector_direction(sectors: u32, i: u32) -> [f64; 2] {
     let (num, den) = (2 * u64::from(i) + 1, 2 * u64::from(sectors));
     if (8 * num).is_multiple_of(den) {
@@ -34,13 +35,19 @@ pub fn azimuth(dx: f64, dy: f64) -> f64 {
 }
 
 /// The sector of `sectors` that contains azimuth `angle` (any real; wrapped into `[0, 2π)`).
+///
+/// # Panics
+///
+/// When `sectors` is 0 (no sector holds it; every hierarchy has at least one, see
+/// [`crate::Hierarchy::check_invariants`]).
 pub fn sector_of_azimuth(sectors: u32, angle: f64) -> u32 {
     let i = (angle * (f64::from(sectors) / TAU)).floor() as i64;
     i.rem_euclid(i64::from(sectors)) as u32
 }
 
 /// Calls `f` once for every sector of `sectors` that the closed azimuth interval `[centre − half, centre + half]`
-/// touches, in increasing order from the interval's start (wrapping past 2π). `half ≥ π` touches every sector.
+/// touches, in increasing order from the interval's start (wrapping past 2π). `half ≥ π` touches every sector. Panics
+/// as [`sector_of_azimuth`] when `sectors` is 0.
 pub fn for_each_sector_in(sectors: u32, centre: f64, half: f64, mut f: impl FnMut(u32) -> bool) -> bool {
     if half >= std::f64::consts::PI {
         return (0..sectors).all(f);

@@ -133,6 +133,39 @@ fn invalid_structure_is_rejected() {
     );
 }
 
+/// A hierarchy built or changed in code (its fields are public) is checked by `AnyCuller::checked` before any culler
+/// is prepared: a node that is its own child made the thesis' culler exhaust memory and Lloyd & Egbert's loop, an
+/// index out of range made them panic or draw ranges beyond the mesh.
+#[test]
+fn a_culler_of_a_broken_hierarchy_is_refused() {
+    type Break = fn(&mut Hierarchy);
+    let broken: [(&str, Break); 5] = [
+        ("a node its own child", |h| h.nodes[2].children.push(2)),
+        ("a child beyond the nodes", |h| h.nodes[2].children[0] = 9999),
+        ("a root beyond the nodes", |h| h.roots.push(9999)),
+        ("a range beyond the triangles", |h| {
+            h.nodes[0].triangles = [0, 1_000_000]
+        }),
+        ("no sectors", |h| h.sectors = 0),
+    ];
+    for (what, break_it) in broken {
+        let mut h = tiny();
+        break_it(&mut h);
+        for method in cull::CullMethod::ALL {
+            let e = cull::AnyCuller::checked(&h, method).expect_err(what);
+            assert!(matches!(e, HierarchyError::Invalid(_)), "{what}, {method}: {e:?}");
+        }
+    }
+    // `stewart` is for quadtrees: refused over these crystal groups, by the method's own check.
+    for method in [
+        cull::CullMethod::Safe,
+        cull::CullMethod::Thesis,
+        cull::CullMethod::LloydEgbert,
+    ] {
+        cull::AnyCuller::checked(&tiny(), method).expect("a sound hierarchy");
+    }
+}
+
 /// Regression (found by an audit of the proofs): a file whose roots and always-visible range leave a triangle out
 /// passed the checks, and every culler then never drew that triangle, in plain view or not. Every triangle must be
 /// in a root's range or always visible.

@@ -16,8 +16,10 @@
 //! Besides [`build`] it owns the content for people and other tools ([`export`]: the grouped OBJ + MTL and the
 //! hierarchy's JSON form) and the group palette they share with the viewer ([`palette`]).
 //!
-//! The crates whose types its functions take and return are re-exported, so that a library user needs only this one
-//! dependency: `pipeline::tin` (the terrain, its readers) and `pipeline::cull` (the hierarchy, cameras, cullers).
+//! The crates whose types a build and a cull take and return are re-exported, so that a library user needs only this
+//! one dependency: `pipeline::tin` (the terrain, its readers of OBJ, `.hgt`, `.asc`, `.npy`, and with this crate's
+//! default features `png` and `geotiff` also of PNG height maps and GeoTIFFs) and `pipeline::cull` (the hierarchy,
+//! cameras, cullers).
 //!
 //! Errors: [`build`], [`build_from_regions`], [`build_without_regions`] and [`BuildParams::validate`] return a
 //! [`BuildError`], whose variant says which stage refused (the horizon sweep, crystal grouping, the quadtree, regions
@@ -29,9 +31,9 @@
 //! [`cull::Hierarchy::to_bytes`]; [`cull::Hierarchy::load`] reads them back):
 //!
 //! ```
-//! use cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
+//! use pipeline::cull::{AnyCuller, Camera, CullMethod, DrawList, Hierarchy};
+//! use pipeline::tin::{self, ObjImportOptions};
 //! use pipeline::{BuildParams, build};
-//! use tin::ObjImportOptions;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! # let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/../../meshes/jacksboro-2k.obj");
@@ -66,6 +68,9 @@ pub use {crystal::CrystalError, horizon::HorizonError, quadtree::QuadtreeError};
 
 pub use cull;
 pub use tin;
+/// The crates whose types a [`Build`] holds beyond the hierarchy (its groups, quadtree and regions), and glam, whose
+/// vectors [`tin::Tin`] and the regions use: re-exported so that they can be named without depending on them.
+pub use {crystal, glam, occlusion, quadtree};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -193,6 +198,7 @@ pub struct BuildReport {
 }
 
 /// The result of [`build`]: the exported hierarchy, the figures, and the intermediate data that evaluation reuses.
+#[derive(Clone, Debug)]
 pub struct Build {
     /// The exported hierarchy (mesh reordered).
     pub hierarchy: Hierarchy,

@@ -107,8 +107,9 @@ impl PvsFile {
         cull::file::encode_framed(&MAGIC, FORMAT_VERSION, self).map_err(|e| PvsError::BadFile(e.to_string()))
     }
 
-    /// Decodes a file's bytes, checking magic, version, length, checksum and that every range lies within the
-    /// triangles.
+    /// Decodes a file's bytes, checking magic, version, length, checksum, every cell (a finite, non-empty rectangle
+    /// and height band, a finite top) and that every range lies within the triangles and every node id within the
+    /// nodes.
     pub fn from_bytes(bytes: &[u8]) -> Result<PvsFile, PvsError> {
         let bad = |m: String| Err(PvsError::BadFile(m));
         let (version, payload) = match unframe(bytes, &MAGIC) {
@@ -123,8 +124,17 @@ impl PvsFile {
         }
         let file: PvsFile = decode(payload).map_err(PvsError::BadFile)?;
         for (i, c) in file.cells.iter().enumerate() {
+            if let Err(e) = c.cell.validate() {
+                return bad(format!("cell {i}: {e}"));
+            }
+            if !c.ztop.is_finite() {
+                return bad(format!("cell {i}: its top {} is not finite", c.ztop));
+            }
             if c.range_deltas.len() % 2 != 0 || c.ranges().iter().any(|r| r[1] > file.triangles) {
                 return bad(format!("cell {i} has ranges beyond the {} triangles", file.triangles));
+            }
+            if c.nodes().last().is_some_and(|&n| n >= file.nodes) {
+                return bad(format!("cell {i} names nodes beyond the {} nodes", file.nodes));
             }
         }
         Ok(file)
@@ -170,7 +180,40 @@ mod tests {
         let padded = cull::file::frame(&MAGIC, FORMAT_VERSION, &payload);
         let e = PvsFile::from_bytes(&padded).expect_err("a byte left over");
         assert!(e.to_string().contains("1 unexpected bytes"), "{e}");
-        let short = PvsFile { triangles: 100, ..file };
+        let short = PvsFile {
+            triangles: 100,
+            ..file.clone()
+        };
         assert!(PvsFile::from_bytes(&short.to_bytes().expect("encodes")).is_err());
+        let few_nodes = PvsFile {
+            nodes: 7,
+            ..file.clone()
+        };
+        let e = PvsFile::from_bytes(&few_nodes.to_bytes().expect("encodes")).expect_err("node 7 of 7");
+        assert!(e.to_string().contains("cell 0 names nodes beyond the 7 nodes"), "{e}");
+        // Cells that no computation makes (written by hand, their checksum made to match) are refused by name.
+        for (rect, ztop, needle) in [
+            (
+                [f64::NAN, 0.0, 50.0, 50.0],
+                12.5,
+                "cell 0: invalid viewcell: the rectangle NaN,0,50,50 must be finite",
+            ),
+            (
+                [0.0, 0.0, -1e300, 50.0],
+                12.5,
+                "cell 0: invalid viewcell: the rectangle 0,0,-1e300,50 must be finite",
+            ),
+            (
+                [0.0, 0.0, 50.0, 50.0],
+                f64::INFINITY,
+                "cell 0: its top inf is not finite",
+            ),
+        ] {
+            let mut odd = file.clone();
+            odd.cells[0].cell.rect = rect;
+            odd.cells[0].ztop = ztop;
+            let e = PvsFile::from_bytes(&odd.to_bytes().expect("encodes")).expect_err("a cell no one computes");
+            assert!(e.to_string().contains(needle), "{e}");
+        }
     }
 }

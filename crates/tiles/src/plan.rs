@@ -22,6 +22,7 @@ pub const PLAN_VERSION: u32 = 3;
 
 /// The DEM's grid, as the plan saw it; every job checks that the file still has it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct GridInfo {
     /// Rows (north to south).
     pub rows: usize,
@@ -60,6 +61,7 @@ impl GridInfo {
 
 /// One tile: a rectangle of samples (both ends inclusive) and where its job writes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TileSpec {
     /// Index in [`Plan::tiles`].
     pub index: usize,
@@ -99,6 +101,7 @@ pub struct TileSpec {
 /// What a mesh tile's part holds: its vertices' bounding box in x,y and its counts. A tile's hierarchy keeps the
 /// part's vertices and triangles, so a built tile that differs is not this tile's.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MeshExtent {
     /// Least x and y of the tile's vertices.
     pub min: [f64; 2],
@@ -131,6 +134,7 @@ impl MeshExtent {
 
 /// How to cut a terrain into tiles. Lengths are in samples for a DEM, in metres for a mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PlanOptions {
     /// Largest tile side: sample intervals of a DEM (a tile has at most `tile + 1` samples a side), metres of a
     /// mesh.
@@ -209,6 +213,7 @@ pub fn file_digest(bytes: &[u8]) -> u32 {
 
 /// A tiled build's plan (see the module docs).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Plan {
     /// [`PLAN_VERSION`].
     pub version: u32,

@@ -20,7 +20,7 @@ const DEM_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/dem"
 
 /// A DEM of `../shared/dem` through the crate's own readers (`.npy` with its sidecar, SRTM `.hgt`).
 fn read(name: &str) -> tin::Result<Grid> {
-    tin::read_dem(&std::path::Path::new(DEM_DIR).join(name), &DemOptions::default())
+    tin::read_dem(std::path::Path::new(DEM_DIR).join(name), &DemOptions::default())
 }
 
 fn bench_grid(c: &mut Criterion, name: &str, grid: &Grid, vertices: usize) {

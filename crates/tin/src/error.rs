@@ -118,7 +118,8 @@ pub enum TinError {
         /// What is wrong and where.
         message: String,
     },
-    /// A parameter is out of range, or missing where the input needs it (the message names it, and the file).
+    /// A parameter is out of range, or missing where the input needs it (the message names it, and the file where the
+    /// file decides it).
     #[error("{0}")]
     InvalidParameter(String),
     /// A line of an OBJ file is malformed, or the mesh it describes is not a height field there.

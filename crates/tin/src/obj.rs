@@ -104,6 +104,10 @@ pub struct ObjImportReport {
     pub vertices: usize,
     /// Triangles of the resulting TIN.
     pub triangles: usize,
+    /// Whether the text does not end with a line break: every OBJ writer ends its last line with one, and a file cut
+    /// short (a copy or download that stopped) need not show it otherwise: a number cut after its point still
+    /// reads (`10.`), as does a last face that lost none of its vertices.
+    pub unterminated: bool,
 }
 
 /// What is wrong with one line of an OBJ file (see [`TinError::ObjLine`]).
@@ -499,6 +503,7 @@ fn import(text: &[u8], path: &Path, opts: &ObjImportOptions) -> Result<(Tin, Obj
         polygons_read: parsed.polygons,
         ignored_statements: parsed.ignored,
         kept_faces: opts.keep_faces,
+        unterminated: text.last().is_some_and(|&b| b != b'\n'),
         ..ObjImportReport::default()
     };
     let tin = if opts.keep_faces {

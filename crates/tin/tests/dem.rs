@@ -271,7 +271,7 @@ fn npy_malformed_files() {
     );
     // Missing file.
     assert!(matches!(
-        read_dem(&dir.path().join("none.npy"), &s),
+        read_dem(dir.path().join("none.npy"), &s),
         Err(TinError::Io { .. })
     ));
 }
@@ -1051,13 +1051,13 @@ fn range(g: &Grid) -> (f64, f64) {
 #[test]
 fn real_jacksboro_npy_and_asc_agree() {
     let dir = shared_dem();
-    let npy = read_dem(&dir.join("jacksboro_fault.npy"), &opts()).expect("npy");
+    let npy = read_dem(dir.join("jacksboro_fault.npy"), &opts()).expect("npy");
     assert_eq!((npy.rows, npy.cols), (344, 403));
     assert_eq!((npy.dx, npy.dy), (74.485, 92.767));
     assert_eq!(npy.voids(), 0);
     assert_eq!(range(&npy), (236.0, 1076.0));
     assert_eq!(npy.origin, DVec2::new(0.0, 343.0 * 92.767));
-    let asc = read_dem(&dir.join("jacksboro_fault.asc"), &opts()).expect("asc");
+    let asc = read_dem(dir.join("jacksboro_fault.asc"), &opts()).expect("asc");
     assert_eq!((asc.rows, asc.cols, asc.dx, asc.dy), (344, 403, 74.485, 92.767));
     assert!(same_heights(&npy.z, &asc.z));
     // The ASCII grid's lower-left cell corner is (0, 0), half a cell from its sample.
@@ -1067,7 +1067,7 @@ fn real_jacksboro_npy_and_asc_agree() {
 #[test]
 fn real_crater_lake() {
     let dir = shared_dem();
-    let g = read_dem(&dir.join("crater_lake.npy"), &opts()).expect("npy");
+    let g = read_dem(dir.join("crater_lake.npy"), &opts()).expect("npy");
     assert_eq!((g.rows, g.cols), (513, 513));
     assert_eq!((g.dx, g.dy), (20.182, 27.305));
     assert_eq!(range(&g), (1524.0, 2478.0));
@@ -1084,7 +1084,7 @@ fn real_crater_lake() {
 #[test]
 fn real_srtm_tiles() {
     let dir = shared_dem();
-    let g = read_dem(&dir.join("N43W123.hgt"), &opts()).expect("hgt");
+    let g = read_dem(dir.join("N43W123.hgt"), &opts()).expect("hgt");
     assert_eq!((g.rows, g.cols), (1201, 1201));
     assert_eq!(g.voids(), 0);
     assert_eq!(range(&g), (143.0, 2731.0));
@@ -1093,7 +1093,7 @@ fn real_srtm_tiles() {
     assert!((g.dx - 67.291).abs() < 0.001, "{}", g.dx);
     assert!((g.origin.y - 44.0 * METRES_PER_DEGREE).abs() < 1e-6);
 
-    let g = read_dem(&dir.join("N50E008.hgt"), &opts()).expect("hgt");
+    let g = read_dem(dir.join("N50E008.hgt"), &opts()).expect("hgt");
     assert_eq!((g.rows, g.cols), (1201, 1201));
     assert_eq!(g.voids(), 50);
     assert_eq!(range(&g), (62.0, 885.0));

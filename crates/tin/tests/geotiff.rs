@@ -83,7 +83,7 @@ fn info(path: &Path) -> (Grid, GeoTiffInfo) {
 fn crater_lake_utm_matches_its_npy_twin() {
     let dir = shared_dem();
     let (tif, i) = info(&dir.join("crater_lake_utm.tif"));
-    let npy = read_dem(&dir.join("crater_lake.npy"), &DemOptions::default()).expect("npy");
+    let npy = read_dem(dir.join("crater_lake.npy"), &DemOptions::default()).expect("npy");
     assert_twins(&tif, &npy);
     // README: 513 x 513 float32, 20.182 x 27.305 m, UTM 10N (EPSG:26910), 1524 - 2478 m, pixel-is-area, tiles,
     // Deflate with the floating-point predictor, nodata -9999 unused. Sidecar: easting_min 561133.125, northing_max
@@ -111,7 +111,7 @@ fn crater_lake_utm_matches_its_npy_twin() {
 fn n50e008_deflate_matches_its_hgt_twin() {
     let dir = shared_dem();
     let (tif, i) = info(&dir.join("N50E008_deflate.tif"));
-    let hgt = read_dem(&dir.join("N50E008.hgt"), &DemOptions::default()).expect("hgt");
+    let hgt = read_dem(dir.join("N50E008.hgt"), &DemOptions::default()).expect("hgt");
     assert_twins(&tif, &hgt);
     // README: 1201 x 1201 int16, 3", EPSG:4326, 62 - 885 m, 50 voids, pixel-is-point with the tie point 8E 51N at
     // sample (0, 0), strips of 16 rows, Deflate with the horizontal predictor.

@@ -434,6 +434,19 @@ fn truncated_lines_are_reported() {
         line_error(keep("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3e")),
         (4, K::BadReference { token: "3e".into() })
     );
+    // Cuts that leave lines which still read: the report says the text has no final line break.
+    let opts = ObjImportOptions {
+        keep_faces: true,
+        ..ObjImportOptions::default()
+    };
+    for (text, unterminated) in [
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3", true),
+        ("v 0 0 0\nv 1 0 0\nv 0 1. 0\nf 1 2 3\n", false),
+        ("v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n", false),
+    ] {
+        let (_, report) = parse_obj(text.as_bytes(), "m.obj", &opts).expect("reads");
+        assert_eq!(report.unterminated, unterminated, "{text:?}");
+    }
 }
 
 #[test]

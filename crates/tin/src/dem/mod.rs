@@ -117,7 +117,8 @@ impl DemOptions {
 }
 
 /// Reads a DEM, choosing the reader from the extension (`.npy`, `.asc`, `.hgt`, `.png`, `.tif`/`.tiff`, any case).
-pub fn read_dem(path: &Path, opts: &DemOptions) -> Result<Grid> {
+pub fn read_dem(path: impl AsRef<Path>, opts: &DemOptions) -> Result<Grid> {
+    let path = path.as_ref();
     let grid = read_dem_unchecked(path, opts)?;
     check_range(&grid, path, opts.z_scale)?;
     Ok(grid)
