@@ -42,6 +42,13 @@ fn planned(dir: &std::path::Path) -> std::path::PathBuf {
     plan
 }
 
+/// A synthetic grid of 30 x 30 samples, `t.npy` in `dir`.
+fn small_grid(dir: &std::path::Path) -> std::path::PathBuf {
+    let npy = dir.join("t.npy");
+    ok(&["synth", "--vertices", "900", "--rng-seed", "2", "-o", s(&npy), "-q"]);
+    npy
+}
+
 /// The tiles' output files named by a plan, resolved.
 fn tile_outputs(plan: &std::path::Path) -> Vec<std::path::PathBuf> {
     let text = std::fs::read_to_string(plan).expect("plan");
@@ -478,8 +485,7 @@ fn a_plan_of_many_tiles_needs_few_open_files() {
 #[test]
 fn a_halo_wider_than_the_grid_is_the_whole_grid() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let npy = dir.path().join("t.npy");
-    ok(&["synth", "--vertices", "900", "--rng-seed", "2", "-o", s(&npy), "-q"]);
+    let npy = small_grid(dir.path());
     let plan = dir.path().join("plan.json");
     let v = json(&[
         "tiles",
@@ -923,8 +929,7 @@ fn a_plan_without_regions_culls_as_the_one_with_them() {
 #[test]
 fn an_unlimited_expanse_is_kept_in_plans_and_exports() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let npy = dir.path().join("t.npy");
-    ok(&["synth", "--vertices", "900", "--rng-seed", "2", "-o", s(&npy), "-q"]);
+    let npy = small_grid(dir.path());
     let plan = dir.path().join("plan.json");
     ok(&[
         "tiles",
