@@ -30,35 +30,41 @@ fn main() -> ExitCode {
 }
 
 /// Ctrl-C, `SIGTERM` or `SIGHUP` while an output is written: its temporary files are removed (outputs are all or
-/// nothing, and nothing else is left behind either), then the process exits with status 130.
+/// nothing, and nothing else is left behind either), then the process ends by that signal, as it would have without
+/// the handler (a shell reports status 130, 143 or 129).
 /// Where the shell made the process ignore Ctrl-C (a background job of a script), it keeps ignoring it; `SIGTERM`
 /// and `SIGHUP` still clean up.
+#[cfg(unix)]
 fn remove_temporaries_on_interrupt() {
-    let ignored = interrupts_ignored();
-    // Without a handler (it cannot be installed), an interrupt still leaves every output untouched; only the hidden
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut caught = vec![SIGTERM, SIGHUP];
+    if !interrupts_ignored() {
+        caught.push(SIGINT);
+    }
+    // Without a handler (it cannot be installed), a signal still leaves every output untouched; only the hidden
     // temporary files would stay.
+    let Ok(mut signals) = signal_hook::iterator::Signals::new(&caught) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            outfile::remove_temporaries();
+            // The signal's default action (termination), so that the parent sees which signal ended the process;
+            // the status a shell would report, should that fail.
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
+/// Ctrl-C while an output is written: its temporary files are removed, then the process exits with status 130.
+#[cfg(not(unix))]
+fn remove_temporaries_on_interrupt() {
     let _ = ctrlc::set_handler(|| {
         outfile::remove_temporaries();
         std::process::exit(130);
     });
-    // The handler covers SIGINT, SIGTERM and SIGHUP together: give SIGINT back the disposition the shell chose.
-    if ignored {
-        ignore_interrupts();
-    }
 }
-
-/// Ignores `SIGINT` again.
-#[cfg(unix)]
-fn ignore_interrupts() {
-    // SAFETY: signal(2) with SIG_IGN installs no handler; nothing else is changed.
-    unsafe {
-        libc::signal(libc::SIGINT, libc::SIG_IGN);
-    }
-}
-
-/// Ignores `SIGINT` again: nothing to do where it cannot be ignored.
-#[cfg(not(unix))]
-fn ignore_interrupts() {}
 
 /// Whether `SIGINT` is ignored (inherited from the shell).
 #[cfg(unix)]
@@ -69,12 +75,6 @@ fn interrupts_ignored() -> bool {
         let mut old: libc::sigaction = std::mem::zeroed();
         libc::sigaction(libc::SIGINT, std::ptr::null(), &mut old) == 0 && old.sa_sigaction == libc::SIG_IGN
     }
-}
-
-/// Whether `SIGINT` is ignored: never known elsewhere.
-#[cfg(not(unix))]
-fn interrupts_ignored() -> bool {
-    false
 }
 
 /// Mesa's Vulkan device-select layer asks a Wayland compositor which GPU is the default. Without a session

@@ -537,7 +537,7 @@ fn cull_above_ground() {
     assert_eq!(rel["ranges"], abs["ranges"]);
     fails_with(
         &["cull", s(&tch), "--eye", "-5000,0,2", "--above-ground"],
-        "eye 1 (--eye) at x -5000, y 0 is outside the terrain's footprint",
+        "the eye (--eye) at x -5000, y 0 is outside the terrain's footprint",
     );
     // An eye below the ground is refused, naming it (its line in a file of eyes), by cull and eval alike; one on
     // the ground (0 m above it, as --above-ground reports it) is not.
@@ -545,7 +545,10 @@ fn cull_above_ground() {
     let ground = on["eye"][2].as_f64().expect("z");
     ok(&["cull", s(&tch), "--eye", &format!("10000,12000,{ground}"), "--json"]);
     let below = format!("10000,12000,{}", ground - 0.01);
-    fails_with(&["cull", s(&tch), "--eye", &below], "eye 1 (--eye) at x 10000, y 12000");
+    fails_with(
+        &["cull", s(&tch), "--eye", &below],
+        "the eye (--eye) at x 10000, y 12000",
+    );
     fails_with(
         &["cull", s(&tch), "--eye", &below],
         &format!(
@@ -564,7 +567,7 @@ fn cull_above_ground() {
     );
     fails_with(
         &["cull", s(&tch), "--eye", "1e300,0,2", "--above-ground"],
-        "eye 1 (--eye) at x 1e300, y 0 is outside the terrain's footprint",
+        "the eye (--eye) at x 1e300, y 0 is outside the terrain's footprint",
     );
     let eyes = dir.path().join("eyes.txt");
     std::fs::write(&eyes, format!("# a path\n-5000,0,2\n{below}\n")).expect("eyes");
@@ -1812,6 +1815,18 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         "{err}"
     );
     assert!(!shot.exists());
+    // The culler's flags are checked before the display too.
+    let out = bin()
+        .args(["view", s(&tch), "--columns", "3"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--columns must be a power of two") && !err.contains("no display"),
+        "{err}"
+    );
     assert_eq!(
         std::fs::read(&tch).expect("hierarchy"),
         before,

@@ -1,8 +1,8 @@
-//! Ctrl-C (`SIGINT`) while a command works: it exits with status 130 and leaves neither its outputs nor temporary
-//! files; where the shell made it ignore `SIGINT` (a background job of a script), it keeps ignoring it, and `SIGTERM`
+//! Ctrl-C (`SIGINT`) while a command works: it ends by that signal (as without a handler: a shell reports 130)
+//! and leaves neither its outputs nor temporary files; where the shell made it ignore `SIGINT` (a background job of a script), it keeps ignoring it, and `SIGTERM`
 //! and `SIGHUP` still clean up.
 
-use std::os::unix::process::CommandExt;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
@@ -12,13 +12,13 @@ mod common;
 use common::{mesh, ok, s};
 
 /// Runs `tincull args` with `SIGINT` at its default disposition (or ignored), sends it `SIGINT` after `delay`, and
-/// returns its exit status code.
-fn interrupted(args: &[&str], delay: Duration, ignore: bool) -> Option<i32> {
+/// returns how it ended: `Ok(status)` when it exited, `Err(signal)` when a signal ended it.
+fn interrupted(args: &[&str], delay: Duration, ignore: bool) -> Result<i32, i32> {
     signalled(args, delay, ignore, libc::SIGINT)
 }
 
 /// [`interrupted`] with the signal `signal`.
-fn signalled(args: &[&str], delay: Duration, ignore: bool, signal: libc::c_int) -> Option<i32> {
+fn signalled(args: &[&str], delay: Duration, ignore: bool, signal: libc::c_int) -> Result<i32, i32> {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_tincull"));
     cmd.args(args).stdout(Stdio::null()).stderr(Stdio::null());
     // SAFETY: only async-signal-safe calls between fork and exec (signal(2)).
@@ -32,7 +32,10 @@ fn signalled(args: &[&str], delay: Duration, ignore: bool, signal: libc::c_int) 
     std::thread::sleep(delay);
     // SAFETY: kill(2) on the child's pid.
     unsafe { libc::kill(child.id() as libc::pid_t, signal) };
-    child.wait().expect("wait").code()
+    let status = child.wait().expect("wait");
+    status
+        .code()
+        .ok_or_else(|| status.signal().expect("an exit status or a signal"))
 }
 
 fn names(dir: &Path) -> Vec<String> {
@@ -67,7 +70,7 @@ fn an_interrupted_command_leaves_nothing_behind() {
             Duration::from_millis(ms),
             false,
         );
-        assert_eq!(code, Some(130), "interrupted after {ms} ms");
+        assert_eq!(code, Err(libc::SIGINT), "interrupted after {ms} ms");
         assert_eq!(names(dir.path()), ["h.tch"], "after {ms} ms");
     }
     // Ignored by the shell, the interrupt changes nothing: the command finishes.
@@ -85,7 +88,7 @@ fn an_interrupted_command_leaves_nothing_behind() {
         Duration::from_millis(100),
         true,
     );
-    assert_eq!(code, Some(0));
+    assert_eq!(code, Ok(0));
     assert_eq!(names(dir.path()), ["e.csv", "h.tch"]);
     std::fs::remove_file(&csv).expect("remove");
     // There, `SIGTERM` and `SIGHUP` still clean up (they killed the process outright, leaving its temporary files).
@@ -96,7 +99,7 @@ fn an_interrupted_command_leaves_nothing_behind() {
             true,
             signal,
         );
-        assert_eq!(code, Some(130), "signal {signal}");
+        assert_eq!(code, Err(signal), "signal {signal}");
         assert_eq!(names(dir.path()), ["h.tch"], "signal {signal}");
     }
 }
@@ -116,7 +119,7 @@ fn an_interrupted_plan_leaves_no_folder() {
             Duration::from_millis(ms),
             false,
         );
-        assert_eq!(code, Some(130), "interrupted after {ms} ms");
+        assert_eq!(code, Err(libc::SIGINT), "interrupted after {ms} ms");
         assert_eq!(names(dir.path()), before, "after {ms} ms");
     }
 }
@@ -139,6 +142,6 @@ fn an_interrupted_demo_leaves_no_folder() {
         Duration::from_millis(1500),
         false,
     );
-    assert_eq!(code, Some(130));
+    assert_eq!(code, Err(libc::SIGINT));
     assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
 }

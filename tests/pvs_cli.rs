@@ -155,6 +155,10 @@ fn bad_arguments_give_clear_errors() {
         &["pvs", s(&tch), "--cell", &cell, "--resolution", "16,32"],
         "only with --check",
     );
+    fails_with(
+        &["pvs", s(&tch), "--check", "1", "--resolution", "8,8"],
+        "--resolution: 8 is given twice",
+    );
     fails_with(&["pvs", s(&tch), "--cell", "10,0,5,5"], "x0 < x1");
     fails_with(&["pvs", s(&tch), "--cell", "1,2,3"], "4 comma-separated");
     fails_with(

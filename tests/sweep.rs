@@ -282,6 +282,11 @@ fn sweep_rejects_bad_lists() {
         let err = refused(&[opt, val]);
         assert!(err.contains(opt), "{opt} {val}: {err}");
     }
+    // A value given twice would be swept once: refused (it once was dropped without a word).
+    for (opt, val) in [("--sectors", "4,4"), ("--subsectors", "1..3,2"), ("--rng-seeds", "1,1")] {
+        let err = refused(&[opt, val]);
+        assert!(err.contains(opt) && err.contains("given twice"), "{opt} {val}: {err}");
+    }
     // The crystal's swept parameters with a quadtree: refused by name.
     for (opt, val) in [("--seeds", "10"), ("--rng-seeds", "1,2"), ("--rng-seed", "3")] {
         let err = refused(&["--grouping", "quadtree", opt, val]);

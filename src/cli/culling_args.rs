@@ -113,6 +113,7 @@ impl SafeArgs {
                 anyhow::bail!("--columns must be a power of two from 2 to {MAX_COLUMNS_PER_FACE}, got {n}")
             }
             Err(SafeParamsError::Patch(n)) => anyhow::bail!("--patch must be from 1 to {MAX_PATCH}, got {n}"),
+            Err(e) => Err(e.into()),
         }
     }
 }
@@ -200,9 +201,13 @@ impl Eyes {
         Ok(())
     }
 
-    /// How errors name eye `i`: `eye 2 (eyes.txt:3)`.
+    /// How errors name eye `i`: `eye 2 (eyes.txt:3)`, or `the eye (--eye)` for the one eye of `--eye`.
     pub fn name(&self, i: usize) -> String {
-        format!("eye {} ({})", i + 1, self.sources[i])
+        if self.points.len() == 1 && self.sources[i] == "--eye" {
+            "the eye (--eye)".to_owned()
+        } else {
+            format!("eye {} ({})", i + 1, self.sources[i])
+        }
     }
 
     /// The ground's height under each eye on `h`'s mesh, `None` outside its footprint ([`truth::ground_heights`]).

@@ -58,15 +58,16 @@ pub fn run(args: &ExportArgs, out: Output) -> Result<()> {
         gltf_written = files.add_gltf(&h, path)?;
     }
     files.commit()?;
-    if !gltf_written.is_empty() {
-        let names: Vec<String> = gltf_written.iter().map(|p| p.display().to_string()).collect();
-        out.say(format!("wrote {}", names.join(" and ")));
-    }
+    // In the order of the flags' help: JSON, OBJ, glTF.
     if let Some(path) = &args.export_json {
         out.say(format!("wrote {}", path.display()));
     }
     if let Some(path) = &args.export_obj {
         out.say(format!("wrote {} and its .mtl", path.display()));
+    }
+    if !gltf_written.is_empty() {
+        let names: Vec<String> = gltf_written.iter().map(|p| p.display().to_string()).collect();
+        out.say(format!("wrote {}", names.join(" and ")));
     }
     // Every format is `null` when not asked for; the OBJ's `.mtl` and the glTF's `.bin` are named beside it.
     out.json(&serde_json::json!({

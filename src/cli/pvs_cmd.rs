@@ -139,12 +139,13 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         args.resolution.clone()
     };
     let patch = args.patch.unwrap_or(cull::SafeParams::default().patch);
-    for &r in &resolutions {
+    for (i, &r) in resolutions.iter().enumerate() {
         ensure!(
             (1..=pvs::MAX_RESOLUTION).contains(&r),
             "--resolution must be from 1 to {}, got {r}",
             pvs::MAX_RESOLUTION
         );
+        ensure!(!resolutions[..i].contains(&r), "--resolution: {r} is given twice");
     }
     ensure!(
         args.check.is_some() || resolutions.len() == 1,

@@ -43,7 +43,7 @@ pub struct RenderArgs {
     /// View direction in degrees, counter-clockwise from east [eye: 0, orbit: 45].
     #[arg(long, allow_hyphen_values = true)]
     pub yaw: Option<f64>,
-    /// Pitch in degrees up from the horizontal [eye: 0, orbit: -35].
+    /// Pitch in degrees up from the horizontal, between -89 and 89 exclusive [eye: 0, orbit: -35].
     #[arg(long, allow_hyphen_values = true)]
     pub pitch: Option<f64>,
     /// Horizontal field of view of the eye view in degrees (drawn at most 150) [default: 90].
@@ -52,7 +52,7 @@ pub struct RenderArgs {
     /// Horizontal field of view the culler uses, in degrees (360 = occlusion only), turned by --yaw [default: 360].
     #[arg(long)]
     pub cull_fov: Option<f64>,
-    /// Image size `WIDTHxHEIGHT` in pixels.
+    /// Image size `WIDTHxHEIGHT` in pixels, each 1 to 8192.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     pub size: [u32; 2],
     /// Colouring: groups, level, visibility (drawn / culled for --eye) or height [default: groups for a hierarchy,

@@ -21,7 +21,9 @@ pub struct ViewArgs {
     /// A hierarchy (.tch), or a terrain mesh (.obj) or DEM grid (.npy, .asc, .hgt, .png, .tif/.tiff) simplified to
     /// --dem-vertices.
     pub input: PathBuf,
-    /// Culling method at start (switchable in the side panel): `safe`, `thesis`, `stewart` or `lloyd-egbert`.
+    /// Culling method at start (switchable in the side panel): `safe`, `thesis`, `stewart` or `lloyd-egbert`. The
+    /// horizon cullers' flags (--columns …) are taken with any method: they apply whenever the panel switches to
+    /// `safe` or `lloyd-egbert`.
     #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
     pub method: cull::CullMethod,
     /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
@@ -59,7 +61,8 @@ pub struct ViewArgs {
     /// Frames drawn before the screenshot.
     #[arg(long, default_value_t = DEFAULT_SCREENSHOT_AFTER)]
     pub screenshot_after: u32,
-    /// Window size `WIDTHxHEIGHT` in points.
+    /// Window size `WIDTHxHEIGHT` in points, each 1 to 8192 (a window larger than the screen may be made smaller by
+    /// the window manager; the screenshot is the window as drawn).
     #[arg(long, default_value = "1280x800", value_parser = super::render_cmd::parse_size)]
     pub size: [u32; 2],
     /// No progress bars or human-readable text (errors and warnings are still printed), as in every command.
@@ -158,6 +161,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
+    let safe = args.safe.params()?;
     no_display_is_an_error()?;
     let summary = viewer::app::run(ViewerOptions {
         title,
@@ -182,7 +186,7 @@ pub fn run(args: &ViewArgs, out: Output) -> Result<()> {
         }),
         window_size: [args.size[0] as f32, args.size[1] as f32],
         method: args.method,
-        safe: args.safe.params()?,
+        safe,
         startup: Startup {
             rebuild: args.rebuild,
             ground_truth: args.truth,

@@ -2,6 +2,7 @@
 
 /// Everything that can go wrong in [`crate::build`] and [`crate::Crystal::check_invariants`].
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CrystalError {
     /// A parameter is out of range.
     #[error("crystal parameter `{field}`: {reason}")]

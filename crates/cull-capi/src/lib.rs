@@ -579,10 +579,11 @@ pub unsafe extern "C" fn tc_set_params(culler: *mut TcCuller, params: *const TcP
         let p = given.params();
         p.check().map_err(|e| {
             let field = match e {
-                SafeParamsError::Columns(_) => "columns_per_face",
-                SafeParamsError::Patch(_) => "patch",
+                SafeParamsError::Columns(_) => "columns_per_face: ",
+                SafeParamsError::Patch(_) => "patch: ",
+                _ => "",
             };
-            Failure(TC_ERR_INVALID, format!("tc_set_params: {field}: {e}"))
+            Failure(TC_ERR_INVALID, format!("tc_set_params: {field}{e}"))
         })?;
         if method == CullMethod::LloydEgbert {
             let d = TcParams::of(&SafeParams::default());

@@ -67,6 +67,7 @@ pub struct Camera {
 
 /// Why [`Camera::from_degrees`] refused a view.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum CameraError {
     /// A coordinate of the eye is NaN or infinite.
     Eye([f64; 3]),

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 /// What can go wrong reading or writing a `.tch` hierarchy file.
 #[derive(Debug)]
+#[non_exhaustive]
 pub enum HierarchyError {
     /// The file could not be read or written (the I/O error is the source).
     Io {

@@ -195,6 +195,7 @@ pub const MAX_PATCH: usize = 64;
 /// A [`SafeParams`] value outside what a front end should accept ([`SafeParams::check`]); the culler itself rounds and
 /// clamps such values instead.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum SafeParamsError {
     /// [`SafeParams::columns_per_face`] is not a power of two from 2 to [`MAX_COLUMNS_PER_FACE`].
     Columns(usize),

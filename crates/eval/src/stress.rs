@@ -92,8 +92,9 @@ pub struct CaseResult {
     pub groups: usize,
     /// Orphan (always-visible) triangles.
     pub orphans: usize,
-    /// Whether [`Hierarchy::check_invariants`] passed (and the file round trip).
-    pub invariants_ok: bool,
+    /// Whether [`Hierarchy::check_invariants`] passed (and the file round trip); `None` for a case that built nothing
+    /// (`skipped` or `error`), whose build and score figures are 0.
+    pub invariants_ok: Option<bool>,
     /// Viewpoints scored.
     pub viewpoints: usize,
     /// Mean false culls per viewpoint.
@@ -283,7 +284,7 @@ fn fill(case: &mut CaseResult, tin: &Tin, params: &BuildParams, b: &Built, s: &S
     case.build_seconds = b.seconds;
     case.groups = b.groups;
     case.orphans = b.orphans;
-    case.invariants_ok = b.invariants.is_ok();
+    case.invariants_ok = Some(b.invariants.is_ok());
     if let Err(e) = &b.invariants {
         case.note = format!("INVARIANTS BROKEN: {e}; {}", case.note);
     }
@@ -931,7 +932,11 @@ impl StressReport {
                 c.build_seconds,
                 c.groups,
                 c.orphans,
-                if c.invariants_ok { "ok" } else { "BAD" },
+                match c.invariants_ok {
+                    Some(true) => "ok",
+                    Some(false) => "BAD",
+                    None => "-",
+                },
                 c.viewpoints,
                 c.false_culls_mean,
                 c.false_culls_max,

@@ -179,7 +179,8 @@ impl SweepSpec {
 }
 
 /// Parses a list of non-negative integers: comma-separated items, each a number or an inclusive range `a..b`
-/// (`"1..5"`, `"4,8,16"`, `"1..3,8"`). `what` names the option in errors.
+/// (`"1..5"`, `"4,8,16"`, `"1..3,8"`). A value given twice (`"4,4"`, `"1..5,3"`) is refused: it would be swept
+/// once. `what` names the option in errors.
 pub fn parse_list(text: &str, what: &str) -> Result<Vec<u64>> {
     let mut out = Vec::new();
     for item in text.split(',').map(str::trim) {
@@ -204,6 +205,11 @@ pub fn parse_list(text: &str, what: &str) -> Result<Vec<u64>> {
             }
             None => out.push(num(item)?),
         }
+    }
+    let mut sorted = out.clone();
+    sorted.sort_unstable();
+    if let Some(twice) = sorted.windows(2).find(|w| w[0] == w[1]) {
+        bail!("{what}: {} is given twice in {text:?}", twice[0]);
     }
     Ok(out)
 }
@@ -566,7 +572,7 @@ mod tests {
         assert_eq!(parse_list("4,8,16", "x").unwrap(), vec![4, 8, 16]);
         assert_eq!(parse_list("1..5", "x").unwrap(), vec![1, 2, 3, 4, 5]);
         assert_eq!(parse_list("1..=3, 8", "x").unwrap(), vec![1, 2, 3, 8]);
-        for bad in ["", "1,,2", "a", "5..1", "-1", "1..x"] {
+        for bad in ["", "1,,2", "a", "5..1", "-1", "1..x", "4,4", "1..5,3"] {
             let e = parse_list(bad, "--sectors").unwrap_err().to_string();
             assert!(e.contains("--sectors"), "{bad}: {e}");
         }

@@ -4,6 +4,7 @@ use thiserror::Error;
 
 /// Why horizons could not be computed.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum HorizonError {
     /// `sectors` is below the minimum of 4 (a sector wider than 90° has no well-defined projection).
     #[error("sectors = {sectors}: at least 4 sectors are needed")]

@@ -4,6 +4,7 @@
 
 /// Everything that can go wrong in a build.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BuildError {
     /// The sector configuration or the undersampling radius is invalid, or the horizon sweep refused the terrain (a
     /// coordinate out of the range of its exact predicates).
@@ -38,6 +39,7 @@ pub enum BuildError {
 /// Why an export to the hierarchy's other forms (grouped OBJ, JSON, glTF) or a read back from them failed: the error
 /// of the functions of [`crate::export`] and [`crate::gltf`]. Messages name the path or the element at fault.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ExportError {
     /// The hierarchy has no vertex or no triangle (glTF has nothing to hold).
     #[error("the hierarchy has no triangles to export")]

@@ -39,6 +39,7 @@ pub use koltun::{Box3, MAX_RESOLUTION};
 
 /// Errors of this crate.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PvsError {
     /// A viewcell or height band that is empty, inverted or not finite.
     #[error("invalid viewcell: {0}")]

@@ -76,6 +76,7 @@ pub fn region_bytes(points: usize) -> usize {
 
 /// Errors of [`build`] and [`build_without_regions`].
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum QuadtreeError {
     /// The terrain has no triangle.
     #[error("the terrain has no triangles")]

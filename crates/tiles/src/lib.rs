@@ -38,6 +38,7 @@ pub use plan::{LeftOut, MeshExtent, Plan, PlanOptions, TileSpec, make_mesh_plan,
 
 /// Errors of tiled builds.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum TilesError {
     /// A parameter or a plan's content is wrong.
     #[error("{0}")]

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 ///
 /// Every variant names the offending element (input index, triangle, file line) so that a user can find it.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum TinError {
     /// A coordinate is NaN or infinite.
     #[error("vertex {index} has a non-finite coordinate ({x}, {y}, {z})")]

@@ -112,6 +112,7 @@ pub struct ObjImportReport {
 
 /// What is wrong with one line of an OBJ file (see [`TinError::ObjLine`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ObjLineError {
     /// The line is not UTF-8 text.
     #[error("the line is not UTF-8 text (a binary or foreign file?)")]

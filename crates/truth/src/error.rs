@@ -2,6 +2,7 @@
 
 /// What can go wrong when computing metrics or parsing names.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum TruthError {
     /// A per-triangle array does not have one entry per triangle of the TIN.
     #[error("{what} has {got} entries, but the TIN has {expected} triangles")]

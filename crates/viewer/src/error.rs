@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 /// What can go wrong rendering, writing images or running the viewer.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ViewerError {
     /// No GPU adapter (not even a software one such as Mesa's llvmpipe) could be found.
     #[error(

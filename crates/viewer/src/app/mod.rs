@@ -288,7 +288,14 @@ pub fn run(options: ViewerOptions) -> Result<RunSummary> {
             Ok(Box::new(app) as Box<dyn eframe::App>)
         }),
     )
-    .map_err(|e| ViewerError::Window(e.to_string()))?;
+    .map_err(|e| match e {
+        // No adapter could draw into the window: the same hint as a render without one.
+        eframe::Error::Wgpu(
+            w @ (eframe::egui_wgpu::WgpuError::RequestAdapterError(_)
+            | eframe::egui_wgpu::WgpuError::CreateSurfaceError(_)),
+        ) => ViewerError::NoAdapter(format!("for the viewer window: {w}")),
+        e => ViewerError::Window(e.to_string()),
+    })?;
     let result = summary.lock().map(|s| s.clone()).unwrap_or_default();
     Ok(result)
 }
