@@ -1802,29 +1802,28 @@ fn view_checks_its_screenshot_and_method_before_opening_a_window() {
         "a mesh has no culler until it is built: add --rebuild",
     );
     // Without a display: said plainly, once the arguments are checked.
+    let without_display = |args: &[&str]| {
+        let out = bin()
+            .arg("view")
+            .args(args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("runs");
+        assert!(!out.status.success(), "{args:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
     let shot = dir.path().join("shot.png");
-    let out = bin()
-        .args(["view", s(&tch), "--screenshot", s(&shot)])
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("runs");
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = without_display(&[s(&tch), "--screenshot", s(&shot)]);
     assert!(
-        !out.status.success() && err.contains("no display to open the viewer's window on") && !err.contains(".rs:"),
+        err.contains("no display to open the viewer's window on") && !err.contains(".rs:"),
         "{err}"
     );
     assert!(!shot.exists());
     // The culler's flags are checked before the display too.
-    let out = bin()
-        .args(["view", s(&tch), "--columns", "3"])
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("runs");
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = without_display(&[s(&tch), "--columns", "3"]);
     assert!(
-        !out.status.success() && err.contains("--columns must be a power of two") && !err.contains("no display"),
+        err.contains("--columns must be a power of two") && !err.contains("no display"),
         "{err}"
     );
     assert_eq!(
