@@ -7,9 +7,10 @@
  * For every eye it prints one line, the ranges to draw as `start-end` pairs (half-open), the same ranges as
  * `tincull cull FILE.tch --method M --eye X,Y,Z --yaw YAW --fov FOV --json` (YAW 0 and FOV 360 when not given), with
  * `--columns` and `--work-budget` set through tc_set_params as `tincull cull` takes them.
- * The file is loaded twice, once by path and once from a memory buffer, and both cullers must agree. On standard
- * error it describes the hierarchy and its mesh (tc_mesh: what a renderer uploads) and, per eye, what is drawn and
- * the lowest point of it (read from the mesh through the ranges, as a renderer draws them).
+ * The file is loaded twice, once by path and once from a memory buffer, and both cullers must agree (so it must be
+ * a regular file: a named pipe would be read once). On standard error it describes the hierarchy and its mesh
+ * (tc_mesh: what a renderer uploads) and, per eye, what is drawn and the lowest point of it (read from the mesh
+ * through the ranges, as a renderer draws them).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -132,8 +133,12 @@ int main(int argc, char **argv) {
     }
     for (int a = first + 2; a < argc; a++) {
         double v[5] = {0, 0, 0, 0, 360};
-        int n = sscanf(argv[a], "%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]);
-        if (n != 3 && n != 5) {
+        /* %n records where the third and the fifth number end: the whole argument must be read, nothing after. */
+        int end3 = -1, end5 = -1;
+        int n = sscanf(argv[a], "%lf,%lf,%lf%n,%lf,%lf%n", &v[0], &v[1], &v[2], &end3, &v[3], &v[4], &end5);
+        size_t len = strlen(argv[a]);
+        int whole = (n == 3 && end3 >= 0 && (size_t)end3 == len) || (n == 5 && end5 >= 0 && (size_t)end5 == len);
+        if (!whole) {
             fprintf(stderr, "error: eye %s: expected X,Y,Z or X,Y,Z,YAW,FOV\n", argv[a]);
             return 2;
         }

@@ -89,6 +89,10 @@ fn a_geographic_asc_is_converted_or_warned_about() {
     let out = ok(&["info", s(&asc)]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("look like degrees read as metres"), "{stderr}");
+    assert!(
+        stderr.contains("spacing 8.333e-4 x 8.333e-4 m and a north-west sample at (-122."),
+        "{stderr}"
+    );
     let obj = dir.path().join("deg.obj");
     let out = ok(&["tin", s(&asc), "-o", s(&obj), "--keep-grid"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("look like degrees"));
@@ -179,6 +183,18 @@ fn a_y_up_mesh_gets_a_hint() {
     )
     .expect("fixture");
     fails_with(&["info", s(&grid), "--up", "y"], "--up y applies to OBJ meshes");
+    // A y-up file's z = 0 becomes y = -0 on rotation: the bounding box shows 0, not "-0.000".
+    let yup0 = dir.path().join("yup0.obj");
+    std::fs::write(
+        &yup0,
+        "v 0 1 0\nv 100 2 0\nv 100 3 -100\nv 0 1 -100\nv 50 5 -50\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
+    )
+    .expect("fixture");
+    let text = String::from_utf8_lossy(&ok(&["info", s(&yup0), "--up", "y"]).stdout).into_owned();
+    assert!(
+        text.contains("bbox          x 0.000 .. 100.000, y 0.000 .. 100.000, z 1.000 .. 5.000"),
+        "{text}"
+    );
     fails_with(
         &[
             "tiles",
@@ -1546,7 +1562,7 @@ fn dem_messages_name_the_file_flag_and_sample() {
     );
     fails_with(
         &["info", s(&npy), "--dem-vertices", "0"],
-        "g.npy: --dem-vertices must be at least 3, got 0",
+        "g.npy: --dem-vertices must be at least 3 and fit in 32 bits (at most 4294967295), got 0",
     );
     assert!(!out.exists());
 
@@ -1576,7 +1592,10 @@ fn dem_messages_name_the_file_flag_and_sample() {
     let first = n - (rows * cols * 8) as usize;
     bytes[first..first + 8].copy_from_slice(&1e200f64.to_le_bytes());
     std::fs::write(&npy, &bytes).expect("npy");
-    fails_with(&["info", s(&npy)], "g.npy: row 1, column 1: height 1e200");
+    fails_with(
+        &["info", s(&npy)],
+        "g.npy: row 1, column 1 (1-based, row 1 north): height 1e200",
+    );
 }
 
 /// Huge numbers in messages are short, counts in human text agree with their nouns, and the help says what
@@ -1597,6 +1616,34 @@ fn messages_and_help_read_well() {
         &["synth", "-o", s(&out), "--vertices", "3"],
         "'3' for '--vertices <VERTICES>': \"3\": a synthetic terrain has 4 to 2^31 vertices",
     );
+    // Range errors name their flag.
+    fails_with(
+        &["synth", "-o", s(&out), "--relief", "1e-30"],
+        "relief (--relief) must be 0, or at least 1 µm and below 1e12 m, got 1e-30",
+    );
+    fails_with(
+        &["horizon", s(&mesh("jacksboro-2k.obj")), "--sectors", "3"],
+        "--sectors: sectors = 3: at least 4 sectors are needed",
+    );
+    fails_with(
+        &["horizon", s(&mesh("jacksboro-2k.obj")), "--subsectors", "0"],
+        "--subsectors: subsectors = 0",
+    );
+    let asc = dir.path().join("g.asc");
+    std::fs::write(
+        &asc,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("fixture");
+    fails_with(
+        &["tin", s(&asc), "--vertices", "99999999999", "-o", s(&out)],
+        "the vertex budget (--vertices) must fit in 32 bits (at most 4294967295), got 99999999999",
+    );
+    fails_with(
+        &["info", s(&asc), "--dem-vertices", "99999999999"],
+        "--dem-vertices must be at least 3 and fit in 32 bits (at most 4294967295), got 99999999999",
+    );
+    assert!(!out.exists());
 
     let tch = build_2k(dir.path());
     let text = String::from_utf8_lossy(&ok(&["info", s(&tch)]).stdout).into_owned();

@@ -224,17 +224,25 @@ impl ParamArgs {
 /// The flag (or flags) whose value [`BuildParams::validate`] refused with `e`: the keys of a `--config` file are the
 /// same names with underscores.
 fn flag_of(e: &BuildError) -> String {
-    use horizon::HorizonError as H;
     match e {
-        BuildError::Horizon(H::TooFewSectors { .. }) => "--sectors".into(),
-        BuildError::Horizon(H::NoSubsectors) => "--subsectors".into(),
-        BuildError::Horizon(H::TooManySubsectors { .. }) => "--sectors and --subsectors".into(),
-        BuildError::Horizon(H::InvalidRadius { .. }) => "--undersampling".into(),
+        BuildError::Horizon(h) => horizon_flag(h).into(),
         BuildError::Crystal(crystal::CrystalError::InvalidParams { field, .. }) => {
             format!("--{}", field.replace('_', "-"))
         }
         BuildError::Quadtree(_) => "--depth or --cell-size".into(),
         _ => "the build parameters".into(),
+    }
+}
+
+/// The flag (or flags) whose value the horizon stage refused with `e` (`build`, `horizon`).
+pub fn horizon_flag(e: &horizon::HorizonError) -> &'static str {
+    use horizon::HorizonError as H;
+    match e {
+        H::TooFewSectors { .. } => "--sectors",
+        H::NoSubsectors => "--subsectors",
+        H::TooManySubsectors { .. } => "--sectors and --subsectors",
+        H::InvalidRadius { .. } => "--undersampling",
+        _ => "the horizon parameters",
     }
 }
 

@@ -64,7 +64,8 @@ pub fn compute_with_progress(
 
 /// Runs `tincull horizon`.
 pub fn run(args: &HorizonArgs, out: Output) -> Result<()> {
-    let config = SectorConfig::new(args.sectors, args.subsectors)?;
+    let config = SectorConfig::new(args.sectors, args.subsectors)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", super::build_cmd::horizon_flag(&e)))?;
     horizon::check_undersampling_radius(args.undersampling).context("--undersampling")?;
     // With --verify the exit status is a result (non-zero on a mismatch).
     out.require_a_result(

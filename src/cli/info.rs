@@ -102,10 +102,7 @@ pub fn run(args: &InfoArgs, out: Output) -> Result<()> {
         out.say(format!("  vertices      {}", stats.vertices));
     }
     out.say(format!("  triangles     {}", stats.triangles));
-    out.say(format!(
-        "  bbox          x {:.3} .. {:.3}, y {:.3} .. {:.3}, z {:.3} .. {:.3}",
-        b.min.x, b.max.x, b.min.y, b.max.y, b.min.z, b.max.z
-    ));
+    out.say(bbox_line(b.min.to_array(), b.max.to_array()));
     out.say(format!(
         "  extent        {:.1} m x {:.1} m, relief {:.1} m",
         b.size().x,
@@ -170,10 +167,7 @@ fn hierarchy(path: &std::path::Path, out: Output) -> Result<()> {
         triangles
     ));
     if lo[0] <= hi[0] {
-        out.say(format!(
-            "  bbox          x {:.3} .. {:.3}, y {:.3} .. {:.3}, z {:.3} .. {:.3}",
-            lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]
-        ));
+        out.say(bbox_line(lo, hi));
     }
     out.say(format!(
         "  hierarchy     {}: {} ({}, {}, depth {depth}), {} always visible",
@@ -326,4 +320,24 @@ fn pvs_file(path: &std::path::Path, out: Output) -> Result<()> {
         "mean_pvs_triangles": mean,
         "cells": cells,
     }))
+}
+
+/// The bounding box line of `info`, in millimetres, without a negative zero (a y-up file's `-0` heights).
+fn bbox_line(lo: [f64; 3], hi: [f64; 3]) -> String {
+    let mm = |v: f64| {
+        let text = format!("{v:.3}");
+        match text.strip_prefix('-') {
+            Some(rest) if rest.bytes().all(|c| c == b'0' || c == b'.') => rest.to_string(),
+            _ => text,
+        }
+    };
+    format!(
+        "  bbox          x {} .. {}, y {} .. {}, z {} .. {}",
+        mm(lo[0]),
+        mm(hi[0]),
+        mm(lo[1]),
+        mm(hi[1]),
+        mm(lo[2]),
+        mm(hi[2])
+    )
 }

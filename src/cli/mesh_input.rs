@@ -236,8 +236,8 @@ pub fn warn_if_degrees(grid: &tin::Grid, path: &std::path::Path, out: Output) {
     let o = grid.origin;
     if grid.dx < 0.01 && grid.dy < 0.01 && o.x.abs() <= 180.0 && o.y.abs() <= 90.0 {
         out.warn(format!(
-            "{}: spacing {} x {} m and a north-west sample at ({}, {}) look like degrees read as metres; if they are \
-             degrees, put the CRS beside the grid (a .prj for .asc) or give --spacing in metres",
+            "{}: spacing {:.3e} x {:.3e} m and a north-west sample at ({:.6}, {:.6}) look like degrees read as \
+             metres; if they are degrees, put the CRS beside the grid (a .prj for .asc) or give --spacing in metres",
             path.display(),
             grid.dx,
             grid.dy,
@@ -589,9 +589,9 @@ impl MeshArgs {
 
     /// Reads a DEM grid and simplifies it to `dem_vertices` vertices.
     fn load_dem(&self, out: Output) -> Result<(Tin, ObjImportReport, Option<DemSource>)> {
-        if self.import.dem_vertices() < 3 {
+        if !(3..=u32::MAX as usize).contains(&self.import.dem_vertices()) {
             bail!(
-                "{}: --dem-vertices must be at least 3, got {}",
+                "{}: --dem-vertices must be at least 3 and fit in 32 bits (at most 4294967295), got {}",
                 self.mesh.display(),
                 self.import.dem_vertices()
             );

@@ -24,10 +24,11 @@ pub struct SynthArgs {
     /// Seed of the random generator: the same seed gives the same terrain.
     #[arg(long, default_value_t = 1)]
     pub rng_seed: u64,
-    /// Side of the square footprint in metres (default: 30 m per vertex spacing, 30·√vertices).
+    /// Side of the square footprint in metres (default: 30 m per vertex spacing, 30·√vertices); below 1e12 m, and at
+    /// least 1 mm per vertex spacing (1 mm·√vertices).
     #[arg(long)]
     pub extent: Option<f64>,
-    /// Relief in metres (default: a tenth of the extent).
+    /// Relief in metres (default: a tenth of the extent): 0 (flat), or from 1 µm to below 1e12 m.
     #[arg(long)]
     pub relief: Option<f64>,
     /// Output flags.

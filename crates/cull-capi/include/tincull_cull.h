@@ -35,8 +35,8 @@
 
 /**
  * An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
- * yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix, a parameter out of its range or one
- * the culler's method does not take).
+ * yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix, a buffer length over `PTRDIFF_MAX`, a
+ * parameter out of its range or one the culler's method does not take).
  */
 #define TC_ERR_INVALID 4
 
@@ -264,7 +264,8 @@ int32_t tc_load_path(const char *path,
 
 /**
  * Loads a `.tch` hierarchy from `len` bytes at `data` (copied; the buffer may be freed afterwards) and prepares a
- * culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`].
+ * culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`]; on
+ * failure `*out` is set to NULL.
  *
  * A `len` over `PTRDIFF_MAX` gives `TC_ERR_INVALID` (no buffer is that long) without reading `data`.
  *

@@ -31,8 +31,8 @@ pub const TC_ERR_IO: i32 = 2;
 /// The bytes are not a valid `.tch` hierarchy (bad magic, version, checksum, structure).
 pub const TC_ERR_FORMAT: i32 = 3;
 /// An argument is out of range (unknown method, a method the hierarchy's grouping does not take, non-finite eye or
-/// yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix, a parameter out of its range or one
-/// the culler's method does not take).
+/// yaw, field of view outside (0, 360], a path that is not UTF-8 outside Unix, a buffer length over `PTRDIFF_MAX`, a
+/// parameter out of its range or one the culler's method does not take).
 pub const TC_ERR_INVALID: i32 = 4;
 /// The caller's range buffer is too small; `*count` holds the number of ranges needed.
 pub const TC_ERR_BUFFER_TOO_SMALL: i32 = 5;
@@ -344,6 +344,9 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
         }
         // SAFETY: the caller passes a NUL-terminated string.
         let path = path_of(unsafe { CStr::from_ptr(path) })?;
+        if path.as_os_str().is_empty() {
+            return fail(TC_ERR_IO, "tc_load_path: the path is empty");
+        }
         let m = method(method_id, &format!("tc_load_path: {}", path.display()))?;
         let h = Hierarchy::load(path).map_err(|e| load_error("tc_load_path", e))?;
         m.check(&h)
@@ -355,7 +358,8 @@ pub unsafe extern "C" fn tc_load_path(path: *const c_char, method_id: u32, out: 
 }
 
 /// Loads a `.tch` hierarchy from `len` bytes at `data` (copied; the buffer may be freed afterwards) and prepares a
-/// culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`].
+/// culler of method `method_id` (`TC_METHOD_*`). On success `*out` receives a culler to release with [`tc_free`]; on
+/// failure `*out` is set to NULL.
 ///
 /// A `len` over `PTRDIFF_MAX` gives `TC_ERR_INVALID` (no buffer is that long) without reading `data`.
 ///

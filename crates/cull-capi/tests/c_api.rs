@@ -302,9 +302,10 @@ fn c_example_prints_the_rust_ranges() {
     );
 }
 
-/// The example refuses a method name it does not know (a typo must not silently cull with `safe`).
+/// The example refuses a method name it does not know (a typo must not silently cull with `safe`), and an eye with
+/// anything but three or five numbers (a YAW,FOV it cannot read must not silently become 0,360).
 #[test]
-fn c_example_refuses_an_unknown_method() {
+fn c_example_refuses_an_unknown_method_and_a_malformed_eye() {
     let h = bundled_hierarchy();
     let dir = tempfile::tempdir().expect("tempdir");
     let tch = dir.path().join("jacksboro-2k.tch");
@@ -328,6 +329,28 @@ fn c_example_refuses_an_unknown_method() {
     let usage = Command::new(&exe).output().expect("the example runs");
     assert_eq!(usage.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&usage.stderr).contains("safe|thesis|stewart|lloyd-egbert"));
+    for bad in [
+        format!("{eye},x,y"),
+        format!("{eye}abc"),
+        format!("{eye},0,360junk"),
+        format!("{eye},0"),
+        format!("{eye},0,360,1"),
+        "1,2".to_string(),
+    ] {
+        let run = Command::new(&exe)
+            .arg(&tch)
+            .arg("safe")
+            .arg(&bad)
+            .output()
+            .expect("the example runs");
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(
+            stderr.contains(&format!("eye {bad}: expected X,Y,Z or X,Y,Z,YAW,FOV")),
+            "{bad}: {stderr}"
+        );
+        assert!(run.stdout.is_empty(), "{bad}: no ranges printed");
+    }
 }
 
 /// An eye 200 m above the middle of the terrain, as the example takes it (`X,Y,Z`).

@@ -878,6 +878,9 @@ fn attack_header_and_foreign_files() {
             Ok(_) => panic!("{} loaded", p.display()),
         }
     }
+    // An empty path is said to be one (not "tc_load_path: : No such file or directory").
+    let (_, e) = load_path(Path::new(""), TC_METHOD_SAFE).err().expect("refused");
+    assert_eq!(e, "tc_load_path: the path is empty");
 }
 
 /// Hostile postcard counts (a node, vertex or root count of 2^60, with a matching checksum) are refused at once,

@@ -88,7 +88,7 @@ impl SimplifyOptions {
             && n > u32::MAX as usize
         {
             return Err(TinError::InvalidParameter(format!(
-                "max_vertices must fit in 32 bits, got {n}"
+                "the vertex budget (--vertices) must fit in 32 bits (at most 4294967295), got {n}"
             )));
         }
         if let Some(e) = self.max_error

@@ -88,7 +88,8 @@ impl Sniffed {
             }
             Sniffed::AsciiGrid => "it starts like an ESRI ASCII grid: name it .asc to read it as a DEM",
             Sniffed::Obj => {
-                "it starts like an OBJ mesh, which is not a DEM grid: give it where a mesh is read (named .obj)"
+                "it starts like an OBJ mesh, which is not a DEM grid: the commands that read meshes (build, \
+                 info, …) take it, named .obj, as it is"
             }
             Sniffed::Compressed => "it starts like a compressed file (gzip or zip): unpack it first",
             Sniffed::Gltf => "it starts like a binary glTF mesh: tincull reads DEM grids and OBJ meshes",

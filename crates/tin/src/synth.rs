@@ -56,8 +56,8 @@ impl SynthOptions {
     }
 
     /// Checks the vertex count (4 to 2^31), extent (positive, finite, below 1e12 m, and at least 1 mm per point
-    /// spacing, `extent / √vertices`) and relief (non-negative, below 1e12 m: every coordinate stays within what the
-    /// mesh readers accept).
+    /// spacing, `extent / √vertices`) and relief (0, or at least 1 µm and below 1e12 m: every coordinate stays within
+    /// what the mesh readers accept).
     pub fn validate(&self) -> Result<()> {
         if !(4..=1 << 31).contains(&self.vertices) {
             return Err(TinError::InvalidParameter(format!(
@@ -67,21 +67,21 @@ impl SynthOptions {
         }
         if !(self.extent.is_finite() && self.extent > 0.0 && self.extent < 1e12) {
             return Err(TinError::InvalidParameter(format!(
-                "synthetic terrain extent must be positive and below 1e12 m, got {}",
+                "synthetic terrain extent (--extent) must be positive and below 1e12 m, got {}",
                 crate::compact_number(self.extent)
             )));
         }
         let spacing = self.extent / (self.vertices as f64).sqrt();
         if spacing < 1e-3 {
             return Err(TinError::InvalidParameter(format!(
-                "synthetic terrain extent {:.3e} m is too small for {} vertices: points would be {spacing:.3e} m apart \
-                 (at least 1 mm)",
+                "synthetic terrain extent (--extent) {:.3e} m is too small for {} vertices: points would be \
+                 {spacing:.3e} m apart (at least 1 mm)",
                 self.extent, self.vertices
             )));
         }
-        if !(self.relief.is_finite() && self.relief >= 0.0 && self.relief < 1e12) {
+        if !(self.relief.is_finite() && (self.relief == 0.0 || (1e-6..1e12).contains(&self.relief))) {
             return Err(TinError::InvalidParameter(format!(
-                "synthetic terrain relief must be non-negative and below 1e12 m, got {}",
+                "synthetic terrain relief (--relief) must be 0, or at least 1 µm and below 1e12 m, got {}",
                 crate::compact_number(self.relief)
             )));
         }
@@ -197,6 +197,8 @@ fn jitter(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Scales `z` linearly onto `[0, relief]` (all zero if `z` is constant).
+/// Heights whose magnitude is below what the readers accept (`1 / COORDINATE_LIMIT`) become 0, so every terrain
+/// written reads back.
 fn normalise(z: &mut [f64], relief: f64) {
     let lo = z.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -207,6 +209,9 @@ fn normalise(z: &mut [f64], relief: f64) {
         } else {
             0.0
         };
+        if *h < 1.0 / crate::COORDINATE_LIMIT {
+            *h = 0.0;
+        }
     }
 }
 
@@ -441,6 +446,8 @@ mod tests {
                 relief: f64::INFINITY,
                 ..ok
             },
+            // Heights of about 1e-31 m: below what the readers accept (2^-100), so refused rather than written.
+            SynthOptions { relief: 1e-30, ..ok },
         ];
         for opts in bad {
             assert!(
@@ -454,6 +461,19 @@ mod tests {
         }
         let flat = synth_tin(&SynthOptions { relief: 0.0, ..ok }).expect("flat terrain");
         assert!(flat.positions().iter().all(|p| p.z == 0.0));
+        // The smallest relief accepted: every height is 0 or within the readers' range.
+        let low = SynthOptions { relief: 1e-6, ..ok };
+        let tin = synth_tin(&low).expect("1 µm relief");
+        assert!(tin.positions().iter().all(|p| crate::coordinate_in_range(p.z)));
+        let grid = synth_grid(&low).expect("1 µm relief");
+        assert!(grid.z.iter().all(|&h| crate::coordinate_in_range(h)));
+    }
+
+    #[test]
+    fn heights_below_the_readers_range_become_zero() {
+        let mut z = vec![0.0, 1e-40, 1.0, 0.5];
+        normalise(&mut z, 1.0);
+        assert_eq!(z, [0.0, 0.0, 1.0, 0.5]);
     }
 
     #[test]

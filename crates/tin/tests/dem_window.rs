@@ -547,12 +547,21 @@ fn heights_out_of_range_name_the_whole_files_row_and_column() {
     let e = read_dem_window(&p, &opts, [4, 6], [6, 8]).expect_err("out of range");
     assert!(matches!(e, TinError::Format { .. }), "{e}");
     let text = names_file(e, &p);
-    assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
+    assert!(
+        text.contains("row 6, column 8 (1-based, row 1 north): height 1e200"),
+        "{text}"
+    );
     let text = names_file(read_dem(&p, &opts).expect_err("whole"), &p);
-    assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
+    assert!(
+        text.contains("row 6, column 8 (1-based, row 1 north): height 1e200"),
+        "{text}"
+    );
     let strips = |p: &Path| read_dem_strips(p, &opts, 2, |_, _| Ok(())).expect_err("out of range");
     let text = names_file(strips(&p), &p);
-    assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
+    assert!(
+        text.contains("row 6, column 8 (1-based, row 1 north): height 1e200"),
+        "{text}"
+    );
     // The same in a streamed `.asc`: the strip's first row is counted in.
     let asc = dir.path().join("huge.asc");
     let mut body = format!("ncols {C}\nnrows {R}\nxllcenter 0\nyllcenter 0\ncellsize 1\n");
@@ -566,7 +575,10 @@ fn heights_out_of_range_name_the_whole_files_row_and_column() {
     }
     std::fs::write(&asc, body).expect("write");
     let text = names_file(strips(&asc), &asc);
-    assert!(text.contains("row 6, column 8: height 1e200"), "{text}");
+    assert!(
+        text.contains("row 6, column 8 (1-based, row 1 north): height 1e200"),
+        "{text}"
+    );
     // A window without the sample reads.
     let w = read_dem_window(&p, &opts, [0, 3], [0, 16]).expect("reads");
     assert_eq!(w.z[17 + 2], ival(1, 2) as f64);
@@ -578,9 +590,15 @@ fn heights_out_of_range_name_the_whole_files_row_and_column() {
         "{\"spacing_x_m\": 1.0, \"spacing_y_m\": 1.0, \"easting_min\": 1e200, \"northing_max\": 10.0}",
     );
     let text = names_file(read_dem_header(&p, &opts).expect_err("far"), &p);
-    assert!(text.contains("row 1, column 1: x = 1e200"), "{text}");
+    assert!(
+        text.contains("row 1, column 1 (1-based, row 1 north): x = 1e200"),
+        "{text}"
+    );
     let text = names_file(read_dem_window(&p, &opts, [3, 5], [4, 6]).expect_err("far"), &p);
-    assert!(text.contains("row 4, column 5: x = 1e200"), "{text}");
+    assert!(
+        text.contains("row 4, column 5 (1-based, row 1 north): x = 1e200"),
+        "{text}"
+    );
 }
 
 /// `../shared/dem`: required (CI has it); a missing directory fails the test.

@@ -994,7 +994,7 @@ fn read_geotiff_info_checks_the_grid_as_read_dem_does() {
         ),
         (
             Some([1e35, 10.0, 0.0]),
-            "row 1, column 1: x = 5e34 is outside the coordinates every stage accepts",
+            "row 1, column 1 (1-based, row 1 north): x = 5e34 is outside the coordinates every stage accepts",
         ),
     ];
     for (scale, expected) in cases {

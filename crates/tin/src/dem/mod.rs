@@ -426,8 +426,8 @@ fn check_corners(shape: &GridShape, rows: [usize; 2], cols: [usize; 2], path: &P
                 return Err(TinError::format(
                     path,
                     format!(
-                        "row {}, column {}: {axis} = {v:e} is outside the coordinates every stage accepts (0 or 2^-100 \
-                         to 2^100 in magnitude)",
+                        "row {}, column {} (1-based, row 1 north): {axis} = {v:e} is outside the coordinates every stage \
+                         accepts (0 or 2^-100 to 2^100 in magnitude)",
                         r + 1,
                         c + 1
                     ),
@@ -466,8 +466,8 @@ fn check_heights(z: &[f64], row0: usize, cols: [usize; 2], path: &Path, z_scale:
             return Err(TinError::format(
                 path,
                 format!(
-                    "row {}, column {}: height {h:e}{} is outside the coordinates every stage accepts (0 or 2^-100 \
-                     to 2^100 in magnitude)",
+                    "row {}, column {} (1-based, row 1 north): height {h:e}{} is outside the coordinates every stage \
+                     accepts (0 or 2^-100 to 2^100 in magnitude)",
                     row0 + i / width + 1,
                     cols[0] + i % width + 1,
                     scaled_note(z_scale)
