@@ -21,6 +21,7 @@ import shutil
 import subprocess
 import sys
 import time
+import uuid
 
 
 def run_cli(args):
@@ -46,6 +47,9 @@ def merge(tincull, plan, out, _tiles):
 
 def find_tincull(given):
     if given:
+        # A bare name (`--tincull tincull`) is looked up on PATH, as a shell would.
+        if os.sep not in given:
+            return shutil.which(given) or os.path.abspath(given)
         return os.path.abspath(given)
     here = os.path.dirname(os.path.abspath(__file__))
     target = os.environ.get("CARGO_TARGET_DIR") or os.path.join(here, "..", "..", "target")
@@ -64,7 +68,13 @@ def main():
     p.add_argument("-o", "--out", required=True, help="the merged hierarchy (.tch)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler; without it a local cluster starts")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster [2]")
-    p.add_argument("--threads", type=int, default=0, help="threads of each tile job [0: one per core of the machine it runs on]")
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=0,
+        help="threads of each tile job [0: on a local cluster the cores shared among its workers, on a scheduler's "
+        "workers every core of the machine a job runs on]",
+    )
     p.add_argument("--retries", type=int, default=2, help="retries of a failed tile job [2]")
     p.add_argument("--tincull", help="the tincull binary [$CARGO_TARGET_DIR or target/, release/tincull there, else on PATH]")
     args = p.parse_args()
@@ -73,7 +83,7 @@ def main():
     if args.retries < 0:
         p.error(f"--retries must be 0 or more, got {args.retries}")
     if args.threads < 0:
-        p.error(f"--threads must be 0 (all cores) or more, got {args.threads}")
+        p.error(f"--threads must be 0 (the default share of cores) or more, got {args.threads}")
 
     tincull = find_tincull(args.tincull)
     if not (os.path.isfile(tincull) and os.access(tincull, os.X_OK)):
@@ -106,6 +116,10 @@ def main():
 
     start = time.time()
     cluster = None
+    threads = args.threads
+    if threads == 0 and not args.scheduler:
+        # The local workers share this machine's cores rather than each taking them all.
+        threads = max(1, (os.cpu_count() or 1) // args.workers)
     if args.scheduler:
         try:
             client = Client(args.scheduler)
@@ -114,16 +128,22 @@ def main():
     else:
         cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
         client = Client(cluster)
+    # Keys of this run's own: a scheduler runs a key once while its result is held, so two drivers sharing one
+    # (two plans, two users) must not name their tasks alike.
+    run = uuid.uuid4().hex
     try:
         futures = [
-            client.submit(build_tile, tincull, plan, i, args.threads, key=f"tile-{i}", retries=args.retries, pure=False)
+            client.submit(
+                build_tile, tincull, plan, i, threads, key=f"tincull-tile-{i}-{run}", retries=args.retries, pure=False
+            )
             for i in range(tiles)
         ]
         reports = []
         for k, fut in enumerate(as_completed(futures), 1):
             reports.append(fut.result())
             print(f"tiles: {k}/{tiles}", file=sys.stderr)
-        merged = client.submit(merge, tincull, plan, out, futures, key="merge", pure=False).result()
+        merging = client.submit(merge, tincull, plan, out, futures, key=f"tincull-merge-{run}", pure=False)
+        merged = merging.result()
     except RuntimeError as e:
         # A tile or the merge failed (after its retries): tincull's own message, without a traceback.
         sys.exit(f"error: {e}")

@@ -157,7 +157,10 @@ impl ParamArgs {
         match self.fixed.grouping.as_deref().or(from_file.fixed.grouping.as_deref()) {
             None | Some("crystal") => {
                 if quadtree != QuadtreeParams::default() {
-                    anyhow::bail!("--depth, --cell-size and --max-bytes need --grouping quadtree");
+                    anyhow::bail!(
+                        "--depth, --cell-size and --max-bytes (`depth`, `cell_size` and `max_bytes` in --config) need \
+                         --grouping quadtree"
+                    );
                 }
             }
             Some("quadtree") => {

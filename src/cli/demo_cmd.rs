@@ -22,7 +22,8 @@ pub const DEFAULT_MESH: &str = "meshes/jacksboro-10k.obj";
 /// Arguments of `tincull demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
-    /// The terrain (default: the bundled jacksboro-10k, a 10,000-vertex TIN of a public-domain USGS DEM).
+    /// The terrain (default: the bundled jacksboro-10k, a 10,000-vertex TIN of a public-domain USGS DEM:
+    /// meshes/jacksboro-10k.obj in the working folder, else in the source tree the binary was built from).
     pub mesh: Option<PathBuf>,
     /// Directory for the outputs.
     #[arg(long, default_value = "out")]

@@ -116,7 +116,8 @@ pub struct ImportArgs {
     /// For a mesh input: the file's up axis (y for a y-up OBJ, rotated to z up on import) [default: z].
     #[arg(long, value_enum)]
     pub up: Option<UpArg>,
-    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first [default: 10000].
+    /// For a DEM grid (.npy, .asc, .hgt, .png, .tif): simplify it to this many vertices first (at least 3, and at
+    /// least the corners of the grid's convex hull) [default: 10000].
     #[arg(long, value_name = "N")]
     pub dem_vertices: Option<usize>,
     /// For a DEM grid: how to read it.

@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// The output flags most commands share.
 #[derive(Clone, Copy, Debug, Default, clap::Args)]
 pub struct OutputArgs {
-    /// Print one JSON object on stdout instead of text.
+    /// Print JSON on stdout instead of text: one object (one per line where the command says so: `cull --eyes`).
     #[arg(long)]
     pub json: bool,
     /// No progress bars or human-readable text (errors and warnings are still printed).

@@ -22,7 +22,8 @@ pub struct TinArgs {
     /// Output OBJ file (`-` for standard output).
     #[arg(short, long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Stop at this many vertices (with --max-error: at whichever is reached first).
+    /// Stop at this many vertices (with --max-error: at whichever is reached first); at least 3, and at least the
+    /// corners of the grid's convex hull, which are always kept.
     #[arg(long)]
     pub vertices: Option<usize>,
     /// Stop when the largest vertical error is at most this (m) (with --vertices: at whichever is reached first).

@@ -35,6 +35,22 @@ fn main() -> Result<()> {
     let viewpoints: usize = args[2].parse().context("VIEWPOINTS")?;
     let depths: Vec<u32> = args[3].split(',').map(str::parse).collect::<Result<_, _>>()?;
     let widths: Vec<usize> = args[4].split(',').map(str::parse).collect::<Result<_, _>>()?;
+    // Refused before the ground truth's cost, as `tincull build` and `cull` refuse them.
+    for &d in &depths {
+        QuadtreeParams {
+            depth: Some(d),
+            ..QuadtreeParams::default()
+        }
+        .validate()?;
+    }
+    for &columns_per_face in &widths {
+        SafeParams {
+            columns_per_face,
+            ..SafeParams::default()
+        }
+        .check()
+        .with_context(|| format!("COLUMNS {columns_per_face}"))?;
+    }
     let opts = EvalOptions {
         viewpoints,
         per_triangle: false,

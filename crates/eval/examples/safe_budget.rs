@@ -8,8 +8,9 @@
 //!
 //! A `CONFIG` is `default` or comma-separated `key=value` over [`SafeParams::default`]: `columns`, `patch`,
 //! `occluders` (occluder budget), `work` (work budget; `0` for unlimited) and `coarse`
-//! (coarse columns; `0` refines every visible node). Viewpoints: `VIEWPOINTS` per class, `--view-seed 1` (as
-//! `tincull eval`), 360° view. Set `TRUTH=0` to skip the ground truth (timings and drawn fractions only), `REPS=N` to
+//! (coarse columns; `0` refines every visible node); values out of range are refused as `tincull cull` refuses them.
+//! Viewpoints: `VIEWPOINTS` per class, 360° view, its own: `truth::viewpoints` with seed 1 for every class (the
+//! README's tables were made so), not those of `tincull eval`, which seeds each class apart. Set `TRUTH=0` to skip the ground truth (timings and drawn fractions only), `REPS=N` to
 //! time each cull `N` times (default 7; more for a profiler).
 //!
 //! Prints CSV on stdout, one line per (config, class): the median over the viewpoints of the cull time (ns; each the
@@ -45,6 +46,7 @@ fn parse_config(s: &str) -> Result<SafeParams> {
             _ => bail!("unknown key {k:?}"),
         }
     }
+    p.check().with_context(|| format!("config {s:?}"))?;
     Ok(p)
 }
 
@@ -65,6 +67,9 @@ fn main() -> Result<()> {
         .split(',')
         .map(|c| c.parse::<ViewpointClass>().map_err(|e| anyhow::anyhow!("{e}")))
         .collect::<Result<_>>()?;
+    if let Some(twice) = classes.iter().enumerate().find(|(i, c)| classes[..*i].contains(c)) {
+        bail!("class {} given twice", twice.1.name());
+    }
     let configs: Vec<(String, SafeParams)> = args[4..]
         .iter()
         .map(|s| Ok((s.clone(), parse_config(s)?)))

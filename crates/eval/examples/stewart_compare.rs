@@ -9,7 +9,8 @@
 //! For every sector configuration: one build (horizons, vertex regions, crystals), then one quadtree per depth from
 //! the same vertex regions. Prints CSV on stdout, one line per (hierarchy, method, class): build seconds (horizons +
 //! regions + grouping), visibility bytes, nodes, the method's false culls, occlusion captured, the leaf limit and the
-//! median cull time; then, per sector configuration, the bytes of every quadtree level (`# levels` lines, JSON).
+//! median cull time; before a sector configuration's lines, one `# levels` line per quadtree with the bytes of each
+//! of its levels (JSON). The configurations and depths are checked before the ground truth is computed.
 //! Methods: `safe` (run-time conservative horizon), the region test (`thesis` over crystals, `stewart` over the
 //! quadtree), and `safe_regions` (the same region test over conservative regions of the same nodes,
 //! `pipeline::conservative_hierarchy`).
@@ -32,11 +33,22 @@ fn main() -> Result<()> {
     let configs: Vec<(u32, u32)> = args[3]
         .split(',')
         .map(|c| {
-            let (s, k) = c.split_once('x').context("SxK")?;
-            Ok((s.parse()?, k.parse()?))
+            let bad = || format!("{c:?}: expected SECTORSxSUBSECTORS, e.g. 16x4");
+            let (s, k) = c.split_once('x').with_context(bad)?;
+            Ok((s.parse().with_context(bad)?, k.parse().with_context(bad)?))
         })
         .collect::<Result<_>>()?;
     let depths: Vec<u32> = args[4].split(',').map(str::parse).collect::<Result<_, _>>()?;
+    for &(s, k) in &configs {
+        horizon::SectorConfig::new(s, k).with_context(|| format!("{s}x{k}"))?;
+    }
+    for &d in &depths {
+        QuadtreeParams {
+            depth: Some(d),
+            ..QuadtreeParams::default()
+        }
+        .validate()?;
+    }
     let opts = EvalOptions {
         viewpoints,
         per_triangle: false,

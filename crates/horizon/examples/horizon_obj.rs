@@ -22,24 +22,48 @@ impl Hasher for Fnv {
     }
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args
-        .first()
-        .ok_or("usage: horizon_obj MESH.obj [SECTORS SUBSECTORS] [--repeat N]")?;
-    let num = |i: usize, default: u32| args.get(i).and_then(|a| a.parse().ok()).unwrap_or(default);
-    let (s, k) = (num(1, 16), num(2, 4));
-    let repeat: usize = args
-        .iter()
-        .position(|a| a == "--repeat")
-        .and_then(|i| args.get(i + 1))
-        .and_then(|r| r.parse().ok())
-        .unwrap_or(1);
+/// The error's message and its causes, as `error: …` on standard error; exit status 1.
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            let mut message = e.to_string();
+            let mut cause = e.source();
+            while let Some(c) = cause {
+                message += &format!(": {c}");
+                cause = c.source();
+            }
+            eprintln!("error: {message}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    const USAGE: &str = "usage: horizon_obj MESH.obj [SECTORS SUBSECTORS] [--repeat N]";
+    let whole = |what: &str, a: &str| {
+        a.parse::<u32>()
+            .map_err(|_| format!("{what} {a:?}: not a whole number"))
+    };
+    let (mut positional, mut repeat) = (Vec::new(), 1);
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        if a == "--repeat" {
+            repeat = whole("--repeat", &args.next().ok_or(USAGE)?)?.max(1);
+        } else {
+            positional.push(a);
+        }
+    }
+    let (path, s, k) = match positional.as_slice() {
+        [path] => (path, 16, 4),
+        [path, s, k] => (path, whole("SECTORS", s)?, whole("SUBSECTORS", k)?),
+        _ => return Err(USAGE.into()),
+    };
     let (tin, _) = tin::read_obj(std::path::Path::new(path), &tin::ObjImportOptions::default())?;
     let cfg = SectorConfig::new(s, k)?;
     let mut best = f64::INFINITY;
     let mut field = None;
-    for _ in 0..repeat.max(1) {
+    for _ in 0..repeat {
         let started = Instant::now();
         field = Some(compute(&tin, &cfg, &HorizonOptions::default())?);
         best = best.min(started.elapsed().as_secs_f64());

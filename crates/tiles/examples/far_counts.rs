@@ -12,6 +12,10 @@
 use tiles::far_field::FarField;
 
 fn main() {
+    if std::env::args().len() > 1 {
+        eprintln!("usage: far_counts (it takes no arguments)");
+        std::process::exit(2);
+    }
     let (block, halo, side) = (16usize, 16usize, 1024usize);
     println!("grid_side,samples,level0_blocks,ratio,far_points");
     for n in [3_162usize, 10_000, 40_000] {

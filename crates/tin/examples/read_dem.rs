@@ -5,8 +5,13 @@ use std::path::Path;
 use std::time::Instant;
 
 fn main() {
+    let files: Vec<String> = std::env::args().skip(1).collect();
+    if files.is_empty() {
+        eprintln!("usage: read_dem FILE...");
+        std::process::exit(2);
+    }
     let mut failed = false;
-    for arg in std::env::args().skip(1) {
+    for arg in files {
         let path = Path::new(&arg);
         // Best of five reads (the first one also warms the page cache).
         let mut best = f64::INFINITY;
@@ -34,7 +39,14 @@ fn main() {
                 );
             }
             Some(Err(e)) => {
-                eprintln!("error: {e}");
+                // The message and its causes (an I/O error's message is the path, its cause the reason).
+                let mut message = e.to_string();
+                let mut cause = std::error::Error::source(&e);
+                while let Some(c) = cause {
+                    message += &format!(": {c}");
+                    cause = c.source();
+                }
+                eprintln!("error: {message}");
                 failed = true;
             }
             None => {}

@@ -58,9 +58,19 @@ impl ViewerApp {
         if eye_changed {
             self.map_dirty = true;
         }
+        // Decimetres; an eye given far out (`--eye 1e30,…`) in short scientific notation instead of 31 digits.
+        let metres = |v: f64| {
+            if v.abs() < 1e9 {
+                format!("{v:.1}")
+            } else {
+                format!("{v:.3e}")
+            }
+        };
         ui.label(format!(
-            "eye {:.1}, {:.1}, {:.1}",
-            self.eye[0], self.eye[1], self.eye[2]
+            "eye {}, {}, {}",
+            metres(self.eye[0]),
+            metres(self.eye[1]),
+            metres(self.eye[2])
         ));
         ui.separator();
         ui.label("Colour");
