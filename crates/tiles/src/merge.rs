@@ -229,7 +229,7 @@ pub fn merge_with(
     if let Some(&[v, t]) = cracks.first.first() {
         let point = |v: u32| {
             let p = tin.position(v);
-            format!("({}, {}, {})", p.x, p.y, p.z)
+            format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
         };
         let corners = border[t as usize].map(point);
         // The tile that added a vertex or a triangle: the last whose start is not past it.
