@@ -25,7 +25,7 @@ takes_no_arguments() {
 
 # The arguments of a script that takes one optional working directory ($1: the script's path, then its arguments):
 # --help prints its header and exits; sets `work` to the directory made absolute (a new temporary directory when
-# none is given); refuses a flag or a second argument with exit 2.
+# none is given, removed when the script exits, however it ends); refuses a flag or a second argument with exit 2.
 optional_workdir() {
     local script=$1
     shift
@@ -44,6 +44,7 @@ optional_workdir() {
         work=$(absolute "$1")
     else
         work=$(mktemp -d)
+        trap 'rm -rf "$work"' EXIT
     fi
 }
 

@@ -178,6 +178,27 @@ fn the_measuring_scripts_check_their_arguments_first() {
         )),
         "{stderr}"
     );
+
+    // A missing DEM for the cascades source is refused before any work: skipping it replaced the table with one
+    // without its rows.
+    let out = Command::new(root().join("scripts/scale"))
+        .args(["--sources", "cascades", "--vertices", "10000", "--out", out_dir])
+        .env("PATH", path.path())
+        .env("TINCULL_DEM", dir.path().join("no-such.hgt"))
+        .current_dir(root())
+        .output()
+        .expect("the script runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no-such.hgt is missing: the cascades source needs it"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&table).expect("read"),
+        "source,vertices\nsynth,10\n",
+        "scripts/scale without its DEM left the table as it was"
+    );
 }
 
 /// `scripts/tiles/dask_tiles.py` run by `python3` with the given extra arguments, `PYTHONPATH` set to `pythonpath`.
