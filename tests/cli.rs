@@ -176,12 +176,7 @@ fn a_y_up_mesh_gets_a_hint() {
         "{stderr}"
     );
     assert!(!stderr.contains("give --up y"), "{stderr}");
-    let grid = dir.path().join("g.asc");
-    std::fs::write(
-        &grid,
-        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
-    )
-    .expect("fixture");
+    let grid = common::small_asc(dir.path(), "g.asc");
     fails_with(&["info", s(&grid), "--up", "y"], "--up y applies to OBJ meshes");
     // A y-up file's z = 0 becomes y = -0 on rotation: the bounding box shows 0, not "-0.000".
     let yup0 = dir.path().join("yup0.obj");
@@ -1265,12 +1260,7 @@ fn messages_name_the_flag_at_fault() {
         "too small for 10000 vertices",
     );
     assert!(!out.exists());
-    let asc = dir.path().join("g.asc");
-    std::fs::write(
-        &asc,
-        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
-    )
-    .expect("asc");
+    let asc = common::small_asc(dir.path(), "g.asc");
     fails_with(&["tin", s(&asc), "--vertices", "1", "-o", s(&out)], "--vertices");
     let file = dir.path().join("afile");
     std::fs::write(&file, "x").expect("file");
@@ -1550,12 +1540,7 @@ fn dem_messages_name_the_file_flag_and_sample() {
         );
     }
     fails_with(&["info", s(&npy), "--band", "2"], "g.npy: --band 2");
-    let asc = dir.path().join("g.asc");
-    std::fs::write(
-        &asc,
-        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
-    )
-    .expect("asc");
+    let asc = common::small_asc(dir.path(), "g.asc");
     fails_with(
         &["tin", s(&asc), "--keep-grid", "--band", "1", "-o", s(&out)],
         "g.asc: --band 1: a .asc grid has one band",
@@ -1629,12 +1614,7 @@ fn messages_and_help_read_well() {
         &["horizon", s(&mesh("jacksboro-2k.obj")), "--subsectors", "0"],
         "--subsectors: subsectors = 0",
     );
-    let asc = dir.path().join("g.asc");
-    std::fs::write(
-        &asc,
-        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
-    )
-    .expect("fixture");
+    let asc = common::small_asc(dir.path(), "g.asc");
     fails_with(
         &["tin", s(&asc), "--vertices", "99999999999", "-o", s(&out)],
         "the vertex budget (--vertices) must fit in 32 bits (at most 4294967295), got 99999999999",

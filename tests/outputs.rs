@@ -3,20 +3,13 @@
 //! command leaves none of its outputs, `export --export-obj same.mtl` is refused, and `-o -` writes to standard output.
 //! Everything is made in a temporary directory; no real device is touched.
 
+mod common;
+
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Command;
 
-fn mesh(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes").join(name)
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tincull"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
+use common::{mesh, ok, run};
 
 fn p(path: &Path) -> &str {
     path.to_str().expect("UTF-8 temporary path")
@@ -41,16 +34,6 @@ fn fails_with(args: &[&str], needles: &[&str]) -> String {
         assert!(stderr.contains(n), "tincull {args:?}: {n:?} not in\n{stderr}");
     }
     stderr
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "tincull {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 const SMALL: &str = "jacksboro-2k.obj";
@@ -212,12 +195,7 @@ fn an_output_never_overwrites_an_input() {
         &["pvs", p(&tch), "--cell", "0,0,10,10", "-o", p(&tch)],
         &["the same file as the input"],
     );
-    let asc = dir.path().join("g.asc");
-    fs::write(
-        &asc,
-        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
-    )
-    .expect("asc");
+    let asc = common::small_asc(dir.path(), "g.asc");
     fails_with(
         &["tin", p(&asc), "--keep-grid", "-o", p(&asc)],
         &["g.asc", "the same file as the input"],
@@ -250,12 +228,7 @@ fn an_output_never_overwrites_the_files_a_dem_is_read_with() {
     assert_eq!(fs::read(&sidecar).expect("read"), original);
     assert_eq!(names(dir.path()), ["g.json", "g.npy"], "nothing written");
 
-    let asc = dir.path().join("h.asc");
-    fs::write(
-        &asc,
-        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
-    )
-    .expect("asc");
+    let asc = common::small_asc(dir.path(), "h.asc");
     let prj = dir.path().join("h.prj");
     fs::write(&prj, "LOCAL_CS[\"metres\"]").expect("prj");
     fails_with(

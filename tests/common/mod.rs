@@ -52,3 +52,14 @@ pub fn fails_with(args: &[&str], needle: &str) {
 pub fn s(p: &Path) -> &str {
     p.to_str().expect("UTF-8 path")
 }
+
+/// A 3 × 3 ESRI ASCII grid (10 m cells, heights 1 to 9) written as `name` in `dir`: the smallest DEM the readers take.
+pub fn small_asc(dir: &Path, name: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(
+        &path,
+        "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n7 8 9\n",
+    )
+    .expect("write the grid");
+    path
+}
