@@ -312,12 +312,16 @@ fn c_example_refuses_an_unknown_method_and_a_malformed_eye() {
     std::fs::write(&tch, h.to_bytes().expect("to_bytes")).expect("write the .tch");
     let exe = compile_example(dir.path());
     let eye = info_eye(&h);
-    let run = Command::new(&exe)
-        .arg(&tch)
-        .arg("thesys")
-        .arg(&eye)
-        .output()
-        .expect("the example runs");
+    // The example run with one method and one eye.
+    let cull = |method: &str, eye: &str| {
+        Command::new(&exe)
+            .arg(&tch)
+            .arg(method)
+            .arg(eye)
+            .output()
+            .expect("the example runs")
+    };
+    let run = cull("thesys", &eye);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(2), "{stderr}");
     assert!(
@@ -337,12 +341,7 @@ fn c_example_refuses_an_unknown_method_and_a_malformed_eye() {
         format!("{eye},0,360,1"),
         "1,2".to_string(),
     ] {
-        let run = Command::new(&exe)
-            .arg(&tch)
-            .arg("safe")
-            .arg(&bad)
-            .output()
-            .expect("the example runs");
+        let run = cull("safe", &bad);
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert_eq!(run.status.code(), Some(2), "{bad}: {stderr}");
         assert!(
