@@ -515,7 +515,7 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// Growth's visibility test against the wedge definition (design.md "Occlusion regions"), relative to the
+        /// Growth's visibility test against the wedge definition (crate `occlusion`'s `region` module), relative to the
         /// vertex: in the sector towards the camera, hidden when the camera is strictly beyond `t_p + d` and strictly
         /// below the line through the vertex with the sector's slope. Cases within rounding of a boundary are skipped.
         #[test]

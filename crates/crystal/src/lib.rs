@@ -1,5 +1,5 @@
-//! Crystal grouping of TIN triangles by visibility (thesis 5.2.3 "The Crystal Method" and 6.3; design.md "Crystal
-//! grouping").
+//! Crystal grouping of TIN triangles by visibility (thesis 5.2.3 "The Crystal Method" and 6.3; the README's "What it
+//! does").
 //!
 //! [`build`] groups the triangles of a [`Tin`] into edge-connected crystals that do not grow out of sight of their
 //! lowest vertex ([`growth`]), orphans what no crystal could take, merges the groups into a hierarchy by their

@@ -1,4 +1,4 @@
-//! The merge hierarchy over crystal groups (thesis 5.2.3, last part; design.md "Crystal grouping").
+//! The merge hierarchy over crystal groups (thesis 5.2.3, last part; the README's "What it does").
 //!
 //! Leaves are the groups. Level by level, each node still in play finds the partner it collided with most and, when
 //! both are still free at this level, the two merge into a parent whose collision record is the sum of theirs without

@@ -1,4 +1,4 @@
-//! Triangle reordering so that every hierarchy node draws with one call (design.md "Crystal grouping").
+//! Triangle reordering so that every hierarchy node draws with one call (the README's "What it does").
 //!
 //! A depth-first walk over the forest (roots in increasing id, children in stored order) lays out each group's
 //! triangles when it reaches the group's leaf; every node then covers one contiguous range of the new order, and a

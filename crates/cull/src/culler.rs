@@ -1,4 +1,4 @@
-//! The recursive run-time culler (thesis 5.3, with the frustum restriction of 5.1.1; design.md "Run-time test").
+//! The recursive run-time culler (thesis 5.3, with the frustum restriction of 5.1.1; the README's "What it does").
 //!
 //! For each top-level node: a camera inside the node's bounding circle sees it. Otherwise the directions from the
 //! node's points to the camera lie within `azimuth(c − centre) ± asin(radius / distance)`; the node is culled when, for

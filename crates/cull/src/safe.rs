@@ -1,5 +1,5 @@
 //! The safe run-time culler: a front-to-back traversal of the hierarchy against a conservative horizon
-//! ([`crate::horizon`]), whose verdict "hidden" is a theorem (design.md, "Safe culling").
+//! ([`crate::horizon`]), whose verdict "hidden" is a theorem (the README's "Safe culling").
 //!
 //! ## The tree
 //!

@@ -1,4 +1,5 @@
-//! Sector geometry shared by every stage (design.md "Sectors and horizons").
+//! Sector geometry shared by every stage (the horizon stage uses the same directions; its `sector` module holds the
+//! horizon's definition).
 //!
 //! Azimuth is measured counter-clockwise from +x. With `s` sectors, sector `i` covers azimuths
 //! `[2πi/s, 2π(i+1)/s)`; its centre direction `r_i` is the unit vector at azimuth `2π(i + ½)/s`. A point's coordinate

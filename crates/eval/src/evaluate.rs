@@ -1,4 +1,4 @@
-//! Evaluation of culling methods against ground truth (design.md "Measuring accuracy").
+//! Evaluation of culling methods against ground truth (the README's "Accuracy: how it is measured").
 //!
 //! For each viewpoint class, viewpoints are drawn from the seeded generator; for each viewpoint the ground-truth
 //! visible set `V` is computed once (exact segment walks; a lower bound of the true `V`, see [`truth::visible`]), and

@@ -1,4 +1,4 @@
-//! Where the hierarchy culler fails over a terrain (design.md "Measuring accuracy").
+//! Where the hierarchy culler fails over a terrain (the README's "Accuracy: how it is measured").
 //!
 //! The footprint's bounding box is cut into square cells of side `cell`; each cell whose centre lies on the
 //! terrain is a viewpoint `eye_height` metres above the ground there, looking all around. For each, the hierarchy

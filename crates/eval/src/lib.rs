@@ -1,4 +1,5 @@
-//! Evaluation of tincull's culling methods against ground truth (design.md "Measuring accuracy"), as a library.
+//! Evaluation of tincull's culling methods against ground truth (the README's "Accuracy: how it is measured"), as a
+//! library.
 //!
 //! | module | what it does |
 //! | --- | --- |

@@ -1,5 +1,5 @@
-//! Stability suite: where the methods fail (design.md "Measuring accuracy"; thesis 5.1.2 on undersampling, 6.3 on
-//! sector counts and crystal seeds).
+//! Stability suite: where the methods fail (the README's "Accuracy: how it is measured"; thesis 5.1.2 on undersampling,
+//! 6.3 on sector counts and crystal seeds).
 //!
 //! Every case runs the whole pipeline ([`pipeline`]) on one terrain with one set of parameters, checks the
 //! exported hierarchy's invariants, then scores the `hierarchy` culler against ground truth ([`truth::GroundTruth`])

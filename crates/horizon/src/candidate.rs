@@ -1,4 +1,4 @@
-//! Horizon candidates and the total order that picks the horizon among them (design.md "Sectors and horizons").
+//! Horizon candidates and the total order that picks the horizon among them (the `sector` module).
 //!
 //! Seen from the apex `p̂ = (t_p, z_p)`, a candidate `q̂ = (t_q, z_q)` with `t_q > t_p` is better than another when
 //! its slope `(z_q − z_p)/(t_q − t_p)` is greater; on equal slopes the smaller `t_q` (smaller `t_q − t_p`) wins,

@@ -1,5 +1,5 @@
 //! [`HorizonField`]: the horizon of every vertex in every subsector, and the per-sector summaries that the
-//! occlusion regions are built from (design.md "Sectors and horizons", "Occlusion regions"; Stewart 1997 §5.1).
+//! occlusion regions are built from (the `sector` module and crate `occlusion`; Stewart 1997 §5.1).
 //!
 //! Storage: one `u32` per vertex and subsector (subsector-major, [`NO_HORIZON`] for none), a sorted side table of
 //! the edge points that won under the undersampling option, and per vertex and sector a [`SectorHorizon`]:

@@ -1,4 +1,4 @@
-//! The O(n²) brute-force oracle: the horizon definition of design.md "Sectors and horizons", evaluated literally.
+//! The O(n²) brute-force oracle: the horizon definition of the `sector` module, evaluated literally.
 //!
 //! For every vertex `p` and every other vertex `q`, find the subsectors whose closed wedge at `p` contains `q`
 //! (one, or two when `q` is on a shared boundary ray), and keep in each the best candidate: greatest slope

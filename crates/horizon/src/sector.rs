@@ -1,4 +1,4 @@
-//! Sector and subsector geometry (thesis 4.5.1, design.md "Sectors and horizons").
+//! Sector and subsector geometry (thesis 4.5.1; the definitions below).
 //!
 //! With `s` sectors of `k` subsectors, subsector `j` (of `N = s·k`) spans azimuths `[2πj/N, 2π(j+1)/N]`,
 //! counter-clockwise from +x, and belongs to sector `j / k`. Its wedge at a vertex `p` is bounded by the edge

@@ -1,4 +1,4 @@
-//! Conservative precomputed regions (design.md, "Safe culling": one construction of a conservative region), with
+//! Conservative precomputed regions (the README's "Safe culling": one construction of a conservative region), with
 //! the proof.
 //!
 //! For a node `N` (a set of triangles), bounded in x,y by the circle `(m, r)` and in height by `z_max`, and for sector

@@ -1,4 +1,4 @@
-//! Occlusion regions for tincull (thesis 4.6, design.md "Occlusion regions").
+//! Occlusion regions for tincull (thesis 4.6; the `region` module).
 //!
 //! A [`Region`] is the set of camera positions, in one sector's vertical plane, from which a vertex, a triangle or a
 //! group of triangles is hidden by the terrain. Regions of triangles and groups are intersections of their vertices'

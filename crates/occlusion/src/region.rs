@@ -1,4 +1,4 @@
-//! Occlusion regions in a sector plane (thesis 4.6; design.md "Occlusion regions").
+//! Occlusion regions in a sector plane (thesis 4.6; the definitions below).
 //!
 //! Everything about sector `i` lives in its vertical plane, with coordinates `(t, z)` where `t = r_i · (xy − o)` is the
 //! position along the sector's centre direction, relative to a fixed origin `o` shared by all regions that are
@@ -13,7 +13,7 @@
 //!   regions is never empty; a region is empty only because some vertex has no horizon in the sector, which callers
 //!   represent as `Option<Region>::None`.
 //! - Containment is strict: a camera exactly on the boundary is outside, i.e. it sees the element (grazing view).
-//!   This is the conservative tie rule; the closed definition in design.md differs only on the boundary itself.
+//!   This is the conservative tie rule; a closed definition would differ only on the boundary itself.
 
 use glam::DVec2;
 use smallvec::SmallVec;

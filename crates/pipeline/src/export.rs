@@ -46,8 +46,12 @@ pub fn write_mtl_to(h: &Hierarchy, w: &mut dyn Write) -> io::Result<()> {
 }
 
 /// Writes the hierarchy's mesh as OBJ with one group per leaf (in triangle order) and the orphans last (when there
-/// are any), using the
-/// materials of `mtl_name` (see [`write_mtl_to`]). Positions are written exactly (shortest round-trip f64 text).
+/// are any), using the materials of `mtl_name` (see [`write_mtl_to`]). Positions are written exactly (shortest
+/// round-trip f64 text).
+///
+/// # Panics
+/// When the hierarchy's ranges do not fit its mesh: give it one that passes [`Hierarchy::check_invariants`] (every
+/// loaded or built one does).
 pub fn write_grouped_obj_to(h: &Hierarchy, mtl_name: &str, w: &mut dyn Write) -> io::Result<()> {
     let leaves = h.leaf_ranges();
     writeln!(

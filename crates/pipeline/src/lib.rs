@@ -19,7 +19,9 @@
 //! The crates whose types a build and a cull take and return are re-exported, so that a library user needs only this
 //! one dependency: `pipeline::tin` (the terrain, its readers of OBJ, `.hgt`, `.asc`, `.npy`, and with this crate's
 //! default features `png` and `geotiff` also of PNG height maps and GeoTIFFs) and `pipeline::cull` (the hierarchy,
-//! cameras, cullers).
+//! cameras, cullers). A DEM grid becomes a TIN as `tincull` makes it (`--dem-vertices`, 10,000 by default) with
+//! `let grid = tin::read_dem(path, &tin::DemOptions::default())?;` then
+//! `let (tin, _report) = tin::simplify(&grid, &tin::SimplifyOptions::vertices(10_000), None)?;`.
 //!
 //! Errors: [`build`], [`build_from_regions`], [`build_without_regions`] and [`BuildParams::validate`] return a
 //! [`BuildError`], whose variant says which stage refused (the horizon sweep, crystal grouping, the quadtree, regions
@@ -218,7 +220,8 @@ pub struct Build {
 /// Progress callback of [`build`]: `(stage name, done, total)`.
 pub type BuildProgress = Arc<dyn Fn(&str, u64, u64) + Send + Sync>;
 
-/// Runs the whole pipeline on `tin`.
+/// Runs the whole pipeline on `tin`, which must be a height field (no two triangles overlapping in x,y): every TIN
+/// the readers and `tin::triangulate` make is one; one made with `Tin::from_parts` is checked by `tin::validate`.
 pub fn build(tin: &Tin, params: &BuildParams, progress: Option<BuildProgress>) -> Result<Build, BuildError> {
     params.validate()?;
     let config = SectorConfig::new(params.sectors, params.subsectors)?;
@@ -409,6 +412,9 @@ pub fn stored_circle(c: &Circle, origin: [f64; 3]) -> ([f32; 2], f32) {
 /// The per-triangle regions of `tin`: each triangle's row is the intersection of its three vertices' rows of
 /// `vertex_regions`, in the terrain's original triangle order. Only the per-triangle method
 /// ([`per_triangle_hierarchy`]) needs them; [`build`] does not make them.
+///
+/// # Panics
+/// When `vertex_regions` has fewer rows than `tin` has vertices (a table of another terrain).
 pub fn triangle_regions(tin: &Tin, vertex_regions: &RegionTable) -> RegionTable {
     let triangles = tin.triangles();
     vertex_regions.intersect_rows(triangles.len(), |t| triangles[t])

@@ -2,7 +2,7 @@
 //!
 //! The question: can any point of the viewcell box `A` see any point of a node's box `B` (both axis-parallel in x,y;
 //! only their tops matter)? A verdict "hidden" must be a theorem: every segment from a point of `A` to a point of `B`
-//! passes strictly below the terrain somewhere (design.md, "Safe culling"; touching is visible).
+//! passes strictly below the terrain somewhere (the README's "Safe culling"; touching is visible).
 //!
 //! **Occluders (2.5-D walls).** For every TIN edge `uv`, the wall `{(x, y, z) : (x, y) ∈ uv, z < ẑ(x, y)}` where `ẑ`
 //! interpolates the end heights lowered by `μ`. On an edge the terrain is exactly the segment between its end vertices,

@@ -27,8 +27,8 @@
 //!   as the direct intersection over the node's vertices (up to the rounding of the boundary's crossing points).
 //! - **Per-vertex regions (§5.1, §5.2).** Stewart's vertex region uses the minimum-elevation subsector horizon,
 //!   projected on the sector plane, at the distance of the *farthest* horizon point (§5.1's correction); his
-//!   subsector horizon is the highest point in the subsector *or immediately adjacent* (§5.2). Ours (design.md
-//!   "Sectors and horizons", crate `occlusion`) keeps the same minimum over subsectors and the same farthest-distance
+//!   subsector horizon is the highest point in the subsector *or immediately adjacent* (§5.2). Ours (the `horizon`
+//!   crate's `sector` module, crate `occlusion`) keeps the same minimum over subsectors and the same farthest-distance
 //!   correction, but the subsector horizon is the vertex of greatest *slope* seen from `p` in the subsector's closed
 //!   wedge (not of greatest elevation), the distance is measured along the sector's centre direction, and no
 //!   neighbouring points outside the wedge are taken; a subsector with no vertex leaves the sector's region empty.

@@ -54,7 +54,7 @@ pub fn random_terrain(nx: usize, ny: usize, seed: u64) -> Tin {
     jittered_grid(nx, ny, 10.0, 3.0, seed, fractal(seed, 25.0, 120.0))
 }
 
-/// Brute-force sector horizons after design.md "Sectors and horizons": for each vertex and subsector, the vertex of
+/// Brute-force sector horizons after the horizon crate's `sector` module: for each vertex and subsector, the vertex of
 /// greatest slope among those in the subsector's closed wedge (slope along the subsector's centre direction; ties to
 /// the smaller distance, then the smaller index); per sector the minimum slope over its subsectors and the largest
 /// distance, along the sector's centre direction, to a subsector horizon point; `None` when a subsector has none.
