@@ -65,6 +65,15 @@ need_whole_number() {
     fi
 }
 
+# As need_whole_number, and exits 2 when it is 0 ($4, if given, says why 0 is refused).
+need_count() {
+    need_whole_number "$1" "$2" "$3"
+    if [[ "$2" =~ ^0+$ ]]; then
+        echo "scripts/$1: $3 must be at least 1${4:+ ($4)}" >&2
+        exit 2
+    fi
+}
+
 # Prints the path $1 made absolute against the current directory: call it before the script changes directory, so
 # that paths are taken where the user typed them.
 absolute() {

@@ -52,7 +52,7 @@ def fit(xs, ys):
 
 
 def series(rows, key):
-    pts = [(int(r["vertices"]), number(r[key])) for r in rows]
+    pts = [(int(r["vertices"]), number(r.get(key))) for r in rows]
     pts = sorted((x, y) for x, y in pts if y is not None)
     return [p[0] for p in pts], [p[1] for p in pts]
 
@@ -67,12 +67,16 @@ def read_table(path):
             columns = reader.fieldnames or []
     except (OSError, UnicodeDecodeError, csv.Error) as e:
         sys.exit(f"{name}: cannot read {path}: {getattr(e, 'strerror', None) or e}")
-    missing = [c for c in ("source", "vertices", "threads") if c not in columns]
+    missing = [c for c in ("source", "vertices", "triangles", "threads") if c not in columns]
     if missing:
         sys.exit(f"{name}: {path} is not a scripts/scale table (no column {', '.join(missing)})")
+    stages = [key for key, _ in BUILD_STAGES + OTHER_STAGES + MEMORY_STAGES]
+    if not any(key in columns for key in stages):
+        sys.exit(f"{name}: {path} has no measurement column (such as {', '.join(stages[:3])})")
     for line, r in enumerate(rows, start=2):
-        if not (r["vertices"] or "").isdigit():
-            sys.exit(f"{name}: {path}, line {line}: vertices {r['vertices']!r} is not a count")
+        for count in ("vertices", "triangles"):
+            if not (r[count] or "").isdigit():
+                sys.exit(f"{name}: {path}, line {line}: {count} {r[count]!r} is not a count")
     order = list(SOURCES)
     return sorted(rows, key=lambda r: (order.index(r["source"]) if r["source"] in order else len(order),
                                        int(r["vertices"])))

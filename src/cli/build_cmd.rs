@@ -74,23 +74,54 @@ pub struct FixedParamArgs {
     pub max_bytes: Option<u64>,
 }
 
+/// What a `--config` key takes, so that a wrong type is named in words (serde names the Rust type).
+#[derive(Clone, Copy)]
+enum ConfigValue {
+    /// A whole number from 0 to this.
+    Whole(u64),
+    /// Any number (an integer is read as a float).
+    Number,
+    /// A string.
+    Text,
+}
+
 /// The keys of a `--config` file: the long options of [`ParamArgs`] with underscores, and `cell` (the older name of
-/// `cell_size`). Checked by hand, because serde cannot refuse unknown keys of a struct with a flattened part.
-const CONFIG_KEYS: [&str; 13] = [
-    "sectors",
-    "subsectors",
-    "seeds",
-    "rng_seed",
-    "orphan_passes",
-    "min_group",
-    "max_expanse",
-    "undersampling",
-    "grouping",
-    "depth",
-    "cell_size",
-    "cell",
-    "max_bytes",
-];
+/// `cell_size`), with what each takes. Checked by hand, because serde cannot refuse unknown keys of a struct with a
+/// flattened part.
+const CONFIG_KEYS: [(&str, ConfigValue); 13] = {
+    use ConfigValue::{Number, Text, Whole};
+    const U32: ConfigValue = Whole(u32::MAX as u64);
+    const U64: ConfigValue = Whole(i64::MAX as u64); // TOML's integers are i64
+    [
+        ("sectors", U32),
+        ("subsectors", U32),
+        ("seeds", U64),
+        ("rng_seed", U64),
+        ("orphan_passes", U32),
+        ("min_group", U64),
+        ("max_expanse", Number),
+        ("undersampling", Number),
+        ("grouping", Text),
+        ("depth", U32),
+        ("cell_size", Number),
+        ("cell", Number),
+        ("max_bytes", U64),
+    ]
+};
+
+/// Whether `value` is of the kind `takes`, or what it takes in words.
+fn check_config_value(value: &toml::Value, takes: ConfigValue) -> std::result::Result<(), String> {
+    use toml::Value;
+    match (takes, value) {
+        (ConfigValue::Whole(max), Value::Integer(i)) if u64::try_from(*i).is_ok_and(|i| i <= max) => Ok(()),
+        (ConfigValue::Whole(max), _) if max < i64::MAX as u64 => Err(format!("a whole number from 0 to {max}")),
+        (ConfigValue::Whole(_), _) => Err("a whole number (0 or more)".into()),
+        (ConfigValue::Number, Value::Integer(_) | Value::Float(_)) => Ok(()),
+        (ConfigValue::Number, _) => Err("a number".into()),
+        (ConfigValue::Text, Value::String(_)) => Ok(()),
+        (ConfigValue::Text, _) => Err("a string".into()),
+    }
+}
 
 impl ParamArgs {
     /// The parameters of a `--config` TOML file (keys as the long options of these parameters, with underscores;
@@ -99,12 +130,22 @@ impl ParamArgs {
         let text = infile::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
         let invalid = || format!("{}: invalid parameters", path.display());
         let table: toml::Table = toml::from_str(&text).with_context(invalid)?;
-        if let Some(key) = table.keys().find(|k| !CONFIG_KEYS.contains(&k.as_str())) {
-            anyhow::bail!(
-                "{}: unknown key `{key}`; the keys are {}",
-                invalid(),
-                CONFIG_KEYS.join(", ")
-            );
+        for (key, value) in &table {
+            let Some(&(_, takes)) = CONFIG_KEYS.iter().find(|(k, _)| k == key) else {
+                let keys: Vec<&str> = CONFIG_KEYS.iter().map(|(k, _)| *k).collect();
+                anyhow::bail!("{}: unknown key `{key}`; the keys are {}", invalid(), keys.join(", "));
+            };
+            if let Err(wanted) = check_config_value(value, takes) {
+                let mut shown = value.to_string();
+                if shown.chars().count() > 60 {
+                    shown = format!("of {} characters", shown.chars().count());
+                }
+                anyhow::bail!(
+                    "{}: `{key}` takes {wanted}, not the {} {shown}",
+                    invalid(),
+                    value.type_str()
+                );
+            }
         }
         toml::from_str(&text).with_context(invalid)
     }
@@ -509,8 +550,8 @@ pub fn peak_memory_bytes() -> Option<u64> {
 mod tests {
     use super::*;
 
-    /// Every key of [`CONFIG_KEYS`] is read into its field (the hand-written list and the structs agree), and a key
-    /// outside it is refused with the list.
+    /// Every key of [`CONFIG_KEYS`] is read into its field (the hand-written list and the structs agree), a value of
+    /// the wrong type is refused in words, and a key outside the list is refused with the list.
     #[test]
     fn every_config_key_is_read_and_no_other() {
         let dir = tempfile::tempdir().expect("tempdir");
@@ -542,6 +583,34 @@ mod tests {
             CONFIG_KEYS.len(),
             "a key of the list is not tested here"
         );
+        for (text, message) in [
+            (
+                "sectors = \"x\"",
+                "`sectors` takes a whole number from 0 to 4294967295, not the string \"x\"",
+            ),
+            (
+                "depth = -1",
+                "`depth` takes a whole number from 0 to 4294967295, not the integer -1",
+            ),
+            ("subsectors = 4294967296", "not the integer 4294967296"),
+            (
+                "seeds = 2.0",
+                "`seeds` takes a whole number (0 or more), not the float 2.0",
+            ),
+            (
+                "max_expanse = true",
+                "`max_expanse` takes a number, not the boolean true",
+            ),
+            ("grouping = 3", "`grouping` takes a string, not the integer 3"),
+        ] {
+            std::fs::write(&path, text).expect("write");
+            let e = format!("{:#}", ParamArgs::read(&path).expect_err(text));
+            assert!(e.contains(message), "{text}: {e}");
+        }
+        let long = format!("rng_seed = [{}]", vec!["1"; 100].join(", "));
+        std::fs::write(&path, &long).expect("write");
+        let e = format!("{:#}", ParamArgs::read(&path).expect_err("an array"));
+        assert!(e.ends_with("not the array of 300 characters"), "{e}");
         std::fs::write(&path, "sectors = 8\ncolumns = 64\n").expect("write");
         let e = format!("{:#}", ParamArgs::read(&path).expect_err("not a build parameter"));
         assert!(e.contains("unknown key `columns`") && e.contains("max_bytes"), "{e}");

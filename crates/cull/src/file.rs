@@ -172,7 +172,9 @@ pub const FORMAT_VERSION: u32 = 2;
 pub const OLDEST_READABLE_VERSION: u32 = 1;
 
 impl Hierarchy {
-    /// Encodes the hierarchy as `.tch` bytes.
+    /// Encodes the hierarchy as `.tch` bytes, as it is: the invariants that [`Hierarchy::from_bytes`] checks are not
+    /// checked here. A hierarchy from a build or a load holds them; one changed by hand may not, and its bytes are
+    /// then refused when read. Call [`Hierarchy::check_invariants`] first to find out before writing.
     pub fn to_bytes(&self) -> Result<Vec<u8>, HierarchyError> {
         encode_framed(&MAGIC, FORMAT_VERSION, self).map_err(|e| HierarchyError::Decode(e.to_string()))
     }
