@@ -607,6 +607,10 @@ fn cull_above_ground() {
         ];
         args.extend_from_slice(extra);
         let mut v = json(&args);
+        // The methods left out took no time to set up (the time of an empty branch was reported once).
+        for skipped in ["per_triangle_setup_seconds", "safe_regions_setup_seconds"] {
+            assert_eq!(v[skipped], 0.0, "{skipped}: {v}");
+        }
         v["rows"]
             .as_array_mut()
             .expect("rows")
@@ -1066,16 +1070,39 @@ fn threads_sets_the_worker_count() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     assert_eq!(v["threads"], 2, "{v}");
     std::fs::remove_file(&c).expect("remove");
-    for bad in ["abc", "-3", "1.5"] {
+    // Spaces around the number, which rayon alone would ignore, and an empty variable, taken as unset.
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    for (value, threads) in [(" 3 ", 3), ("", cores)] {
+        let out = with_env(value);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+        assert_eq!(v["threads"], threads, "RAYON_NUM_THREADS={value:?}: {v}");
+        std::fs::remove_file(&c).expect("remove");
+    }
+    for (bad, message) in [
+        ("abc", "not a number of worker threads"),
+        ("-3", "not a number of worker threads"),
+        ("1.5", "not a number of worker threads"),
+        ("100000", "at most 65535 worker threads"),
+    ] {
         let out = with_env(bad);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "RAYON_NUM_THREADS={bad}");
         assert!(
-            stderr.contains(&format!("RAYON_NUM_THREADS={bad}: not a number of worker threads")),
+            stderr.contains(&format!("RAYON_NUM_THREADS={bad}: {message}")),
             "{stderr}"
         );
         assert!(!c.exists());
     }
+    // Before and after the command: refused as clap refuses it twice on one side, not the second taken silently.
+    let out = bin()
+        .args(["--threads", "1", "build", s(&m), "-o", s(&c), "--threads=2"])
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--threads is given twice"), "{stderr}");
+    assert!(!c.exists());
 }
 
 /// Byte-identical outputs at any thread count, on the 10k mesh (large enough for the parallel sorts, checks and

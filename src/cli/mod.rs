@@ -39,7 +39,7 @@ pub struct Cli {
     pub command: Command,
     /// Worker threads of the parallel stages (horizons, ground truth, tiles) [default: the `RAYON_NUM_THREADS`
     /// environment variable, else one per core]. Outputs are the same at any count. Accepted before or after the
-    /// command.
+    /// command (once).
     #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
 }
@@ -54,8 +54,53 @@ impl Cli {
             c.allow_negative_numbers(true).mut_subcommands(negative_numbers)
         }
         let matches = negative_numbers(Cli::command()).get_matches();
+        // clap refuses `--threads` twice on one side of the command, but lets one after it silently override one
+        // before it.
+        let args: Vec<std::ffi::OsString> = std::env::args_os().skip(1).collect();
+        if threads_flags(&args) > 1 {
+            Cli::command()
+                .error(
+                    clap::error::ErrorKind::ArgumentConflict,
+                    "--threads is given twice (before and after the command): give it once",
+                )
+                .exit();
+        }
         Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
     }
+}
+
+/// The worker threads `RAYON_NUM_THREADS` asks for (0: one per core), or `None` when it is unset or empty. rayon
+/// silently ignores a value it cannot read (spaces around a number included): such a value is refused here, as a bad
+/// `--threads` is, and a readable one is applied by [`run`] rather than left to rayon.
+fn env_threads() -> Result<Option<usize>> {
+    let Some(value) = std::env::var_os("RAYON_NUM_THREADS") else {
+        return Ok(None);
+    };
+    let text = value.to_string_lossy();
+    let number = text.trim();
+    if number.is_empty() {
+        return Ok(None);
+    }
+    match number.parse::<u64>() {
+        Ok(n) if n <= u64::from(u16::MAX) => Ok(Some(n as usize)),
+        Ok(_) => anyhow::bail!(
+            "RAYON_NUM_THREADS={text}: at most {} worker threads (as --threads; 0 for one per core)",
+            u16::MAX
+        ),
+        Err(_) => anyhow::bail!(
+            "RAYON_NUM_THREADS={text}: not a number of worker threads (a whole number, 0 for one per core; or leave \
+             the variable unset)"
+        ),
+    }
+}
+
+/// How many times `--threads` is given in `args` (as `--threads N` or `--threads=N`), up to a `--`.
+fn threads_flags(args: &[std::ffi::OsString]) -> usize {
+    args.iter()
+        .map(|a| a.to_string_lossy())
+        .take_while(|a| a != "--")
+        .filter(|a| a == "--threads" || a.starts_with("--threads="))
+        .count()
 }
 
 /// The subcommands.
@@ -140,20 +185,15 @@ pub(crate) fn no_viewer(what: &str) -> anyhow::Error {
 pub fn run(cli: Cli) -> Result<()> {
     // One command, then the process ends: a pipe given as an input may be looked at before it is read.
     infile::keep_pipes();
-    if let Some(n) = cli.threads {
+    let threads = match cli.threads {
+        Some(n) => Some((usize::from(n), "--threads".to_string())),
+        None => env_threads()?.map(|n| (n, format!("RAYON_NUM_THREADS={n}"))),
+    };
+    if let Some((n, given)) = threads.filter(|&(n, _)| n > 0) {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(usize::from(n))
+            .num_threads(n)
             .build_global()
-            .map_err(|e| anyhow::anyhow!("--threads {n}: {e}"))?;
-    } else if let Some(value) = std::env::var_os("RAYON_NUM_THREADS") {
-        // rayon silently ignores a value it cannot read (and takes 0 for one per core): refused, as a bad --threads.
-        let text = value.to_string_lossy();
-        if text.trim().parse::<u16>().is_err() {
-            anyhow::bail!(
-                "RAYON_NUM_THREADS={text}: not a number of worker threads (a whole number, 0 for one per core; or \
-                 leave the variable unset)"
-            );
-        }
+            .map_err(|e| anyhow::anyhow!("{given}: {e}"))?;
     }
     match cli.command {
         Command::Demo(args) => demo_cmd::run(&args, args.output.into()),

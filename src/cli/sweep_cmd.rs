@@ -26,7 +26,8 @@ pub struct SweepArgs {
     /// The mesh and how to import it.
     #[command(flatten)]
     pub mesh: MeshArgs,
-    /// Sector counts: comma-separated numbers or inclusive ranges `a..b`.
+    /// Sector counts: comma-separated numbers or inclusive ranges `a..b`. A combination that no build takes (fewer
+    /// than 4 sectors, no subsectors, too many subsectors in all) is skipped with a warning.
     #[arg(long, default_value = "4,8,16,32,64")]
     pub sectors: String,
     /// Subsectors per sector: comma-separated numbers or ranges.
@@ -270,8 +271,8 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
             if let Some(h) = h {
                 let rep = &r.report;
                 let line = format!(
-                    "s {:>3} k {:>2} seeds {:>4} rng {:>3}: prep {:>7.3} s, {:>4} groups, {:>5} orphans; occlusion \
-                     captured {:.3}, false culls {:.2} ({} views), cull {:.1} µs",
+                    "s {:>3} k {:>2} seeds {:>4} rng {:>3}: prep {:>7.3} s, {:>4} groups, {:>5} orphans; safe: \
+                     occlusion captured {}, false culls {:.2} ({} views), cull {:.1} µs",
                     k.sectors,
                     k.subsectors,
                     k.seeds,
@@ -279,7 +280,10 @@ pub fn run(args: &SweepArgs, out: Output) -> Result<()> {
                     rep.horizon_seconds + rep.regions_seconds + rep.grouping_seconds,
                     rep.groups,
                     rep.orphans,
-                    h.summary.occlusion_captured.map_or(0.0, |s| s.mean),
+                    // Nothing hidden from any viewpoint: nothing to capture ("-", as eval says it).
+                    h.summary
+                        .occlusion_captured
+                        .map_or("-".to_string(), |s| format!("{:.3}", s.mean)),
                     h.summary.false_culls.map_or(0.0, |s| s.mean),
                     h.summary.viewpoints_with_false_culls,
                     h.cull_ns as f64 / 1000.0

@@ -586,7 +586,11 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
     } else {
         None
     };
-    let per_triangle_setup_seconds = start.elapsed().as_secs_f64();
+    let per_triangle_setup_seconds = if opts.per_triangle {
+        start.elapsed().as_secs_f64()
+    } else {
+        0.0
+    };
     let truth = GroundTruthSet::compute(tin, opts, progress)?;
     let mut methods = standard_methods(h, per_triangle.as_ref(), None, opts.safe);
     let start = Instant::now();
@@ -598,7 +602,11 @@ pub fn evaluate(h: &Hierarchy, tin: &Tin, opts: &EvalOptions, progress: &dyn Fn(
             reach: Some(conservative_reach(h)),
         });
     }
-    let safe_regions_setup_seconds = start.elapsed().as_secs_f64();
+    let safe_regions_setup_seconds = if opts.safe_regions {
+        start.elapsed().as_secs_f64()
+    } else {
+        0.0
+    };
     let ranges = h.leaf_ranges();
     let leaves = Leaves {
         ranges: &ranges,
