@@ -280,7 +280,7 @@ fn render_refuses_culling_flags_it_does_not_use() {
     ok(&tincull(&["build", p(&obj), "-o", p(&tch), "-q"]));
     let png = dir.path().join("x.png");
     let eye = ["--view", "eye", "--eye", "100,100,500"];
-    let cases: [(&Path, Vec<&str>, &str); 11] = [
+    let cases: [(&Path, Vec<&str>, &str); 12] = [
         (
             &tch,
             [&eye[..], &["--method", "thesis", "--columns", "8"]].concat(),
@@ -295,6 +295,12 @@ fn render_refuses_culling_flags_it_does_not_use() {
             &obj,
             [&eye[..], &["--method", "thesis"]].concat(),
             "--method thesis: this render culls nothing",
+        ),
+        // The default method given by name, as any other (it was taken for the default and let through).
+        (
+            &tch,
+            vec!["--view", "map", "--method", "safe"],
+            "--method safe: this render culls nothing",
         ),
         (
             &tch,

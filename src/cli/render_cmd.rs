@@ -22,9 +22,10 @@ pub struct RenderArgs {
     /// --dem-vertices (both coloured by height, no culling).
     pub input: PathBuf,
     /// Culling method for a viewpoint: `safe` or `lloyd-egbert` (never cull a visible triangle), `thesis` or
-    /// `stewart` (not conservative).
-    #[arg(long, default_value = "safe", value_parser = super::cull_cmd::parse_method)]
-    pub method: cull::CullMethod,
+    /// `stewart` (not conservative) [default: safe]. Refused, as the other culler flags are, by a render that culls
+    /// nothing.
+    #[arg(long, value_parser = super::cull_cmd::parse_method)]
+    pub method: Option<cull::CullMethod>,
     /// The horizon cullers' parameters (`safe`, `lloyd-egbert`).
     #[command(flatten)]
     pub safe: super::culling_args::SafeArgs,
@@ -175,7 +176,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         level: args.level,
         compare: args.compare,
         timing_runs: args.runs,
-        method: args.method,
+        method: args.method.unwrap_or(cull::CullMethod::Safe),
         safe: args.safe.params()?,
         pvs: None,
     };
@@ -221,9 +222,9 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
         ));
     }
     if culls {
-        args.safe.check_method(args.method)?;
+        args.safe.check_method(options.method)?;
         if let Some(h) = &terrain.hierarchy {
-            super::culling_args::warn_if_no_regions(&args.input, h, args.method, out);
+            super::culling_args::warn_if_no_regions(&args.input, h, options.method, out);
         }
         // `--cull-fov` is the culler's field as given; an eye picture that reaches further round (pitched, its
         // corners do) loses terrain at its edges: said, not changed (a narrow field may be what is being looked at).
@@ -252,7 +253,7 @@ pub fn run(args: &RenderArgs, out: Output) -> Result<()> {
              --colour visibility)"
         );
     } else {
-        let method = (args.method != cull::CullMethod::Safe).then(|| format!("--method {}", args.method.name()));
+        let method = args.method.map(|m| format!("--method {}", m.name()));
         if let Some(flag) = method.or_else(|| args.safe.first_given()) {
             if with_pvs {
                 bail!("{flag}: with --pvs-cell the render shows the cell's PVS, and culls nothing from a point");
