@@ -144,6 +144,31 @@ fn the_check_finds_no_miss() {
     }
 }
 
+/// A check whose sample points see nothing (a band a millimetre thick at the lowest ground, its eyes under the ground
+/// almost everywhere) gives no ratio to the union of visible sets (a divisor of 0 was taken as 1).
+#[test]
+fn a_check_that_sees_nothing_has_no_ratio() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (obj, tch) = (dir.path().join("s.obj"), dir.path().join("s.tch"));
+    ok(&["synth", "-o", s(&obj), "--vertices", "300", "--rng-seed", "3", "-q"]);
+    ok(&["build", s(&obj), "-o", s(&tch), "-q"]);
+    let v = json(&[
+        "pvs",
+        s(&tch),
+        "--check",
+        "2",
+        "--height-band",
+        "0,0.001",
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(v["mean_union_visible"].as_f64(), Some(0.0), "{v}");
+    for row in v["rows"].as_array().expect("rows") {
+        assert_eq!(row["pvs_over_visible"], serde_json::Value::Null, "{row}");
+        assert!(row["pvs_over_safe"].as_f64().expect("a ratio") > 0.0, "{row}");
+    }
+}
+
 #[test]
 fn bad_arguments_give_clear_errors() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -195,6 +220,14 @@ fn bad_arguments_give_clear_errors() {
         &["pvs", s(&tch), "--cell", &cell, "--height-band", "0,100"],
         "lies below the terrain",
     );
+    // A grid's or a check's cells are held to the whole terrain: a band below its lowest vertex is refused (it was
+    // computed, every eye under the ground).
+    for flag in ["--grid", "--check"] {
+        fails_with(
+            &["pvs", s(&tch), flag, "3000", "--height-band", "0,100", "--json"],
+            "--height-band: the band up to 100 m lies below the whole terrain",
+        );
+    }
     fails_with(&["pvs", s(&tch), "--grid", "1"], "more than 1000000");
     fails_with(&["pvs", s(&tch), "--grid", "1e-300"], "a grid of 1e-300 m gives 2.99");
     // As many random cells: refused before they are drawn (a capacity overflow panicked, or the allocation aborted).

@@ -97,6 +97,23 @@ fn band_within_reach(h: &Hierarchy, height: Height) -> Result<()> {
     Ok(())
 }
 
+/// Refuses an absolute band that lies wholly below the terrain's lowest vertex: every eye of every cell would be
+/// under the ground (`--cell` checks its own cell against the ground under it; a grid's or a check's cells cover the
+/// footprint's box, whose corners may hold no terrain, so they are checked against the whole mesh).
+fn band_over_lowest_ground(h: &Hierarchy, height: Height) -> Result<()> {
+    if let Height::Band([_, top]) = height {
+        let lowest = h.mesh.positions.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+        ensure!(
+            top >= lowest,
+            "--height-band: the band up to {} m lies below the whole terrain (its lowest vertex is at {} m): an eye \
+             below the ground sees none of the terrain",
+            tin::compact_number(top),
+            tin::compact_number(lowest)
+        );
+    }
+    Ok(())
+}
+
 fn parse_method(s: &str) -> Result<Method, String> {
     Method::from_name(s).ok_or_else(|| format!("unknown method {s:?}; expected one of koltun, regions, both"))
 }
@@ -194,6 +211,9 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         super::files::refuse_other_format(path, "a PVS file", "pvs")?;
     }
     let h = super::mesh_input::load_hierarchy(&args.hierarchy)?;
+    if args.cell.is_none() {
+        band_over_lowest_ground(&h, height)?;
+    }
     if let Some(n) = args.check {
         band_within_reach(&h, height)?;
         return check(args, &h, height, n, &resolutions, safe_params, out);
@@ -454,6 +474,8 @@ fn check(
     }
     bar.finish_and_clear();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    // A PVS over a union of no triangle (no sample point saw any) has no ratio.
+    let ratio = |pvs: f64, union: f64| (union > 0.0).then(|| pvs / union.max(1.0));
     let rows_json: Vec<Value> = configs
         .iter()
         .zip(&rows)
@@ -467,8 +489,8 @@ fn check(
                 "mean_pvs_fraction": mean(&r.pvs) / nt.max(1) as f64,
                 "mean_pvs_over_visible": mean(&r.over_visible),
                 "mean_pvs_over_safe": mean(&r.over_safe),
-                "pvs_over_visible": mean(&r.pvs) / mean(&unions.0).max(1.0),
-                "pvs_over_safe": mean(&r.pvs) / mean(&unions.1).max(1.0),
+                "pvs_over_visible": ratio(mean(&r.pvs), mean(&unions.0)),
+                "pvs_over_safe": ratio(mean(&r.pvs), mean(&unions.1)),
                 "mean_seconds_per_cell": mean(&r.seconds),
                 "mean_bytes_per_cell": mean(&r.bytes),
             })
@@ -491,8 +513,9 @@ fn check(
         }))?;
     } else {
         out.say(format!(
-            "{n} cells of {s} m ({height}), {} sample points; per cell (means): union of visible sets {:.0}, of safe \
+            "{} of {s} m ({height}), {} sample points; per cell (means): union of visible sets {:.0}, of safe \
              drawn sets {:.0} of {nt} triangles; PVS/visible and PVS/safe are ratios of these means",
+            super::output::count(n, "cell"),
             unions.2,
             mean(&unions.0),
             mean(&unions.1)
@@ -500,7 +523,7 @@ fn check(
         out.say("method   R    misses  PVS (tri)  PVS/visible  PVS/safe  s/cell   bytes/cell");
         for (p, r) in configs.iter().zip(&rows) {
             out.say(format!(
-                "{:<8} {:>4} {:>7} {:>10.0} {:>12.2} {:>9.2} {:>7.3} {:>11.0}",
+                "{:<8} {:>4} {:>7} {:>10.0} {:>12} {:>9} {:>7.3} {:>11.0}",
                 p.method.name(),
                 if p.method == Method::Regions {
                     "-".to_string()
@@ -509,8 +532,8 @@ fn check(
                 },
                 r.misses,
                 mean(&r.pvs),
-                mean(&r.pvs) / mean(&unions.0).max(1.0),
-                mean(&r.pvs) / mean(&unions.1).max(1.0),
+                ratio(mean(&r.pvs), mean(&unions.0)).map_or("-".into(), |x| format!("{x:.2}")),
+                ratio(mean(&r.pvs), mean(&unions.1)).map_or("-".into(), |x| format!("{x:.2}")),
                 mean(&r.seconds),
                 mean(&r.bytes)
             ));
