@@ -268,3 +268,33 @@ fn bad_arguments_give_clear_errors() {
         "and this band reaches",
     );
 }
+
+/// The regions of a hierarchy built without them keep every triangle: `--method regions` says so, as `cull` and
+/// `failmap` do for their region methods; without `-o` the size is that of the file it would write.
+#[test]
+fn regions_without_regions_are_named() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (obj, tch) = (dir.path().join("s.obj"), dir.path().join("q.tch"));
+    ok(&["synth", "-o", s(&obj), "--vertices", "300", "--rng-seed", "3", "-q"]);
+    ok(&[
+        "build",
+        s(&obj),
+        "-o",
+        s(&tch),
+        "--grouping",
+        "quadtree",
+        "--no-regions",
+        "-q",
+    ]);
+    let out = ok(&["pvs", s(&tch), "--cell", "100,100,150,150", "--method", "regions"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("q.tch holds no regions") && stderr.contains("--method regions keeps every triangle"),
+        "{stderr}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("bytes as a .pvs file (give -o to write it)"),
+        "{stdout}"
+    );
+}

@@ -19,7 +19,8 @@ pub struct ExportArgs {
     /// Write the hierarchy's JSON form here (`-` for standard output).
     #[arg(long, value_name = "FILE")]
     pub export_json: Option<PathBuf>,
-    /// Write the mesh as OBJ with one group per leaf and the orphans (and a .mtl beside it).
+    /// Write the mesh as OBJ with one group per leaf and the orphans (and a .mtl beside it). Groups are numbered
+    /// in triangle order (`group_0` holds the first leaf's range), not by node id as the JSON and `.pvs` nodes are.
     #[arg(long, value_name = "FILE")]
     pub export_obj: Option<PathBuf>,
     /// Write the mesh as glTF 2.0: one primitive per leaf group and one for the always-visible set, nodes mirroring

@@ -28,7 +28,7 @@ pub struct FailmapArgs {
     /// Side of the map's square cells (m; `--cell` is an older name).
     #[arg(long, value_name = "M", alias = "cell")]
     pub cell_size: f64,
-    /// The PNG image to write.
+    /// The PNG image to write: one pixel per cell, north up.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// The CSV to write, one line per cell on the terrain: x, y, eye_z, false_culls, false_cull_area,

@@ -218,6 +218,13 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
         band_within_reach(&h, height)?;
         return check(args, &h, height, n, &resolutions, safe_params, out);
     }
+    if args.method == Some(Method::Regions) && !h.has_regions() {
+        out.warn(format!(
+            "{} holds no regions (built with --no-regions, or the terrain hid nothing from its vertices in the \
+             build): --method regions keeps every triangle in the PVS",
+            args.hierarchy.display()
+        ));
+    }
     let params = PvsParams {
         method: args.method.unwrap_or(Method::Both),
         resolution: resolutions[0],
@@ -348,7 +355,10 @@ pub fn run(args: &PvsArgs, out: Output) -> Result<()> {
             bytes.len(),
             args.out
                 .as_ref()
-                .map_or(String::new(), |p| format!(" written to {}", p.display()))
+                .map_or(" as a .pvs file (give -o to write it)".to_string(), |p| format!(
+                    " written to {}",
+                    p.display()
+                ))
         ));
     }
     Ok(())
